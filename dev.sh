@@ -1,0 +1,79 @@
+#!/usr/bin/env bash
+# glrender's two set-up commands, for a fresh Debian 12 machine with python3:
+#
+#   ./dev.sh render [OPTIONS]   install what is missing, render the default scene, print the path
+#   ./dev.sh test [PYTEST ARGS] install what is missing (with the test extras), run the test suite
+#
+# Both are safe to rerun: they install system packages (EGL + Mesa llvmpipe, python3-venv)
+# only when missing, create .venv once and reinstall the package only when pyproject.toml or
+# setup.py changed.
+set -euo pipefail
+cd "$(dirname "$0")"
+root=$PWD
+
+log() { printf '[dev.sh] %s\n' "$*" >&2; }
+
+apt_install() {
+    local sudo=""
+    if [ "$(id -u)" != 0 ]; then
+        if command -v sudo >/dev/null 2>&1; then sudo="sudo"; else
+            log "missing system packages: $*; install them as root: apt-get install -y $*"; exit 1
+        fi
+    fi
+    log "installing system packages: $*"
+    $sudo env DEBIAN_FRONTEND=noninteractive apt-get update -qq
+    $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "$@" >/dev/null
+}
+
+system_packages() {
+    local missing=()
+    # EGL (glvnd) + Mesa's EGL vendor and software rasteriser (llvmpipe) + libGL for GL entry points
+    ldconfig -p 2>/dev/null | grep -q 'libEGL.so.1 ' || missing+=(libegl1)
+    ldconfig -p 2>/dev/null | grep -q 'libGL.so.1 ' || missing+=(libgl1)
+    ls /usr/share/glvnd/egl_vendor.d/*mesa*.json >/dev/null 2>&1 || missing+=(libegl-mesa0)
+    ls /usr/lib/*/dri/swrast_dri.so >/dev/null 2>&1 || missing+=(libgl1-mesa-dri)
+    python3 -c 'import ensurepip, venv' >/dev/null 2>&1 || missing+=(python3-venv)
+    if [ "${1:-}" = test ]; then
+        command -v Xvfb >/dev/null 2>&1 || missing+=(xvfb)
+    fi
+    if [ ${#missing[@]} -gt 0 ]; then apt_install "${missing[@]}"; fi
+}
+
+python_env() {
+    local extras=$1 stamp=.venv/.glrender-installed
+    if [ ! -x .venv/bin/python ]; then
+        log "creating .venv"
+        python3 -m venv .venv
+    fi
+    local want
+    want="$extras $(cat pyproject.toml setup.py | sha256sum | cut -c1-16)"
+    if [ ! -f "$stamp" ] || ! grep -qxF -- "$want" "$stamp"; then
+        log "installing glrender[$extras] into .venv"
+        .venv/bin/python -m pip install -q --upgrade pip >/dev/null
+        .venv/bin/python -m pip install -q -e ".[$extras]"
+        printf '%s\n' "$want" >> "$stamp"
+    fi
+}
+
+cmd=${1:-}
+shift || true
+case "$cmd" in
+    render)
+        system_packages render
+        python_env exr
+        mkdir -p out
+        out=out/cornell-box.png
+        .venv/bin/python -m glrender render scenes/cornell-box/scene.toml -o "$out" "$@"
+        printf '%s\n' "$root/$out"
+        ;;
+    test)
+        system_packages test
+        python_env test,exr,preview
+        # pytest exits 5 when it collects no tests: that is a failure here too.
+        exec .venv/bin/python -m pytest "$@"
+        ;;
+    *)
+        echo "usage: ./dev.sh render [glrender render options] | ./dev.sh test [pytest args]" >&2
+        exit 2
+        ;;
+esac

@@ -1,0 +1,1 @@
+"""GLSL sources of glrender (data only; found through importlib.resources)."""

@@ -1,0 +1,1 @@
+#include "pp/cycle_b.glsl"

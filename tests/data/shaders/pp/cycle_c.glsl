@@ -1,0 +1,2 @@
+
+#include "pp/cycle_a.glsl"

@@ -1,0 +1,3 @@
+float leaf_value() {
+    return 1.0;
+}

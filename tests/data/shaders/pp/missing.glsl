@@ -1,0 +1,1 @@
+#include "pp/missing_file.glsl"

@@ -1,0 +1,2 @@
+// includes a broken file
+#include "pp/broken.glsl"

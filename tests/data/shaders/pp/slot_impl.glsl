@@ -1,0 +1,3 @@
+float slot_value() {
+    return 7.0;
+}
