@@ -50,12 +50,22 @@ def packaged_root() -> Path:
 
 
 class ShaderLibrary:
-    """Where include paths are looked up: extra roots first, then the packaged shaders."""
+    """Where include paths are looked up: generated sources (in memory, e.g. code the
+    renderer writes for one scene), then extra roots, then the packaged shaders."""
 
-    def __init__(self, roots: Iterable[str | Path] = ()):
+    def __init__(self, roots: Iterable[str | Path] = (), generated: Mapping[str, str] | None = None):
         self.roots = [Path(r) for r in roots] + [packaged_root()]
+        self.generated = dict(generated or {})
 
-    def find(self, path: str) -> Path | None:
+    def with_generated(self, generated: Mapping[str, str]) -> "ShaderLibrary":
+        """A library that also holds the given in-memory sources."""
+        lib = ShaderLibrary.__new__(ShaderLibrary)
+        lib.roots, lib.generated = list(self.roots), {**self.generated, **generated}
+        return lib
+
+    def find(self, path: str) -> Path | str | None:
+        if path in self.generated:
+            return path
         if Path(path).is_absolute() or ".." in Path(path).parts:
             return None
         for root in self.roots:
@@ -65,6 +75,8 @@ class ShaderLibrary:
         return None
 
     def read(self, path: str) -> str:
+        if path in self.generated:
+            return self.generated[path]
         found = self.find(path)
         if found is None:
             raise ShaderError(f"shader file not found (searched {', '.join(map(str, self.roots))})",

@@ -1,13 +1,55 @@
 // The one door for host configuration: host defines become typed constants here.
 //
 // The host (glrender/render/params.py) passes every define below; a missing one
-// is a compile error naming it. Code tests constants (`if (kSampler == ...)`),
-// never the macros, so the compiler folds the branches away.
-#ifndef GLRENDER_SAMPLER
-#error "common/params.glsl: the host define GLRENDER_SAMPLER is missing"
+// is a compile error naming it. Code tests the constants (`if (kUseNee)`), never
+// the macros, so the compiler folds the branches away.
+#if !defined(GLRENDER_SAMPLER) || !defined(GLRENDER_MATERIAL_KINDS) || \
+    !defined(GLRENDER_LIGHT_KINDS) || !defined(GLRENDER_MAX_DEPTH) || \
+    !defined(GLRENDER_RR_DEPTH) || !defined(GLRENDER_STRATEGY) || \
+    !defined(GLRENDER_EMITTER_SAMPLES) || !defined(GLRENDER_BSDF_SAMPLES) || \
+    !defined(GLRENDER_HIDE_EMITTERS) || !defined(GLRENDER_LIGHT_SELECTION) || \
+    !defined(GLRENDER_AREA_SAMPLING) || !defined(GLRENDER_FILTER) || \
+    !defined(GLRENDER_AOVS) || !defined(GLRENDER_COUNT_LOOPS)
+#error "common/params.glsl: a host define is missing (see glrender/render/params.py)"
 #endif
 
+// Sample generator (sampling/sampler.glsl).
 const int kSamplerIndependent = 0;
 const int kSamplerStratified = 1;
 const int kSamplerSobol = 2;
 const int kSampler = GLRENDER_SAMPLER;
+
+// Material and light kinds present in the scene, as bit masks over their kind ids.
+const uint kMaterialKinds = uint(GLRENDER_MATERIAL_KINDS);
+const uint kLightKinds = uint(GLRENDER_LIGHT_KINDS);
+
+// Integrator settings. Depth counts path segments as in Mitsuba 3: 1 = emitters
+// seen directly, 2 = direct lighting; a negative value means unbounded.
+const int kMaxDepth = GLRENDER_MAX_DEPTH;
+const int kRrDepth = GLRENDER_RR_DEPTH;
+const int kStrategyLight = 0;
+const int kStrategyBsdf = 1;
+const int kStrategyMisBalance = 2;
+const int kStrategyMisPower = 3;
+const int kStrategy = GLRENDER_STRATEGY;
+const int kEmitterSamples = GLRENDER_EMITTER_SAMPLES;
+const int kBsdfSamples = GLRENDER_BSDF_SAMPLES;
+const bool kHideEmitters = GLRENDER_HIDE_EMITTERS != 0;
+const int kLightSelectionUniform = 0;
+const int kLightSelectionPower = 1;
+const int kLightSelection = GLRENDER_LIGHT_SELECTION;
+const int kAreaSamplingArea = 0;
+const int kAreaSamplingSolidAngle = 1;
+const int kAreaSampling = GLRENDER_AREA_SAMPLING;
+
+// Pixel filter (camera/filter.glsl).
+const int kFilterBox = 0;
+const int kFilterTent = 1;
+const int kFilterGaussian = 2;
+const int kFilterMitchell = 3;
+const int kFilter = GLRENDER_FILTER;
+
+// First-hit AOVs (albedo, normal, depth) accumulated beside the image.
+const bool kAovs = GLRENDER_AOVS != 0;
+// Debug: count loop iterations per invocation (common/loop_counter.glsl).
+const bool kCountLoops = GLRENDER_COUNT_LOOPS != 0;

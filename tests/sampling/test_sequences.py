@@ -3,11 +3,12 @@ net properties, uniformity, decorrelation, and the discrepancy ordering."""
 import numpy as np
 import pytest
 
+from glrender.render.params import shader_defines
 from glrender.sampling import sequences as seq
 from glrender.testing.chi2 import ChiSquareTest, PlanarDomain
 from glrender.testing.harness import run_glsl
 
-SAMPLER_DEFINES = {name: {"GLRENDER_SAMPLER": kind} for name, kind in seq.SAMPLERS.items()}
+SAMPLER_DEFINES = {name: shader_defines(sampler=name) for name in seq.SAMPLERS}
 
 
 def rand_u32(n, seed):

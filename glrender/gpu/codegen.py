@@ -1,0 +1,144 @@
+"""Generate the GLSL that intersects one scene's compiled primitives.
+
+The output fills the slot ``@scene_geometry`` of the render kernels with
+
+    bool scene_intersect(vec3 o, vec3 d, float t_max, float time, out SurfaceHit hit);
+    bool scene_occluded(vec3 o, vec3 d, float t_max, float time);
+
+Compiled primitives (parallelograms, planar triangles, spheres) are written out as
+constants, so each costs a handful of selects per ray and no memory traffic;
+the hit record is assembled as the loop goes (no switch over primitive ids, which
+llvmpipe would run in full for every ray). Meshes go through the BVH.
+``time`` is the normalized shutter time in [0, 1] (moving spheres lerp their centre).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .pack import PackedScene
+
+GENERATED_PATH = "generated/scene_geometry.glsl"
+
+
+def _f(x: float) -> str:
+    v = float(np.float32(x))
+    if v == 0.0:
+        return "0.0"
+    text = repr(v)
+    return text if ("." in text or "e" in text) else text + ".0"
+
+
+def _v3(v) -> str:
+    return f"vec3({_f(v[0])}, {_f(v[1])}, {_f(v[2])})"
+
+
+def _v2(v) -> str:
+    return f"vec2({_f(v[0])}, {_f(v[1])})"
+
+
+def _planar_args(q) -> str:
+    n = np.cross(q.e1, q.e2)
+    nn = float(np.dot(n, n))
+    dual_a = np.cross(q.e2, n) / nn
+    dual_b = np.cross(n, q.e1) / nn
+    return (f"{_v3(n)}, {_f(np.dot(n, q.corner))}, {_v3(q.corner)}, "
+            f"{_v3(dual_a)}, {_v3(dual_b)}")
+
+
+def generate(packed: PackedScene, has_bvh: bool) -> str:
+    lines = [
+        f"// Scene geometry: {len(packed.quads)} planar primitives, {len(packed.spheres)} spheres, "
+        f"BVH: {'yes' if has_bvh else 'no'}.",
+        '#include "geometry/surface.glsl"',
+        '#include "geometry/parallelogram.glsl"',
+        '#include "geometry/sphere.glsl"',
+        '#include "common/constants.glsl"',
+    ]
+    if has_bvh:
+        lines += ['#include "geometry/bvh.glsl"', '#include "geometry/mesh_surface.glsl"']
+    n_compiled = len(packed.quads) + len(packed.spheres)
+    lines += [f"const uint kCompiledPrimitives = {n_compiled}u;",
+              f"const bool kSceneHasBvh = {'true' if has_bvh else 'false'};", ""]
+
+    # -- closest hit -------------------------------------------------------------
+    body = [
+        "bool scene_intersect(vec3 o, vec3 d, float t_max, float time, out SurfaceHit hit) {",
+        "    float t = t_max;",
+        "    uint prim = kNoPrimitive;",
+        "    vec3 ng = vec3(0.0, 0.0, 1.0);",
+        "    vec3 ns = ng;",
+        "    vec2 uv = vec2(0.0);",
+        "    uint material = 0u;",
+        "    uint light = 0u;",
+        "    vec4 sphere = vec4(0.0);  // centre and signed radius of the nearest sphere hit",
+        "    vec2 ab;",
+        "    float tq;",
+    ]
+    for k, q in enumerate(packed.quads):
+        fn = "intersect_triangle_planar" if q.triangle else "intersect_parallelogram"
+        if q.uv is not None:
+            uv = f"{_v2(q.uv[0])} + ab.x * {_v2(q.uv[1])} + ab.y * {_v2(q.uv[2])}"
+        else:
+            uv = "ab"
+        body += [
+            f"    tq = {fn}(o, d, t, {_planar_args(q)}, ab);",
+            f"    if (tq < t) {{ t = tq; prim = {k}u; ng = {_v3(q.normal)}; uv = {uv}; "
+            f"material = {q.material}u; light = {q.light}u; sphere.w = 0.0; }}",
+        ]
+    for j, s in enumerate(packed.spheres):
+        k = len(packed.quads) + j
+        center = _v3(s.center) if s.center_close is None else \
+            f"mix({_v3(s.center)}, {_v3(s.center_close)}, time)"
+        signed_r = -s.radius if s.flip else s.radius
+        body += [
+            f"    {{ vec3 c = {center};",
+            f"      tq = intersect_sphere(o, d, t, c, {_f(s.radius)});",
+            f"      if (tq < t) {{ t = tq; prim = {k}u; sphere = vec4(c, {_f(signed_r)}); "
+            f"material = {s.material}u; light = {s.light}u; }} }}",
+        ]
+    if has_bvh:
+        body += [
+            "    BvhHit bh;",
+            "    if (bvh_intersect_closest(o, d, t, bh)) {",
+            "        t = bh.t;",
+            "        prim = kCompiledPrimitives + bh.prim;",
+            "        mesh_surface(bh.prim, bh.bary, ng, ns, uv, material, light);",
+            "        sphere.w = 0.0;",
+            "    }",
+        ]
+    body += [
+        "    if (prim == kNoPrimitive) return false;",
+        "    if (sphere.w != 0.0) {",
+        "        vec3 p = o + t * d;",
+        "        vec3 local = (p - sphere.xyz) / abs(sphere.w);",
+        "        ng = local * sign(sphere.w);",
+        "        ng = normalize(ng);",
+        "        uv = vec2(atan(local.y, local.x) * kInvTwoPi + 0.5, acos(clamp(local.z, -1.0, 1.0)) * kInvPi);",
+        "    }",
+        "    if (prim < kCompiledPrimitives) ns = ng;",
+        "    hit = SurfaceHit(t, ng, ns, uv, material, light, prim);",
+        "    return true;",
+        "}",
+        "",
+    ]
+    lines += body
+
+    # -- any hit -------------------------------------------------------------------
+    occ = ["bool scene_occluded(vec3 o, vec3 d, float t_max, float time) {",
+           "    float t = t_max;  // min over primitives: no short-circuit branches",
+           "    vec2 ab;"]
+    for q in packed.quads:
+        fn = "intersect_triangle_planar" if q.triangle else "intersect_parallelogram"
+        occ.append(f"    t = min(t, {fn}(o, d, t_max, {_planar_args(q)}, ab));")
+    for s in packed.spheres:
+        center = _v3(s.center) if s.center_close is None else \
+            f"mix({_v3(s.center)}, {_v3(s.center_close)}, time)"
+        occ.append(f"    t = min(t, intersect_sphere(o, d, t_max, {center}, {_f(s.radius)}));")
+    occ.append("    if (t < t_max) return true;")
+    if has_bvh:
+        occ.append("    return bvh_intersect_any(o, d, t_max);")
+    else:
+        occ.append("    return false;")
+    occ += ["}", ""]
+    lines += occ
+    return "\n".join(lines)

@@ -1,0 +1,45 @@
+"""Host side of ``shaders/common/params.glsl``: the compile-time configuration.
+
+Every define that params.glsl requires is produced here and nowhere else.
+"""
+from __future__ import annotations
+
+from ..gpu import layout
+from ..sampling.sequences import SAMPLERS
+
+STRATEGIES = {"light": 0, "bsdf": 1, "mis-balance": 2, "mis-power": 3}
+LIGHT_SELECTION = {"uniform": 0, "power": 1}
+AREA_SAMPLING = {"area": 0, "solid-angle": 1}
+FILTERS = {"box": 0, "tent": 1, "gaussian": 2, "mitchell": 3}
+
+
+def kind_mask(kinds, table: dict[str, int]) -> int:
+    mask = 0
+    for kind in kinds:
+        mask |= 1 << table[kind]
+    return mask
+
+
+def shader_defines(*, sampler: str = "independent", material_kinds=("diffuse",),
+                   light_kinds=(), max_depth: int = -1, rr_depth: int = 5,
+                   strategy: str = "mis-power", emitter_samples: int = 1, bsdf_samples: int = 1,
+                   hide_emitters: bool = False, light_selection: str = "power",
+                   area_sampling: str = "solid-angle", filter: str = "box", aovs: bool = False,
+                   count_loops: bool = False) -> dict[str, object]:
+    """The full define set for params.glsl (defaults suit unit tests of shader code)."""
+    return {
+        "GLRENDER_SAMPLER": SAMPLERS[sampler],
+        "GLRENDER_MATERIAL_KINDS": kind_mask(material_kinds, layout.MATERIAL_KINDS),
+        "GLRENDER_LIGHT_KINDS": kind_mask(light_kinds, layout.LIGHT_KINDS),
+        "GLRENDER_MAX_DEPTH": int(max_depth),
+        "GLRENDER_RR_DEPTH": int(rr_depth),
+        "GLRENDER_STRATEGY": STRATEGIES[strategy],
+        "GLRENDER_EMITTER_SAMPLES": int(emitter_samples),
+        "GLRENDER_BSDF_SAMPLES": int(bsdf_samples),
+        "GLRENDER_HIDE_EMITTERS": bool(hide_emitters),
+        "GLRENDER_LIGHT_SELECTION": LIGHT_SELECTION[light_selection],
+        "GLRENDER_AREA_SAMPLING": AREA_SAMPLING[area_sampling],
+        "GLRENDER_FILTER": FILTERS[filter],
+        "GLRENDER_AOVS": bool(aovs),
+        "GLRENDER_COUNT_LOOPS": bool(count_loops),
+    }

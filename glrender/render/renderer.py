@@ -1,0 +1,305 @@
+"""Progressive rendering on the device: compile, upload, dispatch in chunks, accumulate.
+
+A *pass* renders ``samples_per_pass`` samples in every pixel; a pass is split into
+dispatches of whole 8x8 tiles, as many per dispatch as fit the time target
+(measured as the render goes), so progress, previews and Ctrl-C stay responsive.
+Each pixel accumulates its samples in index order (Welford's running mean and M2 in
+float32 on the device): the result is bitwise the same however the passes and
+dispatches are split, for a given scene, seed, spp and device. Every invocation runs
+a few samples only, far below llvmpipe's silent ~65,535-iteration loop cap.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..errors import UsageError
+from ..gl import shaders
+from ..gl.context import default_context
+from ..gpu import codegen, layout
+from ..gpu.pack import PackedScene, pack_scene
+from ..sampling.sequences import strata_columns
+from ..scene import model as m
+from ..film import Film
+from .params import shader_defines
+
+TILE = 8
+INTEGRATOR_FILES = {"path": "integrators/path.glsl", "direct": "integrators/direct.glsl",
+                    "ao": "integrators/ao.glsl"}
+
+
+@dataclass
+class RenderSettings:
+    """Everything that decides an image besides the scene's geometry and materials."""
+
+    integrator: m.Integrator
+    sampler: m.Sampler
+    aovs: bool = False
+    count_loops: bool = False
+    samples_per_pass: int | None = None   # None: chosen from the scene
+    time_target: float = 0.1              # seconds per dispatch
+
+
+def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: int | None = None,
+                        sampler: str | None = None, seed: int | None = None,
+                        max_depth: int | None = None, rr_depth: int | None = None,
+                        strategy: str | None = None, light_selection: str | None = None,
+                        area_sampling: str | None = None, hide_emitters: bool | None = None,
+                        aovs: bool = False, count_loops: bool = False,
+                        samples_per_pass: int | None = None, time_target: float = 0.1) -> RenderSettings:
+    """The scene's settings with the given overrides (None keeps the scene's value)."""
+    integ = scene.integrator
+    overrides = {k: v for k, v in dict(kind=integrator, max_depth=max_depth, rr_depth=rr_depth,
+                                       strategy=strategy, light_selection=light_selection,
+                                       area_sampling=area_sampling,
+                                       hide_emitters=hide_emitters).items() if v is not None}
+    integ = replace(integ, **overrides)  # re-validates in __post_init__
+    samp = replace(scene.sampler, **{k: v for k, v in dict(kind=sampler, spp=spp, seed=seed).items()
+                                     if v is not None})
+    if samp.spp < 1:
+        raise UsageError(f"spp: expected a positive integer, got {samp.spp}")
+    return RenderSettings(integ, samp, aovs=aovs, count_loops=count_loops,
+                          samples_per_pass=samples_per_pass, time_target=time_target)
+
+
+def camera_tangents(camera: m.Camera, width: int, height: int) -> tuple[float, float]:
+    """tan of the half field of view along x and y (Mitsuba's fov_axis rules)."""
+    t = math.tan(math.radians(camera.fov) / 2)
+    axis = camera.fov_axis
+    if axis == "smaller":
+        axis = "x" if width <= height else "y"
+    elif axis == "larger":
+        axis = "x" if width >= height else "y"
+    if axis == "x":
+        return t, t * height / width
+    if axis == "y":
+        return t * width / height, t
+    diag = math.hypot(width, height)
+    return t * width / diag, t * height / diag
+
+
+class Renderer:
+    """A scene on the device, ready to accumulate samples progressively.
+
+    ``step(spp)`` adds samples to every pixel; ``film()`` reads the image back.
+    """
+
+    def __init__(self, scene: m.Scene, settings: RenderSettings | None = None, *, ctx=None,
+                 device=None):
+        self.scene = scene
+        self.settings = settings or settings_from_scene(scene)
+        self.ctx = ctx or default_context(device)
+        self.gl = self.ctx.gl
+        self.packed: PackedScene = pack_scene(scene)
+        self.width, self.height = scene.film.width, scene.film.height
+        self.tiles_x = -(-self.width // TILE)
+        self.tiles_y = -(-self.height // TILE)
+        self.spp_done = 0
+        self._tile_rate = None    # measured seconds per tile-sample
+        self._buffers = []
+        self._bvh = None
+        self._upload()
+        self._compile()
+        self.reset()
+
+    # -- setup -------------------------------------------------------------------------------
+    def _upload(self):
+        gl = self.gl
+        p = self.packed
+        integ = self.settings.integrator
+        lights = p.lights.copy()
+        n_lights = len(lights)
+        from ..sampling.distributions import DistributionPacker
+
+        packer = DistributionPacker()
+        weights = p.light_weights
+        if n_lights:
+            if integ.light_selection == "power" and weights.sum() > 0:
+                pmf = weights / weights.sum()
+                if n_lights > 1:
+                    packer.add_alias_table(weights)
+            else:
+                pmf = np.full(n_lights, 1.0 / n_lights)
+            lights["params"][:, 3] = pmf
+            if integ.area_sampling == "solid-angle":
+                # rectangles (orthogonal edges) can use Urena et al.'s spherical rectangles
+                dots = np.einsum("ij,ij->i", lights["e1"][:, :3], lights["e2"][:, :3])
+                norms = np.linalg.norm(lights["e1"][:, :3], axis=1) * np.linalg.norm(lights["e2"][:, :3], axis=1)
+                rect = (lights["info"][:, 0] == layout.LIGHT_KINDS["parallelogram"]) & \
+                    (np.abs(dots) <= 1e-5 * np.maximum(norms, 1e-30))
+                lights["info"][rect, 1] |= 2
+        dist = packer.array() if packer.array().size else np.zeros(4, np.float32)
+        self._materials = self._buffer(p.materials.tobytes())
+        self._lights = self._buffer(lights.tobytes() if n_lights else layout.zeros(layout.LIGHT).tobytes())
+        self._dist = self._buffer(np.ascontiguousarray(dist, np.float32).tobytes())
+        self._params = gl.buffer(reserve=layout.RENDER_PARAMS.itemsize)
+        self.n_lights = n_lights
+        if p.mesh is not None:
+            self._upload_mesh()
+
+    def _upload_mesh(self):
+        from ..accel import build_bvh
+        from ..accel.gpu import GpuBvh
+        from ..gl.buffers import BufferTexture
+
+        positions, normals, uvs, material, light = self.packed.mesh
+        tri = positions.reshape(-1, 3)
+        index = np.arange(len(tri)).reshape(-1, 3)
+        bvh = build_bvh(tri.astype(np.float32), index)
+        order = bvh.prim_order
+        n4 = np.zeros((len(order), 3, 4), np.float32)
+        n4[:, :, :3] = normals[order]
+        uv4 = np.zeros((len(order), 2, 4), np.float32)
+        uv4[:, 0, :2], uv4[:, 0, 2:] = uvs[order, 0], uvs[order, 1]
+        uv4[:, 1, :2] = uvs[order, 2]
+        info = np.zeros((len(order), 4), np.uint32)
+        info[:, 0], info[:, 1] = material[order], light[order]
+        self._bvh = GpuBvh(self.ctx, bvh)
+        self._mesh_textures = [
+            (layout.TEX_TRI_NORMALS, BufferTexture(self.ctx, n4, "rgba32f", "triangle normals")),
+            (layout.TEX_TRI_UVS, BufferTexture(self.ctx, uv4, "rgba32f", "triangle uvs")),
+            (layout.TEX_TRI_INFO, BufferTexture(self.ctx, info, "rgba32ui", "triangle info")),
+        ]
+
+    def _buffer(self, data: bytes):
+        buf = self.gl.buffer(data if len(data) else b"\0" * 16)
+        self._buffers.append(buf)
+        return buf
+
+    def _compile(self):
+        s = self.settings
+        integ = s.integrator
+        p = self.packed
+        geometry = codegen.generate(p, has_bvh=p.mesh is not None)
+        library = shaders.ShaderLibrary().with_generated({codegen.GENERATED_PATH: geometry})
+        self.defines = shader_defines(
+            sampler=s.sampler.kind, material_kinds=p.material_kinds, light_kinds=p.light_kinds,
+            max_depth=integ.max_depth, rr_depth=integ.rr_depth, strategy=integ.strategy,
+            emitter_samples=integ.emitter_samples, bsdf_samples=integ.bsdf_samples,
+            hide_emitters=integ.hide_emitters, light_selection=integ.light_selection,
+            area_sampling=integ.area_sampling, filter=self.scene.film.filter, aovs=s.aovs,
+            count_loops=s.count_loops)
+        self.program = shaders.compile_compute(
+            self.ctx, "kernels/render.comp.glsl", defines=self.defines,
+            slots={"integrator": INTEGRATOR_FILES[integ.kind],
+                   "scene_geometry": codegen.GENERATED_PATH},
+            library=library)
+        if s.samples_per_pass is not None:
+            self.samples_per_pass = max(1, int(s.samples_per_pass))
+        else:
+            self.samples_per_pass = 1 if p.mesh is not None else 4
+
+    def reset(self):
+        """Forget every sample (after the camera moves, say)."""
+        n = self.width * self.height
+        for name in ("_mean", "_m2", "_aov", "_debug"):
+            old = getattr(self, name, None)
+            if old is not None:
+                old.release()
+        self._mean = self.gl.buffer(reserve=16 * n)
+        self._m2 = self.gl.buffer(reserve=16 * n)
+        self._aov = self.gl.buffer(reserve=32 * n if self.settings.aovs else 16)
+        self._debug = self.gl.buffer(reserve=4 * n if self.settings.count_loops else 16)
+        for buf in (self._mean, self._m2, self._aov, self._debug):
+            buf.clear()
+        self.spp_done = 0
+
+    # -- rendering ---------------------------------------------------------------------------
+    def _param_block(self, first_sample: int, samples: int) -> np.ndarray:
+        scene, s = self.scene, self.settings
+        cam, film = scene.camera, scene.film
+        prm = np.zeros(1, layout.RENDER_PARAMS)[0]
+        prm["camera_open"] = cam.world_from_camera.T
+        close = cam.world_from_camera_close if cam.world_from_camera_close is not None \
+            else cam.world_from_camera
+        prm["camera_close"] = close.T
+        tx, ty = camera_tangents(cam, self.width, self.height)
+        prm["camera_screen"] = (tx, ty, cam.aperture_radius, cam.focus_distance)
+        prm["camera_clip"][:2] = (cam.near_clip, cam.far_clip)
+        sh = scene.shutter
+        prm["shutter"][:3] = (sh.open, sh.close, 1.0 if sh.function == "tent" else 0.0)
+        prm["filter_params"] = (film.radius, film.gaussian_stddev, film.mitchell_b, film.mitchell_c)
+        prm["image"] = (self.width, self.height, self.tiles_x, self.tiles_y)
+        spp_total = s.sampler.spp
+        prm["samples"] = (first_sample, samples, spp_total, strata_columns(spp_total))
+        seed = int(s.sampler.seed) & 0xFFFFFFFF
+        prm["dispatch"] = (0, 0, seed, (seed * 2654435761 + 12345) & 0xFFFFFFFF)
+        prm["counts"] = (self.n_lights, len(self.packed.materials), self.packed.environment, 0)
+        center, radius = self.packed.sphere_bounds
+        prm["scene_sphere"] = (*center, radius)
+        prm["misc"][0] = min(s.integrator.ao_distance, 3.0e38)
+        return prm
+
+    def _bind(self):
+        self._mean.bind_to_storage_buffer(layout.SSBO_ACCUM_MEAN)
+        self._m2.bind_to_storage_buffer(layout.SSBO_ACCUM_M2)
+        self._materials.bind_to_storage_buffer(layout.SSBO_MATERIALS)
+        self._lights.bind_to_storage_buffer(layout.SSBO_LIGHTS)
+        self._dist.bind_to_storage_buffer(layout.SSBO_DISTRIBUTIONS)
+        self._aov.bind_to_storage_buffer(layout.SSBO_AOV)
+        self._debug.bind_to_storage_buffer(layout.SSBO_DEBUG)
+        self._params.bind_to_uniform_block(layout.UBO_PARAMS)
+        if self._bvh is not None:
+            self._bvh.bind()
+            for unit, tex in self._mesh_textures:
+                tex.bind(unit)
+
+    def _run_pass(self, first_sample: int, samples: int, deadline: float | None = None):
+        """Render samples [first_sample, first_sample + samples) in every pixel."""
+        prm = self._param_block(first_sample, samples)
+        tiles = self.tiles_x * self.tiles_y
+        self._bind()
+        start = 0
+        while start < tiles:
+            if self._tile_rate is None:
+                count = min(tiles, 16)
+            else:
+                count = int(self.settings.time_target / max(self._tile_rate * samples, 1e-9))
+                count = max(1, min(tiles - start, count, 65535))
+            count = min(count, tiles - start)
+            prm["dispatch"][0], prm["dispatch"][1] = start, count
+            self._params.write(prm.tobytes())
+            t0 = time.perf_counter()
+            self.program.run(group_x=count)
+            self.gl.finish()
+            elapsed = time.perf_counter() - t0
+            rate = elapsed / (count * samples)
+            self._tile_rate = rate if self._tile_rate is None else 0.7 * self._tile_rate + 0.3 * rate
+            start += count
+
+    def step(self, spp: int, callback=None) -> None:
+        """Add ``spp`` samples per pixel; ``callback(done, total)`` after every pass."""
+        if spp < 0:
+            raise UsageError(f"spp: expected a non-negative integer, got {spp}")
+        target = self.spp_done + spp
+        while self.spp_done < target:
+            k = min(self.samples_per_pass, target - self.spp_done)
+            self._run_pass(self.spp_done, k)
+            self.spp_done += k
+            if callback is not None:
+                callback(self.spp_done, target)
+
+    def film(self) -> Film:
+        """Read the accumulation back as a :class:`Film`."""
+        n = self.width * self.height
+        mean = np.frombuffer(self._mean.read(), np.float32).reshape(self.height, self.width, 4)
+        m2 = np.frombuffer(self._m2.read(), np.float32).reshape(self.height, self.width, 4)
+        aovs = {}
+        if self.settings.aovs:
+            a = np.frombuffer(self._aov.read(), np.float32).reshape(self.height, self.width, 2, 4)
+            aovs = {"albedo": a[:, :, 0, :3].copy(), "normal": a[:, :, 1, :3].copy(),
+                    "depth": a[:, :, 1, 3].copy()}
+        debug = None
+        if self.settings.count_loops:
+            debug = np.frombuffer(self._debug.read(), np.uint32).reshape(self.height, self.width).copy()
+        return Film(mean=mean[..., :3].copy(), m2=m2[..., :3].copy(), count=mean[..., 3].copy(),
+                    nonfinite=m2[..., 3].copy(), spp=self.spp_done, aovs=aovs, loop_counts=debug,
+                    sampler=self.settings.sampler.kind)
+
+    def release(self):
+        for buf in self._buffers + [self._mean, self._m2, self._aov, self._debug, self._params]:
+            buf.release()
+        self._buffers = []

@@ -1,0 +1,369 @@
+"""The native scene format (TOML): validated field by field.
+
+Every error names the file, the key path and what was expected, e.g.
+``scenes/x.toml: materials.floor.reflectance: expected 3 numbers, got "red"``.
+See docs/scene-format.md for the fields.
+"""
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ...errors import SceneError
+from .. import model as m
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+MAX_INCLUDE_DEPTH = 16
+
+
+class _Ctx:
+    def __init__(self, path: Path, params: dict[str, Any]):
+        self.path, self.params = path, params
+
+    def fail(self, key: str, message: str):
+        raise SceneError(f"{self.path}: {key}: {message}")
+
+    # -- typed getters ----------------------------------------------------------------
+    def table(self, value, key: str) -> dict:
+        if not isinstance(value, dict):
+            self.fail(key, f"expected a table, got {_show(value)}")
+        return value
+
+    def number(self, value, key: str, lo=-math.inf, hi=math.inf, integer=False):
+        ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+        if integer:
+            ok = isinstance(value, int) and not isinstance(value, bool)
+        if not ok or not math.isfinite(value) or not lo <= value <= hi:
+            kind = "an integer" if integer else "a number"
+            bounds = "" if (lo == -math.inf and hi == math.inf) else f" in [{lo}, {hi}]"
+            self.fail(key, f"expected {kind}{bounds}, got {_show(value)}")
+        return int(value) if integer else float(value)
+
+    def boolean(self, value, key: str) -> bool:
+        if not isinstance(value, bool):
+            self.fail(key, f"expected true or false, got {_show(value)}")
+        return value
+
+    def string(self, value, key: str, choices=None) -> str:
+        if not isinstance(value, str) or (choices and value not in choices):
+            want = f"one of {', '.join(map(repr, choices))}" if choices else "a string"
+            self.fail(key, f"expected {want}, got {_show(value)}")
+        return value
+
+    def vector(self, value, key: str, n: int = 3, allow_scalar: bool = False) -> tuple:
+        if allow_scalar and isinstance(value, (int, float)) and not isinstance(value, bool):
+            return tuple([self.number(value, key)] * n)
+        if not isinstance(value, list) or len(value) != n or \
+                not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                        for v in value):
+            self.fail(key, f"expected {n} numbers, got {_show(value)}")
+        return tuple(float(v) for v in value)
+
+    def color(self, value, key: str) -> tuple:
+        rgb = self.vector(value, key, 3, allow_scalar=True)
+        if min(rgb) < 0:
+            self.fail(key, f"expected non-negative colour values, got {_show(value)}")
+        return rgb
+
+    def file(self, value, key: str) -> Path:
+        name = self.string(value, key)
+        path = (self.path.parent / name).resolve()
+        if not path.is_file():
+            self.fail(key, f"no such file {name!r} (relative to {self.path.parent})")
+        return path
+
+
+def _show(value) -> str:
+    text = repr(value) if not isinstance(value, str) else f'"{value}"'
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _check_keys(ctx: _Ctx, table: dict, key: str, allowed: set[str]):
+    for name in table:
+        if name not in allowed:
+            where = f"{key}.{name}" if key else name
+            ctx.fail(where, f"unknown field (expected one of {', '.join(sorted(allowed))})")
+
+
+# -- transforms --------------------------------------------------------------------------
+def _transform(ctx: _Ctx, value, key: str) -> np.ndarray:
+    """A matrix (16 numbers, row-major), one operation table, or a list of them applied in order."""
+    if isinstance(value, list) and value and all(isinstance(v, (int, float)) for v in value):
+        if len(value) != 16:
+            ctx.fail(key, f"expected 16 numbers (a row-major 4x4 matrix), got {len(value)}")
+        return np.array(ctx.vector(value, key, 16)).reshape(4, 4)
+    ops = value if isinstance(value, list) else [value]
+    M = np.eye(4)
+    for i, op in enumerate(ops):
+        k = f"{key}[{i}]" if isinstance(value, list) else key
+        op = ctx.table(op, k)
+        if len(op) != 1:
+            ctx.fail(k, "expected one operation per table: translate, rotate, scale, matrix or look_at")
+        (name, arg), = op.items()
+        if name == "translate":
+            T = m.translate(ctx.vector(arg, f"{k}.translate"))
+        elif name == "scale":
+            T = m.scale(ctx.vector(arg, f"{k}.scale", allow_scalar=True))
+        elif name == "rotate":
+            arg = ctx.table(arg, f"{k}.rotate")
+            _check_keys(ctx, arg, f"{k}.rotate", {"axis", "angle"})
+            T = m.rotate(ctx.vector(arg.get("axis"), f"{k}.rotate.axis"),
+                         ctx.number(arg.get("angle"), f"{k}.rotate.angle"))
+        elif name == "matrix":
+            T = np.array(ctx.vector(arg, f"{k}.matrix", 16)).reshape(4, 4)
+        elif name == "look_at":
+            T = _look_at(ctx, arg, f"{k}.look_at")
+        else:
+            ctx.fail(k, f"unknown transform {name!r} (expected translate, rotate, scale, matrix, look_at)")
+        M = T @ M
+    return M
+
+
+def _look_at(ctx: _Ctx, arg, key: str) -> np.ndarray:
+    arg = ctx.table(arg, key)
+    _check_keys(ctx, arg, key, {"origin", "target", "up"})
+    try:
+        return m.look_at(ctx.vector(arg.get("origin"), f"{key}.origin"),
+                         ctx.vector(arg.get("target"), f"{key}.target"),
+                         ctx.vector(arg.get("up", [0, 1, 0]), f"{key}.up"))
+    except SceneError as exc:
+        ctx.fail(key, str(exc).split(": ", 1)[-1])
+
+
+# -- sections ------------------------------------------------------------------------------
+def _film(ctx, t) -> m.Film:
+    t = ctx.table(t, "film")
+    _check_keys(ctx, t, "film", {"width", "height", "filter", "filter_radius", "stddev", "b", "c"})
+    f = m.Film()
+    f.width = ctx.number(t.get("width", f.width), "film.width", 1, 65536, integer=True)
+    f.height = ctx.number(t.get("height", f.height), "film.height", 1, 65536, integer=True)
+    f.filter = ctx.string(t.get("filter", f.filter), "film.filter", m.FILTERS)
+    if "filter_radius" in t:
+        f.filter_radius = ctx.number(t["filter_radius"], "film.filter_radius", 1e-3, 16)
+    f.gaussian_stddev = ctx.number(t.get("stddev", f.gaussian_stddev), "film.stddev", 1e-3, 8)
+    f.mitchell_b = ctx.number(t.get("b", f.mitchell_b), "film.b")
+    f.mitchell_c = ctx.number(t.get("c", f.mitchell_c), "film.c")
+    return f
+
+
+def _camera(ctx, t) -> m.Camera:
+    t = ctx.table(t, "camera")
+    _check_keys(ctx, t, "camera", {"fov", "fov_axis", "look_at", "transform", "transform_close",
+                                   "aperture_radius", "focus_distance", "near_clip", "far_clip"})
+    c = m.Camera()
+    if "look_at" in t and "transform" in t:
+        ctx.fail("camera", "give look_at or transform, not both")
+    if "look_at" in t:
+        c.world_from_camera = _look_at(ctx, t["look_at"], "camera.look_at")
+    elif "transform" in t:
+        c.world_from_camera = _transform(ctx, t["transform"], "camera.transform")
+    if "transform_close" in t:
+        c.world_from_camera_close = _transform(ctx, t["transform_close"], "camera.transform_close")
+    c.fov = ctx.number(t.get("fov", c.fov), "camera.fov", 1e-3, 179.9)
+    c.fov_axis = ctx.string(t.get("fov_axis", c.fov_axis), "camera.fov_axis",
+                            ("x", "y", "smaller", "larger", "diagonal"))
+    c.aperture_radius = ctx.number(t.get("aperture_radius", 0.0), "camera.aperture_radius", 0)
+    c.focus_distance = ctx.number(t.get("focus_distance", c.focus_distance), "camera.focus_distance", 1e-6)
+    c.near_clip = ctx.number(t.get("near_clip", c.near_clip), "camera.near_clip", 0)
+    c.far_clip = ctx.number(t.get("far_clip", c.far_clip), "camera.far_clip", 0)
+    if c.far_clip <= c.near_clip:
+        ctx.fail("camera.far_clip", f"expected a value above near_clip ({c.near_clip}), got {c.far_clip}")
+    return c
+
+
+def _integrator(ctx, t) -> m.Integrator:
+    t = ctx.table(t, "integrator")
+    _check_keys(ctx, t, "integrator", {"type", "max_depth", "rr_depth", "strategy", "emitter_samples",
+                                       "bsdf_samples", "light_selection", "area_sampling",
+                                       "hide_emitters", "ao_distance"})
+    i = m.Integrator()
+    i.kind = ctx.string(t.get("type", i.kind), "integrator.type", m.INTEGRATORS)
+    i.max_depth = ctx.number(t.get("max_depth", i.max_depth), "integrator.max_depth", -1, 1 << 20, integer=True)
+    if i.max_depth == 0:
+        ctx.fail("integrator.max_depth", "expected -1 (unbounded) or an integer >= 1, got 0")
+    i.rr_depth = ctx.number(t.get("rr_depth", i.rr_depth), "integrator.rr_depth", 1, 1 << 20, integer=True)
+    i.strategy = ctx.string(t.get("strategy", i.strategy), "integrator.strategy", m.STRATEGIES)
+    i.emitter_samples = ctx.number(t.get("emitter_samples", 1), "integrator.emitter_samples", 0, 64, integer=True)
+    i.bsdf_samples = ctx.number(t.get("bsdf_samples", 1), "integrator.bsdf_samples", 0, 64, integer=True)
+    i.light_selection = ctx.string(t.get("light_selection", i.light_selection),
+                                   "integrator.light_selection", ("uniform", "power"))
+    i.area_sampling = ctx.string(t.get("area_sampling", i.area_sampling), "integrator.area_sampling",
+                                 ("area", "solid-angle"))
+    i.hide_emitters = ctx.boolean(t.get("hide_emitters", False), "integrator.hide_emitters")
+    i.ao_distance = ctx.number(t.get("ao_distance", 1e30), "integrator.ao_distance", 0)
+    return i
+
+
+def _sampler(ctx, t) -> m.Sampler:
+    t = ctx.table(t, "sampler")
+    _check_keys(ctx, t, "sampler", {"type", "spp", "seed"})
+    s = m.Sampler()
+    s.kind = ctx.string(t.get("type", s.kind), "sampler.type", m.SAMPLER_KINDS)
+    s.spp = ctx.number(t.get("spp", s.spp), "sampler.spp", 1, 1 << 30, integer=True)
+    s.seed = ctx.number(t.get("seed", s.seed), "sampler.seed", 0, 2 ** 32 - 1, integer=True)
+    return s
+
+
+def _shutter(ctx, t) -> m.Shutter:
+    t = ctx.table(t, "shutter")
+    _check_keys(ctx, t, "shutter", {"open", "close", "function"})
+    s = m.Shutter(ctx.number(t.get("open", 0.0), "shutter.open"),
+                  ctx.number(t.get("close", 0.0), "shutter.close"),
+                  ctx.string(t.get("function", "box"), "shutter.function", ("box", "tent")))
+    if s.close < s.open:
+        ctx.fail("shutter.close", f"expected a time >= open ({s.open}), got {s.close}")
+    return s
+
+
+_MATERIAL_FIELDS = {"type", "reflectance", "specular_reflectance", "specular_transmittance", "eta",
+                    "k", "int_ior", "ext_ior", "alpha", "distribution", "nonlinear", "two_sided"}
+
+
+def _material(ctx, name: str, t) -> m.Material:
+    key = f"materials.{name}"
+    t = ctx.table(t, key)
+    _check_keys(ctx, t, key, _MATERIAL_FIELDS)
+    kind = ctx.string(t.get("type", "diffuse"), f"{key}.type", m.MATERIAL_KINDS)
+    mat = m.Material(kind=kind, name=name)
+    for field_name in ("reflectance", "specular_reflectance", "specular_transmittance", "eta", "k"):
+        if field_name in t:
+            setattr(mat, field_name, ctx.color(t[field_name], f"{key}.{field_name}"))
+    for field_name in ("int_ior", "ext_ior"):
+        if field_name in t:
+            setattr(mat, field_name, ctx.number(t[field_name], f"{key}.{field_name}", 1e-3, 100))
+    if "alpha" in t:
+        a = t["alpha"]
+        mat.alpha = (ctx.vector(a, f"{key}.alpha", 2) if isinstance(a, list)
+                     else (ctx.number(a, f"{key}.alpha", 1e-4, 10),) * 2)
+    mat.distribution = ctx.string(t.get("distribution", "beckmann"), f"{key}.distribution", ("ggx", "beckmann"))
+    mat.nonlinear = ctx.boolean(t.get("nonlinear", False), f"{key}.nonlinear")
+    mat.two_sided = ctx.boolean(t.get("two_sided", False), f"{key}.two_sided")
+    return mat
+
+
+def _shape(ctx, i: int, t, materials: dict[str, int], scene: m.Scene) -> list[m.Shape]:
+    key = f"shapes[{i}]"
+    t = ctx.table(t, key)
+    _check_keys(ctx, t, key, {"type", "material", "transform", "transform_close", "emission", "file",
+                              "center", "radius", "flip_normals", "face_normals", "name"})
+    kind = ctx.string(t.get("type"), f"{key}.type", ("rectangle", "cube", "sphere", "disk", "mesh"))
+    mat_name = ctx.string(t.get("material"), f"{key}.material")
+    if mat_name not in materials:
+        ctx.fail(f"{key}.material", f"no material named {mat_name!r} (defined: "
+                 f"{', '.join(materials) or 'none'})")
+    shape = m.Shape(kind=kind, material=materials[mat_name], name=str(t.get("name", f"shape {i}")))
+    if "transform" in t:
+        shape.world_from_object = _transform(ctx, t["transform"], f"{key}.transform")
+    if "transform_close" in t:
+        shape.world_from_object_close = _transform(ctx, t["transform_close"], f"{key}.transform_close")
+    if "emission" in t:
+        e = ctx.table(t["emission"], f"{key}.emission")
+        _check_keys(ctx, e, f"{key}.emission", {"radiance", "two_sided"})
+        shape.emission = m.Emission(ctx.color(e.get("radiance"), f"{key}.emission.radiance"),
+                                    ctx.boolean(e.get("two_sided", False), f"{key}.emission.two_sided"))
+    shape.flip_normals = ctx.boolean(t.get("flip_normals", False), f"{key}.flip_normals")
+    shape.face_normals = ctx.boolean(t.get("face_normals", False), f"{key}.face_normals")
+    if kind == "sphere":
+        shape.center = ctx.vector(t.get("center", [0, 0, 0]), f"{key}.center")
+        shape.radius = ctx.number(t.get("radius", 1.0), f"{key}.radius", 1e-9)
+    if kind == "mesh":
+        path = ctx.file(t.get("file"), f"{key}.file")
+        from .meshes import load_mesh
+
+        shape.vertices, shape.triangles, shape.normals, shape.uvs = load_mesh(path)
+    return [shape]
+
+
+_LIGHT_FIELDS = {"type", "position", "intensity", "power", "transform", "cutoff_angle", "beam_width",
+                 "direction", "irradiance", "radiance", "file", "scale", "name"}
+
+
+def _light(ctx, i: int, t) -> m.Light:
+    key = f"lights[{i}]"
+    t = ctx.table(t, key)
+    _check_keys(ctx, t, key, _LIGHT_FIELDS)
+    kind = ctx.string(t.get("type"), f"{key}.type", m.Light.KINDS)
+    light = m.Light(kind=kind, name=str(t.get("name", f"light {i}")))
+    if kind in ("point", "spot"):
+        if "power" in t and "intensity" in t:
+            ctx.fail(key, "give intensity or power, not both")
+        if "power" in t:
+            light.power = ctx.color(t["power"], f"{key}.power")
+        else:
+            light.intensity = ctx.color(t.get("intensity", [1, 1, 1]), f"{key}.intensity")
+    if kind == "point":
+        light.position = ctx.vector(t.get("position", [0, 0, 0]), f"{key}.position")
+    if kind == "spot":
+        if "transform" in t:
+            light.world_from_light = _transform(ctx, t["transform"], f"{key}.transform")
+        light.cutoff_angle = ctx.number(t.get("cutoff_angle", 20.0), f"{key}.cutoff_angle", 0.01, 90)
+        light.beam_width = ctx.number(t.get("beam_width", light.cutoff_angle * 0.75), f"{key}.beam_width", 0, 90)
+    if kind == "directional":
+        light.direction = ctx.vector(t.get("direction", [0, 0, -1]), f"{key}.direction")
+        if np.linalg.norm(light.direction) == 0:
+            ctx.fail(f"{key}.direction", "expected a non-zero vector")
+        light.irradiance = ctx.color(t.get("irradiance", [1, 1, 1]), f"{key}.irradiance")
+    if kind == "constant":
+        light.radiance = ctx.color(t.get("radiance", [1, 1, 1]), f"{key}.radiance")
+    if kind == "envmap":
+        from ...film.io import read_image
+
+        light.image = read_image(ctx.file(t.get("file"), f"{key}.file"))
+        light.scale = ctx.number(t.get("scale", 1.0), f"{key}.scale", 0)
+        if "transform" in t:
+            light.world_from_light = _transform(ctx, t["transform"], f"{key}.transform")
+    return light
+
+
+_TOP = {"film", "camera", "integrator", "sampler", "shutter", "materials", "shapes", "lights"}
+
+
+def load_toml(path, **params) -> m.Scene:
+    """Load a native TOML scene."""
+    path = Path(path)
+    ctx = _Ctx(path, params)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SceneError(f"{path}: no such file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceneError(f"{path}: cannot read ({exc})") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"{path}: invalid TOML: {exc}") from None
+    _check_keys(ctx, data, "", _TOP)
+    scene = m.Scene(source=str(path))
+    if "film" in data:
+        scene.film = _film(ctx, data["film"])
+    if "camera" in data:
+        scene.camera = _camera(ctx, data["camera"])
+    if "integrator" in data:
+        scene.integrator = _integrator(ctx, data["integrator"])
+    if "sampler" in data:
+        scene.sampler = _sampler(ctx, data["sampler"])
+    if "shutter" in data:
+        scene.shutter = _shutter(ctx, data["shutter"])
+    materials = {}
+    for name, t in ctx.table(data.get("materials", {}), "materials").items():
+        materials[name] = scene.add_material(_material(ctx, name, t))
+    shapes = data.get("shapes", [])
+    if not isinstance(shapes, list):
+        ctx.fail("shapes", "expected an array of tables ([[shapes]])")
+    for i, t in enumerate(shapes):
+        scene.shapes.extend(_shape(ctx, i, t, materials, scene))
+    lights = data.get("lights", [])
+    if not isinstance(lights, list):
+        ctx.fail("lights", "expected an array of tables ([[lights]])")
+    for i, t in enumerate(lights):
+        scene.lights.append(_light(ctx, i, t))
+    scene.validate()
+    return scene

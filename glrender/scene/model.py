@@ -1,0 +1,355 @@
+"""The in-memory scene: what every loader produces and the renderer consumes.
+
+Plain dataclasses and numpy arrays, no GL. Conventions follow Mitsuba 3 so that
+its scenes load unchanged:
+
+- Transforms are 4x4 ``world_from_object`` matrices (column vectors: p_world = M p).
+- Cameras look along +z of camera space with +y up and +x to the *left* of the
+  image (Mitsuba's ``look_at`` builds columns (left, up, dir, origin)).
+- ``Integrator.max_depth`` counts path segments: 1 = emitters seen directly,
+  2 = direct lighting, -1 = unbounded.
+- Colours are linear RGB; emitted radiance in W/(m^2 sr) per channel.
+- Shapes: ``rectangle`` spans [-1, 1]^2 at z = 0 facing +z; ``cube`` spans [-1, 1]^3;
+  ``disk`` is the unit disk at z = 0 facing +z; ``sphere`` has a centre and radius.
+- Motion: a shape or camera may carry ``world_from_object_close``: its transform at
+  the shutter's close; vertices move linearly between the two (linear motion blur).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Optional, Union
+
+import numpy as np
+
+from ..errors import SceneError
+
+RGB = tuple[float, float, float]
+
+
+# -- transforms ---------------------------------------------------------------------------
+def translate(v) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, 3] = v
+    return m
+
+
+def scale(v) -> np.ndarray:
+    v = np.broadcast_to(np.asarray(v, np.float64), (3,))
+    return np.diag([v[0], v[1], v[2], 1.0])
+
+
+def rotate(axis, angle_degrees: float) -> np.ndarray:
+    """Rotation about ``axis`` by ``angle_degrees`` (right-handed)."""
+    a = np.asarray(axis, np.float64)
+    n = np.linalg.norm(a)
+    if n == 0:
+        raise SceneError("rotate: the axis has zero length")
+    x, y, z = a / n
+    t = math.radians(angle_degrees)
+    c, s = math.cos(t), math.sin(t)
+    m = np.eye(4)
+    m[:3, :3] = [[c + x * x * (1 - c), x * y * (1 - c) - z * s, x * z * (1 - c) + y * s],
+                 [y * x * (1 - c) + z * s, c + y * y * (1 - c), y * z * (1 - c) - x * s],
+                 [z * x * (1 - c) - y * s, z * y * (1 - c) + x * s, c + z * z * (1 - c)]]
+    return m
+
+
+def look_at(origin, target, up) -> np.ndarray:
+    """Mitsuba's look_at: columns (left, up, dir, origin) of world_from_camera."""
+    o, t, u = (np.asarray(v, np.float64) for v in (origin, target, up))
+    d = t - o
+    if np.linalg.norm(d) == 0:
+        raise SceneError("look_at: origin and target coincide")
+    d /= np.linalg.norm(d)
+    left = np.cross(u, d)
+    if np.linalg.norm(left) < 1e-12:
+        raise SceneError("look_at: the up vector is parallel to the view direction")
+    left /= np.linalg.norm(left)
+    new_up = np.cross(d, left)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = left, new_up, d, o
+    return m
+
+
+def transform_points(m: np.ndarray, p: np.ndarray) -> np.ndarray:
+    p = np.asarray(p, np.float64)
+    return p @ m[:3, :3].T + m[:3, 3]
+
+
+def transform_normals(m: np.ndarray, n: np.ndarray) -> np.ndarray:
+    inv_t = np.linalg.inv(m[:3, :3]).T
+    out = np.asarray(n, np.float64) @ inv_t.T
+    length = np.linalg.norm(out, axis=-1, keepdims=True)
+    return out / np.where(length > 0, length, 1.0)
+
+
+# -- textures ------------------------------------------------------------------------------
+@dataclass
+class Texture:
+    """A colour that varies over a surface: ``bitmap`` (image, sRGB-decoded unless raw)
+    or ``checkerboard`` (two colours, ``scale`` checks per unit of uv)."""
+
+    kind: str                                  # "bitmap" | "checkerboard"
+    image: Optional[np.ndarray] = None         # HxWx3 linear float32 (bitmap)
+    color0: RGB = (0.4, 0.4, 0.4)              # checkerboard
+    color1: RGB = (0.2, 0.2, 0.2)
+    uv_transform: np.ndarray = field(default_factory=lambda: np.eye(3))  # uv' = M (u, v, 1)
+    filter: str = "bilinear"                   # "bilinear" | "nearest"
+    wrap: str = "repeat"                       # "repeat" | "clamp" | "mirror"
+    name: str = ""
+
+
+Spectrum = Union[RGB, Texture]
+
+
+# -- materials -----------------------------------------------------------------------------
+MATERIAL_KINDS = ("diffuse", "conductor", "roughconductor", "dielectric", "roughdielectric",
+                  "thindielectric", "plastic", "roughplastic", "null")
+
+
+@dataclass
+class Material:
+    """One BSDF. ``kind`` picks the model; unused fields are ignored.
+
+    - diffuse: ``reflectance``
+    - conductor / roughconductor: complex IOR ``eta`` + i ``k`` (per channel),
+      ``specular_reflectance`` tint, ``alpha`` (u, v) and ``distribution`` (ggx | beckmann)
+    - dielectric / roughdielectric / thindielectric: ``int_ior`` / ``ext_ior``,
+      ``specular_reflectance`` / ``specular_transmittance``, ``alpha``
+    - plastic / roughplastic: ``reflectance`` (diffuse base), ``specular_reflectance``,
+      ``int_ior`` / ``ext_ior``, ``alpha``, ``nonlinear``
+    ``two_sided``: the BSDF answers on both sides of the surface (Mitsuba's twosided).
+    """
+
+    kind: str = "diffuse"
+    reflectance: Spectrum = (0.5, 0.5, 0.5)
+    specular_reflectance: Spectrum = (1.0, 1.0, 1.0)
+    specular_transmittance: Spectrum = (1.0, 1.0, 1.0)
+    eta: RGB = (0.0, 0.0, 0.0)
+    k: RGB = (1.0, 1.0, 1.0)
+    int_ior: float = 1.5046
+    ext_ior: float = 1.000277
+    alpha: tuple[float, float] = (0.1, 0.1)
+    distribution: str = "beckmann"
+    nonlinear: bool = False
+    two_sided: bool = False
+    name: str = ""
+
+    def __post_init__(self):
+        if self.kind not in MATERIAL_KINDS:
+            raise SceneError(f"material {self.name or '?'}: unknown kind {self.kind!r} "
+                             f"(expected one of {', '.join(MATERIAL_KINDS)})")
+        if self.distribution not in ("ggx", "beckmann"):
+            raise SceneError(f"material {self.name or '?'}: distribution must be ggx or "
+                             f"beckmann, got {self.distribution!r}")
+
+
+# -- shapes ------------------------------------------------------------------------------
+@dataclass
+class Emission:
+    """An area light attached to a shape: uniform radiance on its front side."""
+
+    radiance: RGB = (1.0, 1.0, 1.0)
+    two_sided: bool = False
+
+
+@dataclass
+class Shape:
+    """A surface. ``kind``: mesh | rectangle | cube | disk | sphere.
+
+    Meshes carry ``vertices`` (V,3), ``triangles`` (T,3) and optionally ``normals`` (V,3)
+    and ``uvs`` (V,2), in object space; ``world_from_object`` places them.
+    Spheres use ``center`` and ``radius`` in object space.
+    """
+
+    kind: str
+    material: int = 0                             # index into Scene.materials
+    world_from_object: np.ndarray = field(default_factory=lambda: np.eye(4))
+    world_from_object_close: Optional[np.ndarray] = None
+    vertices: Optional[np.ndarray] = None
+    triangles: Optional[np.ndarray] = None
+    normals: Optional[np.ndarray] = None
+    uvs: Optional[np.ndarray] = None
+    center: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    radius: float = 1.0
+    emission: Optional[Emission] = None
+    flip_normals: bool = False
+    face_normals: bool = False                    # ignore vertex normals (flat shading)
+    name: str = ""
+
+    @property
+    def moving(self) -> bool:
+        return self.world_from_object_close is not None and not np.allclose(
+            self.world_from_object_close, self.world_from_object)
+
+
+# -- lights that are not shapes ------------------------------------------------------------------
+@dataclass
+class Light:
+    """A light without a surface.
+
+    - point: ``position``, ``intensity`` (W/sr); or ``power`` Φ (W), I = Φ / 4π
+    - spot: ``world_from_light`` (+z is the axis), ``intensity``, ``cutoff_angle`` and
+      ``beam_width`` in degrees (Mitsuba's smooth falloff between them)
+    - directional: ``direction`` (light travels along it), ``irradiance`` (W/m^2)
+    - constant: uniform environment ``radiance``
+    - envmap: lat-long ``image`` (HxWx3 linear) times ``scale``, oriented by ``world_from_light``
+      (Mitsuba's convention: +y up, u = 0 at -x... see glrender/lights)
+    """
+
+    kind: str
+    position: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    intensity: RGB = (1.0, 1.0, 1.0)
+    power: Optional[RGB] = None
+    world_from_light: np.ndarray = field(default_factory=lambda: np.eye(4))
+    cutoff_angle: float = 20.0
+    beam_width: float = 15.0
+    direction: tuple[float, float, float] = (0.0, 0.0, -1.0)
+    irradiance: RGB = (1.0, 1.0, 1.0)
+    radiance: RGB = (1.0, 1.0, 1.0)
+    image: Optional[np.ndarray] = None
+    scale: float = 1.0
+    name: str = ""
+
+    KINDS = ("point", "spot", "directional", "constant", "envmap")
+
+    def __post_init__(self):
+        if self.kind not in self.KINDS:
+            raise SceneError(f"light {self.name or '?'}: unknown kind {self.kind!r} "
+                             f"(expected one of {', '.join(self.KINDS)})")
+
+
+# -- camera, film, settings ------------------------------------------------------------------------
+@dataclass
+class Camera:
+    """Perspective camera; a thin lens when ``aperture_radius`` > 0."""
+
+    world_from_camera: np.ndarray = field(default_factory=lambda: look_at((0, 0, 5), (0, 0, 0), (0, 1, 0)))
+    world_from_camera_close: Optional[np.ndarray] = None
+    fov: float = 40.0                 # degrees, along fov_axis
+    fov_axis: str = "x"               # x | y | smaller | larger | diagonal
+    aperture_radius: float = 0.0
+    focus_distance: float = 1.0
+    near_clip: float = 1e-2
+    far_clip: float = 1e4
+
+    def __post_init__(self):
+        if self.fov_axis not in ("x", "y", "smaller", "larger", "diagonal"):
+            raise SceneError(f"camera.fov_axis: expected x, y, smaller, larger or diagonal, "
+                             f"got {self.fov_axis!r}")
+        if not 0.0 < self.fov < 180.0:
+            raise SceneError(f"camera.fov: expected degrees in (0, 180), got {self.fov}")
+
+
+FILTERS = ("box", "tent", "gaussian", "mitchell")
+
+
+@dataclass
+class Film:
+    width: int = 256
+    height: int = 256
+    filter: str = "gaussian"
+    filter_radius: Optional[float] = None    # pixels; defaults per filter (box 0.5, tent 1, gaussian 2)
+    gaussian_stddev: float = 0.5
+    mitchell_b: float = 1.0 / 3.0
+    mitchell_c: float = 1.0 / 3.0
+
+    def __post_init__(self):
+        if self.filter not in FILTERS:
+            raise SceneError(f"film.filter: expected one of {', '.join(FILTERS)}, got {self.filter!r}")
+        for name in ("width", "height"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, np.integer)) or not 1 <= value <= 65536:
+                raise SceneError(f"film.{name}: expected an integer in [1, 65536], got {value!r}")
+
+    @property
+    def radius(self) -> float:
+        if self.filter_radius is not None:
+            return float(self.filter_radius)
+        return {"box": 0.5, "tent": 1.0, "gaussian": 4.0 * self.gaussian_stddev, "mitchell": 2.0}[self.filter]
+
+
+INTEGRATORS = ("path", "direct", "ao")
+STRATEGIES = ("light", "bsdf", "mis-balance", "mis-power")
+
+
+@dataclass
+class Integrator:
+    kind: str = "path"
+    max_depth: int = -1
+    rr_depth: int = 5
+    strategy: str = "mis-power"        # direct lighting / NEE weighting
+    emitter_samples: int = 1           # direct integrator only
+    bsdf_samples: int = 1
+    light_selection: str = "power"     # uniform | power
+    area_sampling: str = "solid-angle"  # area | solid-angle (for triangle/rectangle lights)
+    hide_emitters: bool = False
+    ao_distance: float = float("inf")
+
+    def __post_init__(self):
+        if self.kind not in INTEGRATORS:
+            raise SceneError(f"integrator: expected one of {', '.join(INTEGRATORS)}, got {self.kind!r}")
+        if self.strategy not in STRATEGIES:
+            raise SceneError(f"integrator.strategy: expected one of {', '.join(STRATEGIES)}, "
+                             f"got {self.strategy!r}")
+        if self.light_selection not in ("uniform", "power"):
+            raise SceneError(f"integrator.light_selection: expected uniform or power, "
+                             f"got {self.light_selection!r}")
+        if self.area_sampling not in ("area", "solid-angle"):
+            raise SceneError(f"integrator.area_sampling: expected area or solid-angle, "
+                             f"got {self.area_sampling!r}")
+        if not isinstance(self.max_depth, int) or (self.max_depth < 1 and self.max_depth != -1):
+            raise SceneError(f"integrator.max_depth: expected -1 (unbounded) or an integer >= 1, "
+                             f"got {self.max_depth!r}")
+
+
+SAMPLER_KINDS = ("independent", "stratified", "sobol")
+
+
+@dataclass
+class Sampler:
+    kind: str = "sobol"
+    spp: int = 64
+    seed: int = 0
+
+    def __post_init__(self):
+        if self.kind not in SAMPLER_KINDS:
+            raise SceneError(f"sampler: expected one of {', '.join(SAMPLER_KINDS)}, got {self.kind!r}")
+
+
+@dataclass
+class Shutter:
+    open: float = 0.0
+    close: float = 0.0
+    function: str = "box"              # box | tent
+
+    @property
+    def active(self) -> bool:
+        return self.close > self.open
+
+
+@dataclass
+class Scene:
+    camera: Camera = field(default_factory=Camera)
+    film: Film = field(default_factory=Film)
+    integrator: Integrator = field(default_factory=Integrator)
+    sampler: Sampler = field(default_factory=Sampler)
+    shutter: Shutter = field(default_factory=Shutter)
+    materials: list[Material] = field(default_factory=list)
+    shapes: list[Shape] = field(default_factory=list)
+    lights: list[Light] = field(default_factory=list)
+    source: str = "<scene>"            # file it came from, for messages
+
+    def add_material(self, material: Material) -> int:
+        self.materials.append(material)
+        return len(self.materials) - 1
+
+    def validate(self) -> None:
+        """Cross-checks that loaders cannot do alone."""
+        for i, shape in enumerate(self.shapes):
+            if not 0 <= shape.material < len(self.materials):
+                raise SceneError(f"{self.source}: shape {shape.name or i}: material index "
+                                 f"{shape.material} out of range")
+        if not self.shapes and not self.lights:
+            raise SceneError(f"{self.source}: the scene has no shapes and no lights")

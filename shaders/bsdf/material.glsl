@@ -1,0 +1,22 @@
+// From a material record and texture coordinates to the Bsdf of one surface point.
+#include "bsdf/bsdf_common.glsl"
+#include "scene/layout.glsl"
+
+// Reads texture layer (index + 1; 0 = none) at uv, or returns the constant colour.
+vec3 material_color(vec3 constant, uint texture_plus_one, vec2 uv) {
+    if (texture_plus_one == 0u) return constant;
+    return textureLod(u_textures, vec3(uv, float(texture_plus_one - 1u)), 0.0).rgb;
+}
+
+Bsdf bsdf_from_material(uint material, vec2 uv) {
+    MaterialData m = materials[material];
+    Bsdf b;
+    b.kind = m.info.x;
+    b.flags = m.info.y;
+    b.c0 = material_color(m.color0.rgb, m.info.z, uv);
+    b.c1 = material_color(m.color1.rgb, m.info.w, uv);
+    b.c2 = m.color2.rgb;
+    b.alpha = m.params.xy;
+    b.eta = m.params.z;
+    return b;
+}

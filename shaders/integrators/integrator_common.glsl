@@ -1,0 +1,46 @@
+// What every integrator shares: the AOV record, the shading frame, and MIS weights by strategy.
+//
+// Every integrator file defines
+//     vec3 integrator_li(vec3 o, vec3 d, float t_max, float time, inout SamplerState s, inout Aov aov);
+// the radiance arriving at o from direction -d (the camera ray), with `time` the
+// normalized shutter time. Only kernels and integrators own a SamplerState.
+#include "common/constants.glsl"
+#include "common/frame.glsl"
+#include "common/loop_counter.glsl"
+#include "common/params.glsl"
+#include "common/ray.glsl"
+#include "geometry/surface.glsl"
+#include "sampling/mis.glsl"
+#include "sampling/sampler.glsl"
+
+// Hard cap on path segments when max_depth is unbounded (-1): Russian roulette ends
+// paths long before (survival <= 0.95 per bounce: 0.95^256 < 2e-6).
+const int kUnboundedDepthCap = 256;
+
+// First-hit arbitrary outputs, averaged over the pixel's samples by the kernel.
+struct Aov {
+    vec3 albedo;
+    vec3 normal;
+    float depth;
+};
+
+// MIS weight of a technique with pdf pdf_a against one with pdf pdf_b, one sample each,
+// by the configured heuristic (balance or power; the single-strategy settings never
+// combine, so their weight is 1 for the strategy in use).
+// The same with n_a and n_b samples per technique (the direct integrator's counts).
+float mis_weight_n(float n_a, float pdf_a, float n_b, float pdf_b) {
+    if (kStrategy == kStrategyMisBalance) return mis_balance(n_a, pdf_a, n_b, pdf_b);
+    return mis_power(n_a, pdf_a, n_b, pdf_b);
+}
+
+float mis_weight(float pdf_a, float pdf_b) {
+    return mis_weight_n(1.0, pdf_a, 1.0, pdf_b);
+}
+
+float max_component(vec3 v) {
+    return max(v.x, max(v.y, v.z));
+}
+
+bool is_finite(vec3 v) {
+    return !any(isnan(v)) && !any(isinf(v));
+}

@@ -1,0 +1,83 @@
+// Light transport at one surface vertex: emission found by a ray, next-event estimation, AOVs.
+//
+// Shared by the path and direct integrators. The MIS weights follow kStrategy:
+// `light` counts emission only through light samples, `bsdf` only through BSDF hits,
+// the mis-* settings weight both (Veach 1997, eq. 9.13 and 9.15).
+#include "integrators/integrator_common.glsl"
+#include "bsdf/bsdf.glsl"
+#include "bsdf/material.glsl"
+#include "lights/light.glsl"
+#include "lights/light_selection.glsl"
+#include "@scene_geometry"
+
+// Rays to lights stop this fraction short of the sampled point (pbrt's ShadowEpsilon).
+const float kShadowEpsilon = 1e-4;
+
+void record_aov(inout Aov aov, SurfaceHit hit) {
+    if (!kAovs) return;
+    aov.albedo = bsdf_albedo(bsdf_from_material(hit.material, hit.uv));
+    aov.normal = hit.ns;
+    aov.depth = hit.t;
+}
+
+// Emission of the area light at `hit`, seen along d, by a segment of `depth`
+// previous segments whose BSDF sample had solid-angle pdf prev_pdf (n_bsdf samples
+// against n_light light samples for the direct integrator's counts).
+vec3 emitter_hit_contribution_n(SurfaceHit hit, vec3 d, int depth, vec3 prev_p, float prev_pdf,
+                                bool prev_delta, float n_bsdf, float n_light) {
+    uint index = hit.light - 1u;
+    LightData l = lights[index];
+    vec3 Le = area_light_radiance(l, hit.ng, -d);
+    if (depth == 0) return kHideEmitters ? vec3(0.0) : Le;
+    if (prev_delta || kStrategy == kStrategyBsdf) return Le;
+    if (kStrategy == kStrategyLight) return vec3(0.0);
+    float pdf_light = light_selection_pmf(index) * light_pdf_area_hit(l, prev_p, d, hit.t, hit.ng);
+    return Le * mis_weight_n(n_bsdf, prev_pdf, n_light, pdf_light);
+}
+
+vec3 emitter_hit_contribution(SurfaceHit hit, vec3 d, int depth, vec3 prev_p, float prev_pdf,
+                              bool prev_delta) {
+    return emitter_hit_contribution_n(hit, d, depth, prev_p, prev_pdf, prev_delta, 1.0, 1.0);
+}
+
+// Radiance of the environment along d for a ray that escaped, weighted as above.
+vec3 environment_contribution_n(vec3 d, int depth, vec3 prev_p, float prev_pdf, bool prev_delta,
+                                float n_bsdf, float n_light) {
+    uint env = u_params.counts.z;
+    if (env == 0u) return vec3(0.0);
+    float pdf_env;
+    vec3 Le = environment_radiance(lights[env - 1u], d, pdf_env);
+    if (depth == 0) return kHideEmitters ? vec3(0.0) : Le;
+    if (prev_delta || kStrategy == kStrategyBsdf) return Le;
+    if (kStrategy == kStrategyLight) return vec3(0.0);
+    return Le * mis_weight_n(n_bsdf, prev_pdf, n_light, light_selection_pmf(env - 1u) * pdf_env);
+}
+
+vec3 environment_contribution(vec3 d, int depth, vec3 prev_p, float prev_pdf, bool prev_delta) {
+    return environment_contribution_n(d, depth, prev_p, prev_pdf, prev_delta, 1.0, 1.0);
+}
+
+// One light sample at the vertex p (with n_light light and n_bsdf BSDF samples taken
+// there): choose a light with u_select, sample it with u_light, trace the shadow ray.
+// Returns f |cos| Le w / pdf, without the path throughput.
+vec3 next_event_n(vec3 p, SurfaceHit hit, Bsdf b, Frame frame, vec3 wo, float time, float u_select,
+                  vec2 u_light, bool use_mis, float n_light, float n_bsdf) {
+    if (u_params.counts.x == 0u) return vec3(0.0);
+    LightChoice choice = select_light(u_select);
+    LightSample ls = sample_light(lights[choice.index], p, u_light);
+    if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return vec3(0.0);
+    vec3 wi = frame_to_local(frame, ls.wi);
+    vec3 f = bsdf_eval(b, wo, wi, false);
+    if (max_component(f) <= 0.0) return vec3(0.0);
+    vec3 o = offset_ray_origin(p, hit.ng, ls.wi);
+    float t_max = isinf(ls.dist) ? kInfinity : ls.dist * (1.0 - kShadowEpsilon);
+    if (scene_occluded(o, ls.wi, t_max, time)) return vec3(0.0);
+    float pdf_light = choice.pmf * ls.pdf;
+    float w = (ls.delta || !use_mis) ? 1.0 : mis_weight_n(n_light, pdf_light, n_bsdf, bsdf_pdf(b, wo, wi));
+    return f * ls.Le * (w / pdf_light);
+}
+
+vec3 next_event(vec3 p, SurfaceHit hit, Bsdf b, Frame frame, vec3 wo, float time, float u_select,
+                vec2 u_light, bool use_mis) {
+    return next_event_n(p, hit, b, frame, wo, time, u_select, u_light, use_mis, 1.0, 1.0);
+}

@@ -1,0 +1,215 @@
+// Light sampling for next-event estimation and the matching pdfs for MIS, for every light kind.
+//
+// Area lights (parallelograms, triangles, spheres) emit radiance from their front
+// side (both sides if two-sided); a parallelogram or triangle is sampled uniformly
+// in solid angle (Urena et al. 2013 / Arvo 1995) or by area (kAreaSampling), a
+// sphere by the cone of directions it subtends (uniform area inside it). Point,
+// spot and directional lights are Dirac deltas that BSDF sampling can never hit.
+// Each light kind is compiled in only when the scene has it (kLightKinds).
+#include "common/constants.glsl"
+#include "common/params.glsl"
+#include "scene/layout.glsl"
+#include "sampling/cone.glsl"
+#include "common/frame.glsl"
+#include "sampling/sphere.glsl"
+#include "sampling/triangle.glsl"
+#include "sampling/spherical_rectangle.glsl"
+#include "sampling/spherical_triangle.glsl"
+
+// Light kinds: the values of glrender.gpu.layout.LIGHT_KINDS.
+const uint kLightParallelogram = 0u;
+const uint kLightTriangle = 1u;
+const uint kLightSphere = 2u;
+const uint kLightDisk = 3u;
+const uint kLightPoint = 4u;
+const uint kLightSpot = 5u;
+const uint kLightDirectional = 6u;
+const uint kLightConstant = 7u;
+const uint kLightEnvmap = 8u;
+// Light flags: glrender.gpu.layout.LIGHT_FLAG_*.
+const uint kLightFlagTwoSided = 1u;
+const uint kLightFlagRectangle = 2u;  // a parallelogram with orthogonal edges
+
+// Solid angles outside this range are sampled by area: below it float32 loses the
+// digits of the spherical construction, above it the warp is badly conditioned
+// (pbrt-v4's MinSphericalSampleArea / MaxSphericalSampleArea).
+const float kMinSphericalSampleArea = 3e-4;
+const float kMaxSphericalSampleArea = 6.22;
+
+bool light_kind_present(uint kind) {
+    return (kLightKinds & (1u << kind)) != 0u;
+}
+
+// A sampled light direction as seen from a reference point.
+struct LightSample {
+    vec3 wi;       // unit direction from the reference point toward the light
+    float dist;    // distance to the sampled point (kInfinity: at infinity)
+    vec3 Le;       // radiance arriving along -wi (point/spot: intensity / dist^2; directional: irradiance)
+    float pdf;     // solid-angle pdf of wi; 1 for delta lights (selection probability not included)
+    bool delta;    // a Dirac light (no MIS)
+};
+
+// Radiance leaving an area light's surface with normal n toward direction w (unit, away).
+vec3 area_light_radiance(LightData l, vec3 n, vec3 w) {
+    bool front = dot(n, w) > 0.0;
+    bool two_sided = (l.info.y & kLightFlagTwoSided) != 0u;
+    return (front || two_sided) ? l.radiance.rgb : vec3(0.0);
+}
+
+// Solid-angle pdf from an area pdf: p_A d^2 / |cos theta_l|.
+float area_to_solid_angle(float pdf_area, float dist, vec3 n, vec3 wi) {
+    float cos_l = abs(dot(n, wi));
+    return cos_l > 0.0 ? pdf_area * dist * dist / cos_l : 0.0;
+}
+
+// Whether a planar light is sampled by solid angle as seen from p.
+bool use_spherical_sampling_rectangle(LightData l, vec3 p, out float solid_angle) {
+    solid_angle = 0.0;
+    if (kAreaSampling != kAreaSamplingSolidAngle || (l.info.y & kLightFlagRectangle) == 0u) return false;
+    if (dot(l.p.xyz - p, l.n.xyz) == 0.0) return false;
+    solid_angle = spherical_rectangle_setup(p, l.p.xyz, l.e1.xyz, l.e2.xyz).solid_angle;
+    return solid_angle > kMinSphericalSampleArea && solid_angle < kMaxSphericalSampleArea;
+}
+
+bool use_spherical_sampling_triangle(LightData l, vec3 p, out float solid_angle) {
+    solid_angle = 0.0;
+    if (kAreaSampling != kAreaSamplingSolidAngle) return false;
+    vec3 v0 = l.p.xyz, v1 = v0 + l.e1.xyz, v2 = v0 + l.e2.xyz;
+    float pdf = spherical_triangle_pdf(v0, v1, v2, p);
+    solid_angle = pdf > 0.0 ? 1.0 / pdf : 0.0;
+    return solid_angle > kMinSphericalSampleArea && solid_angle < kMaxSphericalSampleArea;
+}
+
+// Samples light l as seen from point p; u in [0,1)^2.
+LightSample sample_light(LightData l, vec3 p, vec2 u) {
+    LightSample s = LightSample(vec3(0.0, 0.0, 1.0), 0.0, vec3(0.0), 0.0, false);
+    uint kind = l.info.x;
+    if ((light_kind_present(kLightParallelogram) && kind == kLightParallelogram) ||
+        (light_kind_present(kLightTriangle) && kind == kLightTriangle)) {
+        bool triangle = kind == kLightTriangle;
+        float solid_angle;
+        bool spherical = triangle ? use_spherical_sampling_triangle(l, p, solid_angle)
+                                  : use_spherical_sampling_rectangle(l, p, solid_angle);
+        vec3 q;
+        float pdf_sa = 0.0;
+        if (spherical) {
+            if (triangle) {
+                vec3 v0 = l.p.xyz;
+                vec3 w = sample_spherical_triangle(v0, v0 + l.e1.xyz, v0 + l.e2.xyz, p, u, pdf_sa);
+                float denom = dot(l.n.xyz, w);
+                q = p + w * (dot(l.n.xyz, v0 - p) / denom);
+            } else {
+                q = sample_spherical_rectangle(p, l.p.xyz, l.e1.xyz, l.e2.xyz, u, pdf_sa);
+            }
+        } else {
+            vec2 ab = u;
+            if (triangle) ab = sample_uniform_triangle(u).yz;
+            q = l.p.xyz + ab.x * l.e1.xyz + ab.y * l.e2.xyz;
+        }
+        vec3 d = q - p;
+        float dist = length(d);
+        if (!(dist > 0.0)) return s;
+        s.wi = d / dist;
+        s.dist = dist;
+        s.pdf = spherical ? pdf_sa : area_to_solid_angle(1.0 / l.n.w, dist, l.n.xyz, s.wi);
+        s.Le = area_light_radiance(l, l.n.xyz, -s.wi);
+    } else if (light_kind_present(kLightSphere) && kind == kLightSphere) {
+        vec3 c = l.p.xyz;
+        float r = l.e1.w;
+        vec3 to_c = c - p;
+        float d2 = dot(to_c, to_c);
+        if (d2 > r * r * 1.0001) {
+            // Outside: uniform in the cone subtended (pbrt-v4 Sphere::Sample).
+            float d = sqrt(d2);
+            float sin2_max = r * r / d2;
+            float cos_max = sqrt(max(0.0, 1.0 - sin2_max));
+            Frame f = frame_from_z(to_c / d);
+            vec3 w = frame_from_local(f, sample_uniform_cone(u, cos_max));
+            // Distance to the sphere along w (nearest root).
+            float b = dot(w, to_c);
+            float disc = max(0.0, b * b - (d2 - r * r));
+            float dist = b - sqrt(disc);
+            vec3 n = normalize(p + dist * w - c);
+            s.wi = w;
+            s.dist = dist;
+            s.pdf = uniform_cone_pdf(cos_max);
+            s.Le = area_light_radiance(l, n, -w);
+        } else {
+            // Inside (or on) the sphere: uniform by area.
+            vec3 n = sample_uniform_sphere(u);
+            vec3 q = c + r * n;
+            vec3 dvec = q - p;
+            float dist = length(dvec);
+            if (!(dist > 0.0)) return s;
+            s.wi = dvec / dist;
+            s.dist = dist;
+            s.pdf = area_to_solid_angle(1.0 / l.n.w, dist, n, s.wi);
+            s.Le = area_light_radiance(l, n, -s.wi);
+        }
+    } else if ((light_kind_present(kLightPoint) && kind == kLightPoint) ||
+               (light_kind_present(kLightSpot) && kind == kLightSpot)) {
+        vec3 d = l.p.xyz - p;
+        float dist2 = dot(d, d);
+        s.dist = sqrt(dist2);
+        s.wi = d / s.dist;
+        s.pdf = 1.0;
+        s.delta = true;
+        vec3 intensity = l.radiance.rgb;
+        if (kind == kLightSpot) {
+            // Mitsuba's spot falloff: 1 inside the beam width, a smooth step to 0 at the cutoff.
+            float cos_theta = dot(-s.wi, l.n.xyz);
+            float cos_cutoff = l.params.x, cos_beam = l.params.y;
+            float t = clamp((cos_theta - cos_cutoff) / max(cos_beam - cos_cutoff, 1e-8), 0.0, 1.0);
+            float falloff = cos_theta >= cos_beam ? 1.0 : (cos_theta <= cos_cutoff ? 0.0 : t * t * (3.0 - 2.0 * t));
+            intensity *= falloff;
+        }
+        s.Le = intensity / dist2;
+    } else if (light_kind_present(kLightDirectional) && kind == kLightDirectional) {
+        s.wi = -l.n.xyz;
+        s.dist = kInfinity;
+        s.pdf = 1.0;
+        s.delta = true;
+        s.Le = l.radiance.rgb;
+    } else if (light_kind_present(kLightConstant) && kind == kLightConstant) {
+        s.wi = sample_uniform_sphere(u);
+        s.dist = kInfinity;
+        s.pdf = uniform_sphere_pdf();
+        s.Le = l.radiance.rgb;
+    }
+    return s;
+}
+
+// Solid-angle pdf with which sample_light(l, p, .) returns the direction wi that
+// reaches the light's surface at distance dist where its normal is n (area lights).
+float light_pdf_area_hit(LightData l, vec3 p, vec3 wi, float dist, vec3 n) {
+    uint kind = l.info.x;
+    if ((light_kind_present(kLightParallelogram) && kind == kLightParallelogram) ||
+        (light_kind_present(kLightTriangle) && kind == kLightTriangle)) {
+        float solid_angle;
+        bool spherical = kind == kLightTriangle ? use_spherical_sampling_triangle(l, p, solid_angle)
+                                                : use_spherical_sampling_rectangle(l, p, solid_angle);
+        return spherical ? 1.0 / solid_angle : area_to_solid_angle(1.0 / l.n.w, dist, n, wi);
+    }
+    if (light_kind_present(kLightSphere) && kind == kLightSphere) {
+        vec3 to_c = l.p.xyz - p;
+        float d2 = dot(to_c, to_c);
+        float r = l.e1.w;
+        if (d2 > r * r * 1.0001) {
+            float cos_max = sqrt(max(0.0, 1.0 - r * r / d2));
+            return uniform_cone_pdf(cos_max);
+        }
+        return area_to_solid_angle(1.0 / l.n.w, dist, n, wi);
+    }
+    return 0.0;
+}
+
+// Radiance from the environment along direction w (toward the environment), and
+// the solid-angle pdf with which sample_light returns w.
+vec3 environment_radiance(LightData l, vec3 w, out float pdf) {
+    pdf = 0.0;
+    if (light_kind_present(kLightConstant) && l.info.x == kLightConstant) {
+        pdf = uniform_sphere_pdf();
+        return l.radiance.rgb;
+    }
+    return vec3(0.0);
+}

@@ -1,0 +1,77 @@
+// Every binding of the render kernels and the structs behind them: the device side
+// of the host/device contract. glrender/gpu/layout.py mirrors it field by field
+// (numpy dtypes, binding numbers); tests/gpu/test_layout.py checks that they agree
+// on the device. Nothing else declares a binding.
+//
+// Binding spaces are separate in GL: uniform blocks, storage blocks and texture
+// units each count from 0.
+
+// ---- uniform block 0: per-dispatch parameters (std140) -------------------------
+layout(std140, binding = 0) uniform RenderParams {
+    mat4 camera_open;      // world_from_camera at shutter open (Mitsuba camera frame: +z forward, +x left)
+    mat4 camera_close;     // world_from_camera at shutter close
+    vec4 camera_screen;    // x: tan(fov_x / 2), y: tan(fov_y / 2), z: lens radius, w: focus distance
+    vec4 camera_clip;      // x: near clip, y: far clip
+    vec4 shutter;          // x: open, y: close, z: shutter function (0 box, 1 tent)
+    vec4 filter_params;    // x: radius in pixels, y: gaussian stddev, z: Mitchell B, w: Mitchell C
+    uvec4 image;           // x: width, y: height, z: tiles along x, w: tiles along y
+    uvec4 samples;         // x: first sample index, y: samples per pixel this pass, z: spp of one randomization, w: strata columns
+    uvec4 dispatch;        // x: first tile (permuted order), y: tiles in this dispatch, z: seed, w: tile permutation seed
+    uvec4 counts;          // x: lights, y: materials, z: environment light index + 1 (0: none), w: unused
+    vec4 scene_sphere;     // bounding sphere of the scene: centre xyz, radius w
+    vec4 misc;             // x: AO distance, y: sum of light selection weights, zw: unused
+} u_params;
+
+// ---- storage blocks (std430) ---------------------------------------------------
+// 0, 1: accumulation per pixel, Welford's running mean and M2 (Chan et al.):
+//   accum_mean[i] = (mean r, g, b, count of finite samples)
+//   accum_m2[i]   = (M2 r, g, b, count of dropped non-finite samples)
+layout(std430, binding = 0) buffer AccumMean { vec4 accum_mean[]; };
+layout(std430, binding = 1) buffer AccumM2 { vec4 accum_m2[]; };
+
+// 2: materials. kind: see kMaterial* in bsdf/bsdf.glsl.
+struct MaterialData {
+    vec4 color0;   // diffuse reflectance | conductor eta | specular reflectance (dielectric)
+    vec4 color1;   // specular reflectance (conductor, plastic) | conductor k | specular transmittance
+    vec4 color2;   // conductor k (rgb) for roughconductor tint splitting; w unused
+    vec4 params;   // x: alpha u, y: alpha v, z: relative IOR int/ext, w: unused
+    uvec4 info;    // x: kind, y: flags (kMaterialFlag*), z: color0 texture + 1 (0: none), w: color1 texture + 1
+};
+layout(std430, binding = 2) readonly buffer Materials { MaterialData materials[]; };
+
+// 3: lights. kind: see kLight* in lights/light.glsl.
+struct LightData {
+    vec4 p;         // corner (parallelogram), vertex 0 (triangle), centre (sphere, disk), position (point, spot)
+    vec4 e1;        // edge 1 | disk/spot frame x axis; w: sphere / disk radius
+    vec4 e2;        // edge 2 | disk/spot frame y axis
+    vec4 n;         // unit normal (area) | spot axis | direction (directional); w: area
+    vec4 radiance;  // radiance (area, environment), intensity (point, spot), irradiance (directional)
+    vec4 params;    // spot: x cos(cutoff), y cos(beam width); environment: x scale
+    uvec4 info;     // x: kind, y: flags (kLightFlag*), z: primitive id, w: distribution offset
+};
+layout(std430, binding = 3) readonly buffer Lights { LightData lights[]; };
+
+// 4: packed distributions (light selection alias table, environment map 2D distribution).
+layout(std430, binding = 4) readonly buffer Distributions { float distribution_data[]; };
+
+// 5: first-hit AOVs per pixel, running means: albedo (rgb, -), shading normal (xyz, depth).
+layout(std430, binding = 5) buffer AccumAov { vec4 accum_aov[]; };
+
+// 6: debug counters per pixel (loop iterations of the worst sample) when enabled.
+layout(std430, binding = 6) buffer DebugCounters { uint debug_counters[]; };
+
+// ---- texture units ---------------------------------------------------------------
+// 0-3: BVH nodes and triangles (geometry/bvh_layout.glsl).
+// 4-6: per-triangle shading data of BVH meshes, in BVH order.
+layout(binding = 4) uniform samplerBuffer u_tri_normals;  // 3 texels per triangle: vertex normals (xyz, -)
+layout(binding = 5) uniform samplerBuffer u_tri_uvs;      // 2 texels per triangle: (uv0, uv1), (uv2, -, -)
+layout(binding = 6) uniform usamplerBuffer u_tri_info;    // 1 texel per triangle: material, light + 1, flags, -
+// 7: environment map (lat-long, linear RGB).
+layout(binding = 7) uniform sampler2D u_envmap;
+// 8: surface textures, one layer each, resampled to a common size.
+layout(binding = 8) uniform sampler2DArray u_textures;
+
+// The packed distribution array for sampling/distribution_data.glsl's prototype.
+float distribution_fetch(uint i) {
+    return distribution_data[i];
+}
