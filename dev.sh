@@ -39,6 +39,35 @@ system_packages() {
     if [ ${#missing[@]} -gt 0 ]; then apt_install "${missing[@]}"; fi
 }
 
+# Mesa 25 from bookworm-backports, unpacked into .venv/mesa (the system's Mesa is not touched):
+# its llvmpipe measured 1.8x faster than Debian 12's Mesa 22.3 (see glrender/gl/mesa.py).
+# Best effort: without it glrender runs on the system's Mesa.
+MESA_PACKAGES="mesa-libgallium libegl-mesa0 libgbm1 libdrm2 libdrm-amdgpu1 libdrm-intel1"
+bundled_mesa() {
+    local dest=.venv/mesa
+    [ -f "$dest/.complete" ] && return 0
+    [ "${GLRENDER_MESA:-}" = system ] && return 0
+    grep -q '^VERSION_CODENAME=bookworm' /etc/os-release 2>/dev/null || return 0
+    command -v apt-get >/dev/null 2>&1 || return 0
+    log "fetching Mesa 25 (bookworm-backports) into $dest"
+    local tmp
+    tmp=$(mktemp -d)
+    mkdir -p "$tmp/lists/partial" "$tmp/archives/partial" "$tmp/debs"
+    echo "deb http://deb.debian.org/debian bookworm-backports main" > "$tmp/sources.list"
+    local opts=(-o "Dir::Etc::SourceList=$tmp/sources.list" -o "Dir::Etc::SourceParts=/nonexistent"
+                -o "Dir::State::Lists=$tmp/lists" -o "Dir::Cache::Archives=$tmp/archives"
+                -o "Debug::NoLocking=1" -o "APT::Sandbox::User=root")
+    if apt-get "${opts[@]}" -qq update >/dev/null 2>&1 &&
+       (cd "$tmp/debs" && apt-get "${opts[@]}" -qq download $MESA_PACKAGES >/dev/null 2>&1); then
+        rm -rf "$dest" && mkdir -p "$dest"
+        for deb in "$tmp"/debs/*.deb; do dpkg -x "$deb" "$dest"; done
+        touch "$dest/.complete"
+    else
+        log "could not fetch Mesa 25; using the system's Mesa (slower)"
+    fi
+    rm -rf "$tmp"
+}
+
 python_env() {
     local extras=$1 stamp=.venv/.glrender-installed
     if [ ! -x .venv/bin/python ]; then
@@ -53,6 +82,7 @@ python_env() {
         .venv/bin/python -m pip install -q -e ".[$extras]"
         printf '%s\n' "$want" >> "$stamp"
     fi
+    bundled_mesa
 }
 
 cmd=${1:-}

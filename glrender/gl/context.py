@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import moderngl
 
 from ..errors import DeviceError
-from . import egl
+from . import egl, mesa
 
 REQUIRED_GL = 430
 ENV_DEVICE = "GLRENDER_DEVICE"
@@ -123,6 +123,7 @@ class Context:
             "extensions": {name: self.has_extension(name) for name in EXTENSIONS_OF_INTEREST},
             "llvmpipe_threads": llvmpipe_threads() if self.is_llvmpipe else None,
             "shader_cache": shader_cache_location(),
+            "bundled_mesa": mesa.active_root(),
         }
 
 

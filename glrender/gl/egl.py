@@ -26,6 +26,9 @@ INSTALL_HINT = f"install EGL and Mesa with `sudo apt-get install {APT_PACKAGES}`
 @lru_cache(maxsize=None)
 def library_paths() -> tuple[str, str]:
     """(libEGL, libGL) sonames, or DeviceError naming the package to install."""
+    from . import mesa
+
+    mesa.activate()  # before anything loads EGL
     egl = ctypes.util.find_library("EGL")
     gl = ctypes.util.find_library("GL")
     missing = [name for name, path in (("libEGL", egl), ("libGL", gl)) if path is None]

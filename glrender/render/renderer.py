@@ -104,6 +104,7 @@ class Renderer:
         self._upload()
         self._compile()
         self.reset()
+        self._warm_up()
 
     # -- setup -------------------------------------------------------------------------------
     def _upload(self):
@@ -191,6 +192,15 @@ class Renderer:
             self.samples_per_pass = max(1, int(s.samples_per_pass))
         else:
             self.samples_per_pass = 1 if p.mesh is not None else 4
+
+    def _warm_up(self):
+        """llvmpipe compiles a kernel at its first dispatch (seconds for a cold cache):
+        run one empty work group now, so setup time is not charged to the render."""
+        prm = self._param_block(0, 0)
+        self._bind()
+        self._params.write(prm.tobytes())  # dispatch.y = 0: every invocation returns at once
+        self.program.run(group_x=1)
+        self.gl.finish()
 
     def reset(self):
         """Forget every sample (after the camera moves, say)."""
