@@ -174,6 +174,30 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--debug", action="store_true", help="show full error messages")
     _add_device(p)
     p.set_defaults(func=cmd_render)
+
+    # -- glrender sampling: pictures of every warp and their chi-square table ---------------
+    def cmd_sampling(args) -> int:
+        from pathlib import Path
+
+        from .errors import UsageError
+        from .sampling.plots import write_sampling_plots
+
+        if args.samples < 1000:
+            raise UsageError(f"--samples {args.samples}: the chi-square tests need at least 1000")
+        write_sampling_plots(args.out, seed=args.seed, sample_count=args.samples)
+        print(Path(args.out).resolve())
+        return 0
+
+    p = sub.add_parser("sampling", help="plot the sampling warps and tabulate their chi-square tests",
+                       description="Write one PNG per 2D warp of the GLSL sampling library (the "
+                                   "warp applied to independent and to jittered-grid points), "
+                                   "disks.png (the four disk warps) and chi2.md (each warp's "
+                                   "chi-square p-value), then print the folder.")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder (created if missing)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the plotted and tested points")
+    p.add_argument("--samples", type=int, default=1_000_000, metavar="N",
+                   help="chi-square samples per warp (default 10^6)")
+    p.set_defaults(func=cmd_sampling)
     return parser
 
 
