@@ -1,0 +1,8 @@
+"""Acceleration structures: a 4-wide BVH built in numpy for the GLSL traversal.
+
+``build_bvh`` (no GL) is the entry point; ``glrender.accel.gpu.GpuBvh`` uploads
+the result as buffer textures.
+"""
+from .bvh import Bvh, build_bvh
+
+__all__ = ["Bvh", "build_bvh"]

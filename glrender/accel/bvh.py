@@ -1,0 +1,198 @@
+"""``build_bvh``: triangles in, a 4-wide BVH packed for the GLSL traversal out.
+
+Pipeline (all numpy, no GL): validate and clean the triangles
+(:mod:`.mesh`), build a binary tree (PLOC by default, :mod:`.ploc`; a full
+binned-SAH sweep on request, :mod:`.binned_sah`), choose leaves of at most four
+triangles by SAH, collapse to four children per node (:mod:`.collapse`) and
+reorder the triangles so that every leaf is a contiguous range.
+
+The packed layout (:meth:`Bvh.pack`) is what ``shaders/geometry/bvh.glsl``
+reads through buffer textures:
+
+``nodes`` (rgba32ui, 4 texels = 64 bytes per node, :mod:`.quantize`)
+    the node's origin and scale, the four child references and the child
+    boxes as 8-bit planes rounded outwards. A reference is an inner node index
+    (high bit clear) or a leaf ``LEAF_FLAG | count << 28 | first`` covering
+    triangles ``[first, first + count)``; empty slots decode to a box no ray enters.
+``triangles`` (rgba32f, 3 texels per triangle)
+    the corners v0, v1, v2 of each triangle in BVH order (``w`` unused).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import UsageError
+from .binned_sah import build_binned_sah
+from .collapse import KIND_EMPTY, KIND_INNER, KIND_LEAF, MAX_LEAF_SIZE, WIDTH, Bvh4Arrays, collapse_to_bvh4
+from .mesh import PreparedTriangles, prepare_triangles
+from .ploc import DEFAULT_RADIUS, build_ploc
+from .quantize import pack_nodes
+from .tree import BinaryTree, half_area
+
+METHODS = ("ploc", "binned_sah")
+LEAF_FLAG = 0x80000000
+LEAF_COUNT_SHIFT = 28
+LEAF_FIRST_MASK = (1 << LEAF_COUNT_SHIFT) - 1
+EMPTY_REF = LEAF_FLAG  # a leaf of zero triangles: harmless even if visited
+# Stack bound of the GLSL traversal: it pushes at most WIDTH - 1 entries per
+# inner node on the path, so a tree of inner depth <= MAX_DEPTH never needs more
+# than (WIDTH - 1) * (MAX_DEPTH + 1) entries; shaders/geometry/bvh.glsl sizes its
+# stack from this (kBvhStackSize) and the builder guarantees the depth.
+MAX_DEPTH = 31
+STACK_SIZE = (WIDTH - 1) * (MAX_DEPTH + 1)
+# SAH constants for the leaf decision (cost of a binary node visit and of a
+# triangle test, in the same unit); see benchmarks/RESULTS.md for how they were chosen.
+C_NODE = 1.0
+C_TRI = 1.0
+
+
+@dataclass
+class Bvh:
+    """A 4-wide BVH over triangles, in BVH order (see the module doc for the layout)."""
+
+    corners: np.ndarray  # (T, 3, 3) float32, BVH order
+    prim_order: np.ndarray  # (T,) int64: BVH-order triangle -> input triangle index
+    arrays: Bvh4Arrays
+    prepared: PreparedTriangles = field(repr=False)
+    method: str = "ploc"
+    build_seconds: float = 0.0
+    binary_sah: float = 0.0
+    _packed: dict | None = field(default=None, repr=False)
+
+    @property
+    def triangle_count(self) -> int:
+        return len(self.corners)
+
+    @property
+    def node_count(self) -> int:
+        return self.arrays.node_count
+
+    @property
+    def depth(self) -> int:
+        """Depth of the deepest inner node (the root is 0)."""
+        return int(self.arrays.depth.max()) if self.node_count else 0
+
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """World box of all triangles (an inverted box when empty)."""
+        if not self.triangle_count:
+            return np.full(3, np.inf, np.float32), np.full(3, -np.inf, np.float32)
+        c = self.corners
+        return (np.minimum(np.minimum(c[:, 0], c[:, 1]), c[:, 2]).min(axis=0),
+                np.maximum(np.maximum(c[:, 0], c[:, 1]), c[:, 2]).max(axis=0))
+
+    def sah_cost(self, c_node: float = 1.0, c_tri: float = 1.0) -> float:
+        """SAH cost of the 4-wide tree relative to its root box.
+
+        ``(c_node * sum of inner node areas + c_tri * sum of leaf area x count) / root area``
+        (Goldsmith & Salmon 1987; MacDonald & Booth 1990), with surface areas of
+        the node boxes; one inner node visit tests its four child boxes.
+        """
+        a = self.arrays
+        if not self.triangle_count:
+            return 0.0
+        lo, hi = a.child_lo, a.child_hi
+        area = half_area(np.where(a.child_kind[..., None] > 0, lo, 0),
+                         np.where(a.child_kind[..., None] > 0, hi, 0))
+        root_lo, root_hi = self.bounds
+        root_area = float(half_area(root_lo, root_hi))
+        inner = area[a.child_kind == KIND_INNER].sum() + root_area
+        leaves = (area * a.child_count)[a.child_kind == KIND_LEAF].sum()
+        if root_area <= 0:
+            return float(c_node + c_tri * self.triangle_count)
+        return float((c_node * inner + c_tri * leaves) / root_area)
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes of the packed buffers (nodes, triangles)."""
+        return sum(v.nbytes for v in self.pack().values())
+
+    def stats(self) -> dict:
+        """Build statistics: counts, removed triangles, depth, SAH, memory."""
+        a = self.arrays
+        leaf = a.child_kind == KIND_LEAF
+        leaves = int(np.count_nonzero(leaf))
+        p = self.prepared
+        nbytes = self.nbytes
+        return {
+            "method": self.method,
+            "input_triangles": p.input_count,
+            "triangles": self.triangle_count,
+            "skipped_invalid": p.skipped_invalid,
+            "skipped_degenerate": p.skipped_degenerate,
+            "removed_duplicates": p.removed_duplicates,
+            "nodes": self.node_count,
+            "leaves": leaves,
+            "mean_leaf_size": float(a.child_count[leaf].mean()) if leaves else 0.0,
+            "depth": self.depth,
+            "sah_cost": self.sah_cost(),
+            "binary_sah_cost": self.binary_sah,
+            "bytes": nbytes,
+            "bytes_per_triangle": nbytes / max(self.triangle_count, 1),
+            "build_seconds": self.build_seconds,
+        }
+
+    def child_refs(self) -> np.ndarray:
+        """(N, 4) uint32 child references (see the module doc)."""
+        a = self.arrays
+        refs = np.full(a.child_kind.shape, EMPTY_REF, np.uint64)
+        inner = a.child_kind == KIND_INNER
+        leaf = a.child_kind == KIND_LEAF
+        refs[inner] = a.child_index[inner].astype(np.uint64)
+        refs[leaf] = (LEAF_FLAG | (a.child_count[leaf] << LEAF_COUNT_SHIFT)
+                      | a.child_index[leaf]).astype(np.uint64)
+        return refs.astype(np.uint32)
+
+    def pack(self) -> dict[str, np.ndarray]:
+        """The arrays of the buffer textures: ``nodes`` (uint32) and ``triangles`` (float32)."""
+        if self._packed is None:
+            a = self.arrays
+            nodes = pack_nodes(a.child_lo, a.child_hi, a.child_kind != KIND_EMPTY,
+                               self.child_refs())
+            tris = np.zeros((self.triangle_count, 3, 4), np.float32)
+            tris[..., :3] = self.corners
+            self._packed = {"nodes": nodes, "triangles": tris.reshape(-1, 4)}
+        return self._packed
+
+
+def build_bvh(vertices, triangles, *, method: str = "ploc", radius: int = DEFAULT_RADIUS,
+              on_invalid: str = "skip", remove_degenerate: bool = True,
+              remove_duplicates: bool = True, max_leaf_size: int = MAX_LEAF_SIZE,
+              c_node: float = C_NODE, c_tri: float = C_TRI) -> Bvh:
+    """Build a 4-wide BVH over ``triangles`` (T, 3) int indexing ``vertices`` (V, 3).
+
+    ``method``: ``"ploc"`` (fast, the default) or ``"binned_sah"`` (a full
+    top-down binned SAH sweep: slower, the quality reference). ``on_invalid``:
+    ``"skip"`` or ``"raise"`` for triangles with NaN/Inf vertices. Zero-area and
+    exactly duplicated triangles are dropped (counted in :meth:`Bvh.stats`)
+    unless disabled. ``prim_order`` maps BVH-order triangles to input indices.
+    """
+    if method not in METHODS:
+        raise UsageError(f"build_bvh: method must be one of {METHODS}, got {method!r}")
+    if not 1 <= max_leaf_size <= MAX_LEAF_SIZE:
+        raise UsageError(f"build_bvh: max_leaf_size must be 1..{MAX_LEAF_SIZE}, got {max_leaf_size}")
+    start = time.perf_counter()
+    prepared = prepare_triangles(vertices, triangles, on_invalid=on_invalid,
+                                 remove_degenerate=remove_degenerate,
+                                 remove_duplicates=remove_duplicates)
+    c = prepared.corners
+    lo = np.minimum(np.minimum(c[:, 0], c[:, 1]), c[:, 2])
+    hi = np.maximum(np.maximum(c[:, 0], c[:, 1]), c[:, 2])
+    tree = build_ploc(lo, hi, radius) if method == "ploc" else build_binned_sah(lo, hi)
+    arrays = collapse_tree(tree, max_leaf_size, c_node, c_tri)
+    order = arrays.prim_order
+    bvh = Bvh(np.ascontiguousarray(c[order]), prepared.source[order], arrays, prepared, method,
+              binary_sah=tree.sah_cost())
+    bvh.build_seconds = time.perf_counter() - start
+    return bvh
+
+
+def collapse_tree(tree: BinaryTree, max_leaf_size: int = MAX_LEAF_SIZE, c_node: float = C_NODE,
+                  c_tri: float = C_TRI) -> Bvh4Arrays:
+    """Leaf decisions by SAH, then the collapse to four children per node."""
+    count = tree.counts()
+    leaf = tree.leaf_mask(count, max_leaf_size, c_node, c_tri)
+    return collapse_to_bvh4(tree, leaf, count, tree.first_prim(count), MAX_DEPTH)

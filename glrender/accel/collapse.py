@@ -1,0 +1,241 @@
+"""Collapse a binary BVH into a 4-wide one (the layout the GLSL traversal reads).
+
+Top-down over the BVH4 levels, vectorised: each BVH4 node starts from the two
+children of its binary node and repeatedly opens the internal child of largest
+surface area until it has four children or none can be opened (the greedy
+collapse of Wald et al. 2008 / Pinto 2010). Binary subtrees chosen as leaves by
+:meth:`BinaryTree.leaf_mask` end the descent and become leaf references.
+
+Depth bound: the traversal's stack is sized for inner nodes at depth <=
+``max_depth``. Should the greedy collapse go deeper, it is redone with the
+exact collapsed height of every subtree (:func:`collapsed_heights`): a child at
+depth ``max_depth - RANGE_LEVELS`` whose subtree would end too deep is built
+instead as a balanced 4-wide tree over its triangles (its contiguous range of
+the triangle order split in four near-equal parts, recursively: at most
+RANGE_LEVELS further levels for the 4^(RANGE_LEVELS + 1) = 2^28 triangles a
+leaf reference can address). Ordinary meshes never need it (PLOC on a
+10^6-triangle mesh: depth ~20 against the bound of 31); adversarial ones
+(geometric size progressions, nested shells) do, and only their deep parts change.
+
+Nodes come out in breadth-first order, so the inner children of one node sit
+next to each other; triangles come out in the depth-first leaf order of the
+binary tree, so every leaf is one contiguous range of the reordered triangles.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .tree import BinaryTree, half_area
+
+WIDTH = 4
+MAX_LEAF_SIZE = 4
+EMPTY = -1
+RANGE_LEVELS = 13
+KIND_EMPTY, KIND_INNER, KIND_LEAF = 0, 1, 2
+
+
+@dataclass
+class Bvh4Arrays:
+    """A 4-wide BVH in structure-of-arrays form (no GL types)."""
+
+    child_lo: np.ndarray  # (N, 4, 3) float32; +inf for empty slots
+    child_hi: np.ndarray  # (N, 4, 3) float32; -inf for empty slots
+    child_kind: np.ndarray  # (N, 4) int8: KIND_EMPTY, KIND_INNER or KIND_LEAF
+    child_index: np.ndarray  # (N, 4) int64: node index, or first triangle of a leaf
+    child_count: np.ndarray  # (N, 4) int64: triangles under the child (0 if empty)
+    depth: np.ndarray  # (N,) int64: root = 0
+    prim_order: np.ndarray  # (T,) int64: BVH-order triangle -> builder primitive
+
+    @property
+    def node_count(self) -> int:
+        return len(self.child_kind)
+
+
+def _open_largest(cand: np.ndarray, openable: np.ndarray, area: np.ndarray,
+                  left: np.ndarray, right: np.ndarray) -> np.ndarray:
+    """Replace, in each row, the openable candidate of largest area by its two children.
+
+    ``cand`` (F, k) binary node ids (or EMPTY); returns (F, k + 1), children in
+    place of their parent so the left-to-right (depth-first) order is kept.
+    """
+    f, k = cand.shape
+    score = np.where(openable, area[np.maximum(cand, 0)], -1.0)
+    j = np.argmax(score, axis=1)
+    rows_open = score[np.arange(f), j] >= 0
+    col = np.arange(k + 1)[None, :]
+    jj = np.where(rows_open, j, k + 1)[:, None]
+    src = np.clip(np.where(col < jj, col, col - 1), 0, k - 1)
+    out = np.take_along_axis(cand, src, axis=1)
+    out[~rows_open, k] = EMPTY
+    r = np.nonzero(rows_open)[0]
+    parent = cand[r, j[r]]
+    out[r, j[r]] = left[parent]
+    out[r, j[r] + 1] = right[parent]
+    return out
+
+
+def _range_boxes(prim_lo: np.ndarray, prim_hi: np.ndarray, start: np.ndarray,
+                 size: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Boxes of the primitive ranges [start, start + size) (sizes >= 1)."""
+    if len(start) == 0:
+        return np.zeros((0, 3), np.float32), np.zeros((0, 3), np.float32)
+    order = np.argsort(start, kind="stable")
+    bounds = np.stack([start[order], start[order] + size[order]], axis=1).ravel()
+    pad_lo = np.concatenate([prim_lo, prim_lo[:1]])  # reduceat needs indices < len
+    pad_hi = np.concatenate([prim_hi, prim_hi[:1]])
+    lo = np.empty((len(start), 3), np.float32)
+    hi = np.empty((len(start), 3), np.float32)
+    lo[order] = np.minimum.reduceat(pad_lo, bounds, axis=0)[0::2]
+    hi[order] = np.maximum.reduceat(pad_hi, bounds, axis=0)[0::2]
+    return lo, hi
+
+
+def _binary_rows(tree, roots, is_inner, area):
+    """Candidate children (F, 4) of BVH4 nodes made from binary nodes ``roots``."""
+    cand = np.stack([tree.left[roots], tree.right[roots]], axis=1)
+    for _ in range(WIDTH - 2):
+        openable = (cand >= 0) & is_inner[np.maximum(cand, 0)]
+        cand = _open_largest(cand, openable, area, tree.left, tree.right)
+    return cand
+
+
+def _range_rows(start, size):
+    """Four near-equal parts (F, 4) of each range [start, start + size), size > WIDTH."""
+    q, r = size // WIDTH, size % WIDTH
+    part = q[:, None] + (np.arange(WIDTH)[None, :] < r[:, None])
+    first = start[:, None] + np.concatenate([np.zeros((len(size), 1), np.int64),
+                                             np.cumsum(part, axis=1)[:, :-1]], axis=1)
+    return first, part
+
+
+def collapsed_heights(tree: BinaryTree, is_inner: np.ndarray, area: np.ndarray) -> np.ndarray:
+    """Inner BVH4 levels the greedy collapse makes from each binary subtree (0 for leaves).
+
+    The BVH4 node made from binary node c depends only on c's subtree, so this is
+    a bottom-up pass: 1 + the largest height among the node's inner children.
+    """
+    height = np.zeros(len(tree.lo), np.int64)
+    for s, e in tree.bottom_up():
+        ids = np.arange(s, e)
+        ids = ids[is_inner[ids]]
+        if len(ids) == 0:
+            continue
+        cand = _binary_rows(tree, ids, is_inner, area)
+        safe = np.maximum(cand, 0)
+        below = np.where((cand >= 0) & is_inner[safe], height[safe], 0)
+        height[ids] = 1 + below.max(axis=1)
+    return height
+
+
+def collapse_to_bvh4(tree: BinaryTree, leaf: np.ndarray, count: np.ndarray,
+                     first: np.ndarray, max_depth: int) -> Bvh4Arrays:
+    """Collapse ``tree`` given its leaf decisions (``leaf``), counts and first positions."""
+    if max_depth < RANGE_LEVELS:
+        raise ValueError(f"max_depth must be at least {RANGE_LEVELS}")
+    area = half_area(tree.lo, tree.hi)
+    is_inner = ~leaf
+    arrays = _collapse(tree, leaf, count, first, area, None, max_depth)
+    if len(arrays.depth) and arrays.depth.max() > max_depth:
+        height = collapsed_heights(tree, is_inner, area)
+        arrays = _collapse(tree, leaf, count, first, area, height, max_depth)
+    return arrays
+
+
+def _collapse(tree: BinaryTree, leaf: np.ndarray, count: np.ndarray, first: np.ndarray,
+              area: np.ndarray, height: np.ndarray | None, max_depth: int) -> Bvh4Arrays:
+    """The collapse; with ``height``, subtrees that would end too deep become ranges."""
+    n = tree.n
+    if n == 0:  # one root with four empty slots
+        return Bvh4Arrays(np.full((1, WIDTH, 3), np.inf, np.float32),
+                          np.full((1, WIDTH, 3), -np.inf, np.float32),
+                          np.zeros((1, WIDTH), np.int8), np.zeros((1, WIDTH), np.int64),
+                          np.zeros((1, WIDTH), np.int64), np.zeros(1, np.int64), np.zeros(0, np.int64))
+    is_inner = ~leaf
+    switch_depth = max_depth - RANGE_LEVELS
+    prim_order = np.empty(n, np.int64)
+    prim_order[first[:n]] = np.arange(n)
+    prim_lo, prim_hi = tree.lo[:n][prim_order], tree.hi[:n][prim_order]
+
+    # The root is always an inner BVH4 node; a tree that is one leaf hangs below it.
+    bin_roots = np.zeros(0, np.int64)
+    rng_start = np.zeros(0, np.int64)
+    rng_size = np.zeros(0, np.int64)
+    first_level = None
+    if leaf[tree.root]:
+        first_level = np.full((1, WIDTH), EMPTY, np.int64)
+        first_level[0, 0] = tree.root
+    else:
+        bin_roots = np.array([tree.root])
+
+    chunks = []
+    depth = 0
+    next_index = 1
+    while True:
+        # Binary rows: children from opening binary nodes.
+        cand = first_level if first_level is not None else _binary_rows(tree, bin_roots, is_inner, area)
+        first_level = None
+        valid = cand >= 0
+        safe = np.maximum(cand, 0)
+        inner = valid & is_inner[safe]
+        b_kind = np.where(valid, np.where(inner, KIND_INNER, KIND_LEAF), KIND_EMPTY)
+        b_first, b_size = first[safe], np.where(valid, count[safe], 0)
+        b_lo, b_hi = tree.lo[safe], tree.hi[safe]
+        # Inner children whose subtree may end too deep switch to balanced ranges.
+        to_range = np.zeros_like(inner)
+        if height is not None and depth + 1 == switch_depth:
+            to_range = inner & (depth + height[safe] > max_depth)
+        b_mode = np.where(to_range, 1, 0)
+        # Range rows: four near-equal parts of each range.
+        r_first, r_size = _range_rows(rng_start, rng_size)
+        r_kind = np.where(r_size > MAX_LEAF_SIZE, KIND_INNER,
+                          np.where(r_size > 0, KIND_LEAF, KIND_EMPTY))
+        r_lo, r_hi = _range_boxes(prim_lo, prim_hi, r_first.ravel(), np.maximum(r_size, 1).ravel())
+        kind = np.concatenate([b_kind, r_kind]).astype(np.int8)
+        start = np.concatenate([b_first, r_first])
+        size = np.concatenate([b_size, r_size])
+        mode = np.concatenate([b_mode, np.ones_like(r_size)])  # 0 binary, 1 range
+        binary_id = np.concatenate([cand, np.full_like(r_size, EMPTY)])
+        lo = np.concatenate([b_lo, r_lo.reshape(-1, WIDTH, 3)])
+        hi = np.concatenate([b_hi, r_hi.reshape(-1, WIDTH, 3)])
+        lo = np.where((kind > 0)[..., None], lo, np.float32(np.inf)).astype(np.float32)
+        hi = np.where((kind > 0)[..., None], hi, np.float32(-np.inf)).astype(np.float32)
+
+        is_child_node = kind == KIND_INNER
+        n_inner = int(np.count_nonzero(is_child_node))
+        index = np.where(kind == KIND_LEAF, start, 0)
+        index[is_child_node] = next_index + np.arange(n_inner)  # row-major: breadth-first
+        rows = len(kind)
+        chunks.append((lo, hi, kind, index, size, np.full(rows, depth, np.int64)))
+        next_index += n_inner
+        # Next level: inner children keep their order (binary ones, then ranges, as indexed).
+        child_mode, child_bin = mode[is_child_node], binary_id[is_child_node]
+        child_start, child_size = start[is_child_node], size[is_child_node]
+        if np.any(child_mode == 1) and np.any(child_mode == 0):
+            # Keep index order = row order of the next level: binary rows must come first.
+            order = np.argsort(child_mode, kind="stable")
+            if np.any(order != np.arange(len(order))):
+                _renumber(chunks[-1], next_index - n_inner, order)
+                child_mode, child_bin = child_mode[order], child_bin[order]
+                child_start, child_size = child_start[order], child_size[order]
+        bin_roots = child_bin[child_mode == 0]
+        rng_start, rng_size = child_start[child_mode == 1], child_size[child_mode == 1]
+        depth += 1
+        if n_inner == 0:
+            break
+
+    def cat(i):
+        return np.concatenate([c[i] for c in chunks])
+
+    return Bvh4Arrays(cat(0), cat(1), cat(2), cat(3), cat(4), cat(5), prim_order)
+
+
+def _renumber(chunk, base: int, order: np.ndarray) -> None:
+    """Give the inner children of this level the indices of their sorted positions."""
+    kind, index = chunk[2], chunk[3]
+    inner = kind == KIND_INNER
+    old = index[inner] - base  # 0..k-1 in row-major order
+    new_of_old = np.empty_like(order)
+    new_of_old[order] = np.arange(len(order))
+    index[inner] = base + new_of_old[old]

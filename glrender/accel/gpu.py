@@ -1,0 +1,56 @@
+"""Upload a :class:`~glrender.accel.bvh.Bvh` as the buffer textures the GLSL traversal reads.
+
+Texture units 0-3 belong to geometry; ``shaders/geometry/bvh_layout.glsl``
+declares them and nothing else does (a test checks the units below against it).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import UsageError
+from ..gl.buffers import BufferTexture
+from .bvh import MAX_DEPTH, Bvh
+
+UNIT_NODES = 0
+UNIT_TRIANGLES = 1
+UNIT_INSTANCES = 2
+UNITS_RESERVED = range(4)  # units 0-3 belong to geometry
+# name in Bvh.pack() -> (texture unit, buffer texture format, GLSL sampler name)
+TEXTURES = {
+    "nodes": (UNIT_NODES, "rgba32ui", "u_bvh_nodes"),
+    "triangles": (UNIT_TRIANGLES, "rgba32f", "u_bvh_triangles"),
+    "instances": (UNIT_INSTANCES, "rgba32f", "u_bvh_instances"),
+}
+
+
+class GpuBvh:
+    """A BVH's buffer textures on one context; :meth:`bind` before dispatching."""
+
+    def __init__(self, ctx, bvh: Bvh):
+        if bvh.depth > MAX_DEPTH:
+            raise UsageError(f"GpuBvh: tree depth {bvh.depth} exceeds the traversal stack "
+                             f"bound {MAX_DEPTH} (build it with glrender.accel.build_bvh)")
+        packed = bvh.pack()
+        packed.setdefault("instances", np.zeros((1, 4), np.float32))
+        self.bvh = bvh
+        self.textures = {}
+        try:
+            for name, (unit, fmt, _) in TEXTURES.items():
+                self.textures[name] = BufferTexture(ctx, packed[name], fmt, f"bvh {name}")
+        except Exception:
+            self.release()
+            raise
+
+    @property
+    def nbytes(self) -> int:
+        return sum(t.nbytes for t in self.textures.values())
+
+    def bind(self) -> None:
+        """Bind every texture to its unit (see ``shaders/geometry/bvh_layout.glsl``)."""
+        for name, texture in self.textures.items():
+            texture.bind(TEXTURES[name][0])
+
+    def release(self) -> None:
+        for texture in self.textures.values():
+            texture.release()
+        self.textures = {}

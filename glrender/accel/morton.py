@@ -1,0 +1,35 @@
+"""Morton (Z-order) codes of points: the spatial sort every builder here starts from."""
+from __future__ import annotations
+
+import numpy as np
+
+BITS_PER_AXIS = 21  # 3 x 21 = 63 bits in one uint64
+
+
+def _spread_bits(x: np.ndarray) -> np.ndarray:
+    """Insert two zero bits between each of the low 21 bits of ``x`` (uint64)."""
+    x = x & np.uint64(0x1FFFFF)
+    x = (x | (x << np.uint64(32))) & np.uint64(0x001F00000000FFFF)
+    x = (x | (x << np.uint64(16))) & np.uint64(0x001F0000FF0000FF)
+    x = (x | (x << np.uint64(8))) & np.uint64(0x100F00F00F00F00F)
+    x = (x | (x << np.uint64(4))) & np.uint64(0x10C30C30C30C30C3)
+    x = (x | (x << np.uint64(2))) & np.uint64(0x1249249249249249)
+    return x
+
+
+def morton_codes(points: np.ndarray) -> np.ndarray:
+    """63-bit Morton codes of (N, 3) points, quantised over their own bounds per axis."""
+    points = np.asarray(points, np.float64)
+    if len(points) == 0:
+        return np.zeros(0, np.uint64)
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    extent = hi - lo
+    scale = np.where(extent > 0, ((1 << BITS_PER_AXIS) - 1) / np.where(extent > 0, extent, 1), 0)
+    q = np.clip((points - lo) * scale, 0, (1 << BITS_PER_AXIS) - 1).astype(np.uint64)
+    return (_spread_bits(q[:, 0]) << np.uint64(2)) | (_spread_bits(q[:, 1]) << np.uint64(1)) \
+        | _spread_bits(q[:, 2])
+
+
+def morton_order(points: np.ndarray) -> np.ndarray:
+    """Indices that sort ``points`` along the Z-order curve (ties: by index)."""
+    return np.argsort(morton_codes(points), kind="stable")

@@ -1,0 +1,179 @@
+// Closest-hit and any-hit ray queries against the 4-wide BVH of glrender/accel
+// (layout: geometry/bvh_layout.glsl).
+//
+// Ordered traversal: the children a ray enters are sorted by entry distance, the
+// nearest is visited next and the others are pushed farthest first, each with its
+// entry distance so that entries beyond the closest hit found since are dropped
+// when popped.
+//
+// llvmpipe runs 8 invocations per SIMD vector and executes both sides of every
+// branch, so each loop iteration does one node test AND one triangle test for
+// every lane: a lane holds a leaf being tested (one triangle per iteration) and,
+// at the same time, the next inner node. This measured 1.2x faster than one
+// node-or-triangle step per iteration (benchmarks/RESULTS.md, "BVH").
+//
+// Stack bound: a node pushes at most 3 entries, so a tree whose inner nodes lie
+// at depth <= kBvhMaxDepth needs at most kBvhStackSize = 3 (kBvhMaxDepth + 1)
+// entries. The builder guarantees that depth (glrender/accel/bvh.py, MAX_DEPTH)
+// and GpuBvh refuses deeper trees, so the stack cannot overflow. Should it ever
+// be about to (a corrupted tree), the query stops and reports hit.prim =
+// kBvhStackOverflow: it never writes out of bounds, loops, or misses silently.
+#include "common/constants.glsl"
+#include "common/loop_counter.glsl"
+#include "geometry/aabb.glsl"
+#include "geometry/bvh_layout.glsl"
+#include "geometry/triangle.glsl"
+
+#ifndef GLRENDER_BVH_MAX_DEPTH
+#define GLRENDER_BVH_MAX_DEPTH 31
+#endif
+const int kBvhMaxDepth = GLRENDER_BVH_MAX_DEPTH;
+const int kBvhStackSize = 3 * (kBvhMaxDepth + 1);
+const uint kBvhNoHit = 0xFFFFFFFFu;
+const uint kBvhStackOverflow = 0xFFFFFFFEu;
+
+// A ray hit: distance t along d (in units of |d|), triangle in BVH order, and
+// barycentrics (b1, b2) of its corners v1 and v2.
+struct BvhHit {
+    float t;
+    uint prim;
+    vec2 bary;
+};
+
+// Corner k (0, 1, 2) of triangle prim (BVH order), in world space.
+vec3 bvh_triangle_vertex(uint prim, uint k) {
+    return texelFetch(u_bvh_triangles, int(prim) * kBvhTexelsPerTriangle + int(k)).xyz;
+}
+
+// The four 8-bit planes in word w (byte k = child k) decoded as p + q * scale.
+vec4 bvh_decode_planes(uint w, float p, float scale) {
+    return p + vec4((uvec4(w) >> uvec4(0u, 8u, 16u, 24u)) & 255u) * scale;
+}
+
+// Entry distances of the ray into the four children of a node (+inf: missed or
+// beyond t_max), and the children's references.
+vec4 bvh_node_entry(SlabRay r, uint node, float t_max, out uvec4 child) {
+    int base = int(node) * kBvhTexelsPerNode;
+    uvec4 head = texelFetch(u_bvh_nodes, base);
+    child = texelFetch(u_bvh_nodes, base + 1);
+    uvec4 xy = texelFetch(u_bvh_nodes, base + 2);  // lo.x, hi.x, lo.y, hi.y
+    uvec2 z = texelFetch(u_bvh_nodes, base + 3).xy;  // lo.z, hi.z
+    vec3 p = uintBitsToFloat(head.xyz);
+    vec3 scale = uintBitsToFloat(((uvec3(head.w) >> uvec3(0u, 8u, 16u)) & 255u) << 23u);
+    // The near plane of an axis is its min plane unless the ray runs towards -axis.
+    return slab_entry4(r,
+                       bvh_decode_planes(r.neg.x ? xy.y : xy.x, p.x, scale.x),
+                       bvh_decode_planes(r.neg.x ? xy.x : xy.y, p.x, scale.x),
+                       bvh_decode_planes(r.neg.y ? xy.w : xy.z, p.y, scale.y),
+                       bvh_decode_planes(r.neg.y ? xy.z : xy.w, p.y, scale.y),
+                       bvh_decode_planes(r.neg.z ? z.y : z.x, p.z, scale.z),
+                       bvh_decode_planes(r.neg.z ? z.x : z.y, p.z, scale.z), t_max);
+}
+
+// Compare-exchange of (t, ref) pairs: afterwards ta <= tb.
+void bvh_sort2(inout float ta, inout uint ra, inout float tb, inout uint rb) {
+    bool swap = tb < ta;
+    float t = ta;
+    uint r = ra;
+    ta = swap ? tb : ta;
+    ra = swap ? rb : ra;
+    tb = swap ? t : tb;
+    rb = swap ? r : rb;
+}
+
+// The traversal behind both queries; any_hit is a constant at every call site,
+// so the compiler keeps only one variant's code in each.
+bool bvh_traverse(vec3 o, vec3 d, float t_max, const bool any_hit, out BvhHit hit) {
+    hit = BvhHit(t_max, kBvhNoHit, vec2(0.0));
+    if (!(t_max > 0.0) || all(equal(d, vec3(0.0)))) {
+        return false;
+    }
+    SlabRay slab = make_slab_ray(o, d);
+    WatertightRay tri_ray = make_watertight_ray(o, d);
+    const uint kNone = 0xFFFFFFFFu;
+    uint stack[kBvhStackSize];
+    float stack_t[kBvhStackSize];
+    int sp = 0;
+    uint node = 0u;  // next inner node (the root first), a leaf waiting for the slot, or kNone
+    uint leaf_first = 0u;  // the leaf being tested, one triangle per iteration
+    uint leaf_count = 0u;
+    bool found = false;
+    while (true) {
+        LOOP_TICK();
+        // One triangle of the current leaf ...
+        if (leaf_count > 0u) {
+            int base = int(leaf_first) * kBvhTexelsPerTriangle;
+            float t;
+            vec2 bary;
+            if (intersect_triangle_watertight(tri_ray, texelFetch(u_bvh_triangles, base).xyz,
+                                              texelFetch(u_bvh_triangles, base + 1).xyz,
+                                              texelFetch(u_bvh_triangles, base + 2).xyz,
+                                              hit.t, t, bary)) {
+                hit = BvhHit(t, leaf_first, bary);
+                found = true;
+                if (any_hit) {
+                    return true;
+                }
+            }
+            leaf_first++;
+            leaf_count--;
+        }
+        // ... and one inner node.
+        if ((node & kBvhLeafFlag) == 0u) {
+            uvec4 child;
+            vec4 tn = bvh_node_entry(slab, node, hit.t, child);
+            float t0 = tn.x, t1 = tn.y, t2 = tn.z, t3 = tn.w;
+            uint c0 = child.x, c1 = child.y, c2 = child.z, c3 = child.w;
+            // Sorting network for four; misses (+inf) sink to the end.
+            bvh_sort2(t0, c0, t1, c1);
+            bvh_sort2(t2, c2, t3, c3);
+            bvh_sort2(t0, c0, t2, c2);
+            bvh_sort2(t1, c1, t3, c3);
+            bvh_sort2(t1, c1, t2, c2);
+            if (sp + 3 > kBvhStackSize) {
+                hit.prim = kBvhStackOverflow;
+                return false;
+            }
+            if (t3 < kInfinity) {
+                stack_t[sp] = t3;
+                stack[sp++] = c3;
+            }
+            if (t2 < kInfinity) {
+                stack_t[sp] = t2;
+                stack[sp++] = c2;
+            }
+            if (t1 < kInfinity) {
+                stack_t[sp] = t1;
+                stack[sp++] = c1;
+            }
+            node = t0 < kInfinity ? c0 : kNone;
+        }
+        // A leaf reference takes the free leaf slot; an empty hand pops the stack
+        // (one entry per iteration; one entered beyond the closest hit is dropped).
+        if (node != kNone && (node & kBvhLeafFlag) != 0u && leaf_count == 0u) {
+            leaf_first = node & kBvhLeafFirstMask;
+            leaf_count = (node >> kBvhLeafCountShift) & 7u;
+            node = kNone;
+        }
+        if (node == kNone) {
+            if (sp > 0) {
+                sp--;
+                node = stack_t[sp] > hit.t ? kNone : stack[sp];
+            } else if (leaf_count == 0u) {
+                break;
+            }
+        }
+    }
+    return found;
+}
+
+// Nearest hit of the ray o + t d, t in (0, t_max) (d need not be normalized).
+bool bvh_intersect_closest(vec3 o, vec3 d, float t_max, out BvhHit hit) {
+    return bvh_traverse(o, d, t_max, false, hit);
+}
+
+// Whether anything blocks o + t d for t in (0, t_max): shadow rays, early exit.
+bool bvh_intersect_any(vec3 o, vec3 d, float t_max) {
+    BvhHit hit;
+    return bvh_traverse(o, d, t_max, true, hit);
+}
