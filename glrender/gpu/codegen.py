@@ -124,16 +124,22 @@ def generate(packed: PackedScene, has_bvh: bool) -> str:
     lines += body
 
     # -- any hit -------------------------------------------------------------------
-    occ = ["bool scene_occluded(vec3 o, vec3 d, float t_max, float time) {",
+    occ = ["// Any hit in (0, t_max), ignoring primitive `ignore` (the light a shadow ray aims at:",
+           "// a segment to a point of a convex emitter cannot meet it before that point, and",
+           "// testing it anyway loses grazing rays to rounding).",
+           "bool scene_occluded(vec3 o, vec3 d, float t_max, float time, uint ignore) {",
            "    float t = t_max;  // min over primitives: no short-circuit branches",
            "    vec2 ab;"]
-    for q in packed.quads:
+    for k, q in enumerate(packed.quads):
         fn = "intersect_triangle_planar" if q.triangle else "intersect_parallelogram"
-        occ.append(f"    t = min(t, {fn}(o, d, t_max, {_planar_args(q)}, ab));")
-    for s in packed.spheres:
+        test = f"{fn}(o, d, t_max, {_planar_args(q)}, ab)"
+        occ.append(f"    t = min(t, {test if not q.light else f'ignore == {k}u ? t_max : {test}'});")
+    for j, s in enumerate(packed.spheres):
+        k = len(packed.quads) + j
         center = _v3(s.center) if s.center_close is None else \
             f"mix({_v3(s.center)}, {_v3(s.center_close)}, time)"
-        occ.append(f"    t = min(t, intersect_sphere(o, d, t_max, {center}, {_f(s.radius)}));")
+        test = f"intersect_sphere(o, d, t_max, {center}, {_f(s.radius)})"
+        occ.append(f"    t = min(t, {test if not s.light else f'ignore == {k}u ? t_max : {test}'});")
     occ.append("    if (t < t_max) return true;")
     if has_bvh:
         occ.append("    return bvh_intersect_any(o, d, t_max);")

@@ -23,6 +23,7 @@ from ..errors import SceneError
 from ..scene import model as m
 from . import layout
 
+NO_PRIMITIVE = 0xFFFFFFFF        # geometry/surface.glsl kNoPrimitive
 MAX_COMPILED_TRIANGLES_PER_MESH = 32
 MAX_COMPILED_PRIMITIVES = 96
 
@@ -210,7 +211,7 @@ def pack_scene(scene: m.Scene) -> PackedScene:
             rec[key][:len(value)] = value
         rec["radiance"][:3] = radiance
         flags = layout.LIGHT_FLAG_TWO_SIDED if emission.two_sided else 0
-        rec["info"] = (layout.LIGHT_KINDS[kind], flags, 0, 0)
+        rec["info"] = (layout.LIGHT_KINDS[kind], flags, NO_PRIMITIVE, 0)
         area = float(rec["n"][3])
         weights.append(math.pi * area * _luminance(radiance) * (2 if emission.two_sided else 1))
         lights.append(rec)
@@ -221,10 +222,12 @@ def pack_scene(scene: m.Scene) -> PackedScene:
             q.light = add_area_light("triangle" if q.triangle else "parallelogram", emission,
                                      p=q.corner, e1=q.e1, e2=q.e2,
                                      n=(*q.normal, q.area))
+            lights[-1]["info"][2] = len(quads)   # its primitive id
         quads.append(q)
         grow([q.corner, q.corner + q.e1, q.corner + q.e2, q.corner + q.e1 + q.e2])
 
     compiled_budget = MAX_COMPILED_PRIMITIVES
+    sphere_lights: list[tuple[int, int]] = []   # (light index, sphere index)
     for index, shape in enumerate(scene.shapes):
         where = f"{scene.source}: shape {shape.name or index}"
         M = shape.world_from_object
@@ -260,6 +263,7 @@ def pack_scene(scene: m.Scene) -> PackedScene:
             if shape.emission is not None:
                 sph.light = add_area_light("sphere", shape.emission, p=center, e1=(0, 0, 0, radius),
                                            n=(0, 0, 1, 4 * math.pi * radius * radius))
+                sphere_lights.append((len(lights) - 1, len(spheres)))
             spheres.append(sph)
             compiled_budget -= 1
             grow([center - radius, center + radius])
@@ -299,6 +303,10 @@ def pack_scene(scene: m.Scene) -> PackedScene:
         raise SceneError(f"{scene.source}: more than {MAX_COMPILED_PRIMITIVES} rectangles, cube "
                          f"faces and spheres; make some of them meshes")
 
+    # primitive ids: planar primitives first, then spheres, then BVH triangles (the
+    # renderer sets those after the BVH orders them); non-area lights ignore nothing
+    for light_index, sphere_index in sphere_lights:
+        lights[light_index]["info"][2] = len(quads) + sphere_index
     if not np.all(np.isfinite(lo)):
         lo, hi = np.zeros(3), np.zeros(3)
     environment = 0
@@ -306,6 +314,7 @@ def pack_scene(scene: m.Scene) -> PackedScene:
     for light in scene.lights:
         rec = np.zeros(1, layout.LIGHT)[0]
         rec["info"][0] = layout.LIGHT_KINDS[light.kind]
+        rec["info"][2] = NO_PRIMITIVE
         if light.kind in ("point", "spot"):
             intensity = (_rgb(light.power, "light.power") / (4 * math.pi) if light.power is not None
                          else _rgb(light.intensity, "light.intensity"))

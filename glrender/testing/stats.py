@@ -70,6 +70,76 @@ def chi2_sf(stat: float, dof: int) -> float:
     return gamma_q(0.5 * dof, 0.5 * stat)
 
 
+def _beta_fraction(a: float, b: float, x: float) -> float:
+    """Continued fraction of the regularized incomplete beta function (modified Lentz)."""
+    qab, qap, qam = a + b, a + 1.0, a - 1.0
+    c, d = 1.0, 1.0 - qab * x / qap
+    d = 1.0 / (_TINY if abs(d) < _TINY else d)
+    h = d
+    for m in range(1, 10_000):
+        m2 = 2 * m
+        aa = m * (b - m) * x / ((qam + m2) * (a + m2))
+        d = 1.0 + aa * d
+        d = 1.0 / (_TINY if abs(d) < _TINY else d)
+        c = 1.0 + aa / c
+        c = _TINY if abs(c) < _TINY else c
+        h *= d * c
+        aa = -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2))
+        d = 1.0 + aa * d
+        d = 1.0 / (_TINY if abs(d) < _TINY else d)
+        c = 1.0 + aa / c
+        c = _TINY if abs(c) < _TINY else c
+        delta = d * c
+        h *= delta
+        if abs(delta - 1.0) < _EPS:
+            break
+    return h
+
+
+def beta_inc(a: float, b: float, x: float) -> float:
+    """Regularized incomplete beta function I_x(a, b)."""
+    if x <= 0.0:
+        return 0.0
+    if x >= 1.0:
+        return 1.0
+    front = math.exp(math.lgamma(a + b) - math.lgamma(a) - math.lgamma(b) +
+                     a * math.log(x) + b * math.log1p(-x))
+    if x < (a + 1.0) / (a + b + 2.0):
+        return front * _beta_fraction(a, b, x) / a
+    return 1.0 - front * _beta_fraction(b, a, 1.0 - x) / b
+
+
+def student_t_sf(t: float, dof: float) -> float:
+    """P(T >= t) for Student's t with ``dof`` degrees of freedom."""
+    if dof <= 0:
+        raise ValueError(f"student_t_sf: dof must be positive, got {dof}")
+    tail = 0.5 * beta_inc(0.5 * dof, 0.5, dof / (dof + t * t))
+    return tail if t >= 0 else 1.0 - tail
+
+
+def student_t_quantile(p: float, dof: float) -> float:
+    """The t with P(T <= t) = p (bisection on the survival function)."""
+    if not 0.0 < p < 1.0:
+        raise ValueError(f"student_t_quantile: p must be in (0, 1), got {p}")
+    if p < 0.5:
+        return -student_t_quantile(1.0 - p, dof)
+    lo, hi = 0.0, 1.0
+    while student_t_sf(hi, dof) > 1.0 - p:
+        hi *= 2.0
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if student_t_sf(mid, dof) > 1.0 - p:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+def sidak_t(alpha: float, tests: int, dof: float) -> float:
+    """Two-sided Student-t threshold for ``tests`` comparisons at family-wise ``alpha``."""
+    return student_t_quantile(1.0 - sidak_alpha(alpha, tests) / 2.0, dof)
+
+
 def sidak_alpha(alpha: float, tests: int) -> float:
     """Per-test significance so that ``tests`` independent tests fail together w.p. ``alpha``."""
     return 1.0 - (1.0 - alpha) ** (1.0 / max(int(tests), 1))

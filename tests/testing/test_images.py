@@ -1,0 +1,52 @@
+"""Image comparisons: calibrated on synthetic renders with a known answer, and powerful."""
+import numpy as np
+import pytest
+
+from glrender.testing.images import compare_images
+from glrender.testing.stats import student_t_quantile, student_t_sf
+
+scipy_stats = pytest.importorskip("scipy.stats")
+
+
+@pytest.mark.parametrize("t, dof", [(2.0, 3), (5.2, 6), (0.5, 48), (-1.3, 10), (4.0, 1000)])
+def test01_student_t_matches_scipy(t, dof):
+    assert student_t_sf(t, dof) == pytest.approx(scipy_stats.t.sf(t, dof), rel=1e-9)
+    p = 1 - scipy_stats.t.sf(abs(t), dof)
+    assert student_t_quantile(p, dof) == pytest.approx(abs(t), rel=1e-7)
+
+
+def synthetic(rng, k=4, shape=(32, 32, 3), bias=0.0, skew=False):
+    truth = np.linspace(0.1, 2.0, np.prod(shape)).reshape(shape)
+    noise = rng.exponential(1.0, (k,) + shape) - 1.0 if skew else rng.standard_normal((k,) + shape)
+    return truth * (1 + bias) + 0.05 * truth * noise, truth
+
+
+def test02_correct_renders_pass_at_the_family_rate():
+    """200 independent trials of unbiased (normal and skewed) renders: alpha = 0.01 means
+    about 2 failures expected; more than 8 is a miscalibration (binomial tail < 1e-3)."""
+    rng = np.random.default_rng(0)
+    failures = 0
+    for trial in range(200):
+        imgs, truth = synthetic(rng, skew=trial % 2 == 1)
+        mask = np.ones(truth.shape[:2], bool)
+        mask[5:11, 3:7] = False  # partly masked blocks get Student-t thresholds
+        failures += not compare_images(imgs, truth, block=4, mask=mask).passed
+    assert failures <= 8
+
+
+def test03_a_small_bias_is_rejected():
+    rng = np.random.default_rng(1)
+    imgs, truth = synthetic(rng, bias=0.005)
+    c = compare_images(imgs, truth, block=4)
+    assert c.detectable_bias < 0.0025  # the test states its power (a bias of half of 0.5%) ...
+    assert not c.passed                 # ... and has it at twice that
+    imgs, truth = synthetic(rng)
+    assert compare_images(imgs, truth, block=4).passed
+
+
+def test04_a_local_error_is_rejected():
+    rng = np.random.default_rng(2)
+    imgs, truth = synthetic(rng)
+    imgs[:, 8:12, 8:12, 1] *= 1.05  # one 4x4 block, one channel, 5% off
+    c = compare_images(imgs, truth, block=4)
+    assert not c.passed and c.worst_block == (2, 2, 1)
