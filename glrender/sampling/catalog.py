@@ -224,6 +224,35 @@ def _microfacet_warp(name, title, sampler, pdf_fn, sample_fn, wo, alpha, invert=
         agree_tol=agree_tol, pdf_tol=256 * EPS32, plot="sphere", group="microfacet")
 
 
+def _triangle_warp(suffix: str, title: str, **fields) -> Warp:
+    """A uniform triangle map (barycentrics), tested on the reference triangle (b1, b2)."""
+    name = f"uniform_triangle{suffix}"
+    return Warp(
+        name=name, title=title, includes=("sampling/triangle.glsl",), point_type="vec3",
+        sample_glsl=f"sample_{name}(u)", pdf_glsl="uniform_triangle_pdf(0.5)",
+        invert_glsl=f"invert_{name}_sample(p)", sample=getattr(triangle, f"sample_{name}"),
+        pdf=_triangle_pdf, invert=getattr(triangle, f"invert_{name}_sample"),
+        domain=PlanarDomain(((0.0, 1.0), (0.0, 1.0))), to_domain=lambda b: b[:, 1:3],
+        group="triangle", **fields)
+
+
+def _table_warp(dim: str, title: str, table: np.ndarray, domain, **fields) -> Warp:
+    """The piecewise-constant 1D or 2D distribution of a packed table at offset 0."""
+    kind = f"distribution_{dim}"
+    sample, pdf = getattr(distributions, f"sample_{kind}"), getattr(distributions, f"{kind}_pdf")
+    invert = getattr(distributions, f"invert_{kind}_sample")
+    one = dim == "1d"
+    return Warp(
+        name=kind, title=title, sample_dim=1 if one else 2,
+        includes=(f"sampling/distribution{dim}.glsl",), point_type="float" if one else "vec2",
+        setup="uint bin;" if one else "",
+        sample_glsl=f"sample_{kind}(0u, u, sample_pdf{', bin' if one else ''})",
+        pdf_glsl=f"{kind}_pdf(0u, p)", invert_glsl=f"invert_{kind}_sample(0u, p)",
+        sample=lambda u: sample(table, 0, u)[0], pdf=lambda x: pdf(table, 0, x),
+        invert=lambda x: invert(table, 0, x), domain=domain,
+        buffers={"table": table}, preamble=TABLE_PREAMBLE, roundtrip_tol=64 * EPS32, **fields)
+
+
 def build_catalog() -> list[Warp]:
     """Every continuous warp, in the order of the lecture."""
     table_1d, table_2d = _table_1d(), _table_2d()
@@ -243,18 +272,9 @@ def build_catalog() -> list[Warp]:
              sample=lambda u: power.sample_power_max(u, POWER_N),
              pdf=lambda x: power.power_pdf(x, POWER_N),
              domain=LineDomain((0.0, 1.0)), plot="none"),
-        Warp(name="distribution_1d", title="piecewise-constant 1D", sample_dim=1,
-             includes=("sampling/distribution1d.glsl",), point_type="float",
-             sample_glsl="sample_distribution_1d(0u, u, sample_pdf, bin)",
-             setup="uint bin;", pdf_glsl="distribution_1d_pdf(0u, p)",
-             invert_glsl="invert_distribution_1d_sample(0u, p)",
-             sample=lambda u: distributions.sample_distribution_1d(table_1d, 0, u)[0],
-             pdf=lambda x: distributions.distribution_1d_pdf(table_1d, 0, x),
-             invert=lambda x: distributions.invert_distribution_1d_sample(table_1d, 0, x),
-             domain=LineDomain(DIST_1D_BOUNDS), res=7 * 15,
-             buffers={"table": table_1d}, preamble=TABLE_PREAMBLE,
-             # the bin's CDF step scales the float32 error of x by n * pmf <= 7 * 5 / 11.5
-             roundtrip_tol=64 * EPS32, plot="none"),
+        # the bin's CDF step scales the float32 error of x by n * pmf <= 7 * 5 / 11.5
+        _table_warp("1d", "piecewise-constant 1D", table_1d, LineDomain(DIST_1D_BOUNDS),
+                    res=7 * 15, plot="none"),
         # -- the disk --------------------------------------------------------------------------
         Warp(name="disk_linear_radius", title="polar, r = u (not uniform)",
              includes=("sampling/disk.glsl",), point_type="vec2",
@@ -289,34 +309,14 @@ def build_catalog() -> list[Warp]:
              preamble=REJECTION_PREAMBLE, sample=_rejection_numpy,
              pdf=lambda p: np.where(_disk_support(p), disk.uniform_disk_pdf(), 0.0),
              domain=PlanarDomain(), group="disk"),
-        # -- the triangle (barycentrics; tested on the reference triangle (b1, b2)) ----------
-        Warp(name="uniform_triangle_sqrt", title="triangle, sqrt map (lecture)",
-             includes=("sampling/triangle.glsl",), point_type="vec3",
-             sample_glsl="sample_uniform_triangle_sqrt(u)", pdf_glsl="uniform_triangle_pdf(0.5)",
-             invert_glsl="invert_uniform_triangle_sqrt_sample(p)",
-             sample=triangle.sample_uniform_triangle_sqrt, pdf=_triangle_pdf,
-             invert=triangle.invert_uniform_triangle_sqrt_sample,
-             domain=PlanarDomain(((0.0, 1.0), (0.0, 1.0))), to_domain=lambda b: b[:, 1:3],
-             # u.y = b1 / (1 - b0) is lost where 1 - b0 = sqrt(u.x) is small
-             well_conditioned=lambda u: u[:, 0] >= 1e-4, group="triangle"),
-        Warp(name="uniform_triangle", title="triangle, Heitz 2019 low-distortion map",
-             includes=("sampling/triangle.glsl",), point_type="vec3",
-             sample_glsl="sample_uniform_triangle(u)", pdf_glsl="uniform_triangle_pdf(0.5)",
-             invert_glsl="invert_uniform_triangle_sample(p)",
-             sample=triangle.sample_uniform_triangle, pdf=_triangle_pdf,
-             invert=triangle.invert_uniform_triangle_sample,
-             domain=PlanarDomain(((0.0, 1.0), (0.0, 1.0))), to_domain=lambda b: b[:, 1:3],
-             group="triangle"),
-        Warp(name="distribution_2d", title="piecewise-constant 2D (image)",
-             includes=("sampling/distribution2d.glsl",), point_type="vec2",
-             sample_glsl="sample_distribution_2d(0u, u, sample_pdf)",
-             pdf_glsl="distribution_2d_pdf(0u, p)", invert_glsl="invert_distribution_2d_sample(0u, p)",
-             sample=lambda u: distributions.sample_distribution_2d(table_2d, 0, u)[0],
-             pdf=lambda p: distributions.distribution_2d_pdf(table_2d, 0, p),
-             invert=lambda p: distributions.invert_distribution_2d_sample(table_2d, 0, p),
-             domain=PlanarDomain(((0.0, 1.0), (0.0, 1.0))), res=105,  # a multiple of 5 and 7
-             buffers={"table": table_2d}, preamble=TABLE_PREAMBLE,
-             roundtrip_tol=64 * EPS32, group="distribution"),
+        # -- the triangle ------------------------------------------------------------------------
+        # u.y = b1 / (1 - b0) is lost where 1 - b0 = sqrt(u.x) is small
+        _triangle_warp("_sqrt", "triangle, sqrt map (lecture)",
+                       well_conditioned=lambda u: u[:, 0] >= 1e-4),
+        _triangle_warp("", "triangle, Heitz 2019 low-distortion map"),
+        _table_warp("2d", "piecewise-constant 2D (image)", table_2d,
+                    PlanarDomain(((0.0, 1.0), (0.0, 1.0))), res=105,  # a multiple of 5 and 7
+                    group="distribution"),
         # -- directions --------------------------------------------------------------------------
         Warp(name="uniform_sphere", title="uniform sphere",
              includes=("sampling/sphere.glsl",), point_type="vec3",
@@ -409,9 +409,9 @@ def build_catalog() -> list[Warp]:
                      RECTANGLE_REF, RECTANGLE["s"], RECTANGLE["ex"], RECTANGLE["ey"]), 0.0)),
              to_domain=_rectangle_direction,
              domain=SphericalDomain(), uniforms=_rectangle_uniforms(),
-             # S = g0 + g1 + g2 + g3 - 2 pi, four angles from atan (each within ATAN_ABS
-             # per atan): 8 ATAN_ABS absolute, relative to S = 0.556
-             agree_tol=1e-4, pdf_tol=8 * ATAN_ABS / 0.5, plot="sphere", group="area_lights"),
+             # S is the sum of two solid angles from atan (relative error <= ATAN_REL); the
+             # points move by about S's relative error times the rectangle's size (~1)
+             agree_tol=4 * ATAN_REL, pdf_tol=2 * ATAN_REL, plot="sphere", group="area_lights"),
         _microfacet_warp("ggx_visible_normal", f"GGX visible normals, alpha = {ALPHA}",
                          "sample_ggx_visible_normal", microfacet.ggx_visible_normal_pdf,
                          microfacet.sample_ggx_visible_normal, WO_OBLIQUE, ALPHA,

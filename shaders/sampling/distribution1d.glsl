@@ -23,12 +23,14 @@ uint distribution_1d_bin(float x, float x_min, float x_max, uint n) {
     return min(uint(max((x - x_min) / (x_max - x_min) * float(n), 0.0)), n - 1u);
 }
 
-// The float next to x toward -infinity (x > 0) or +infinity (x < 0) is one bit pattern
-// away; these step x by one ulp down or up.
+// The float next to x toward -infinity: one bit pattern away (down for x > 0, up for
+// x < 0; below 0, a tiny negative number).
 float float_step_down(float x) {
     uint b = floatBitsToUint(x);
     return x > 0.0 ? uintBitsToFloat(b - 1u) : (x < 0.0 ? uintBitsToFloat(b + 1u) : -1e-38);
 }
+
+// The float next to x toward +infinity.
 float float_step_up(float x) {
     return -float_step_down(-x);
 }

@@ -27,30 +27,34 @@ float spherical_triangle_pdf(vec3 v0, vec3 v1, vec3 v2, vec3 p) {
 // Unit direction from p toward a uniformly chosen point of the solid angle of the
 // triangle v0 v1 v2. u in [0,1)^2 (u.x: sub-triangle area, u.y: along the arc from
 // v1's direction). pdf: per unit solid angle (as spherical_triangle_pdf); 0 and the
-// zero vector for a degenerate triangle.
+// zero vector for a degenerate triangle. Small triangles: every quantity is formed from
+// the differences b - a, c - a (dot(a, e) = 0 turns b.e into (b - a).e, and so on) and
+// 1 - cos of an arc from half its squared chord, so samples stay within ~4e-4 of the
+// triangle's size of exact down to solid angles of ~1e-7 sr (test_warps.py, test08).
 vec3 sample_spherical_triangle(vec3 v0, vec3 v1, vec3 v2, vec3 p, vec2 u, out float pdf) {
     pdf = 0.0;
     vec3 a = normalize(v0 - p), b = normalize(v1 - p), c = normalize(v2 - p);
+    vec3 ab = b - a, ac = c - a;
     float area = spherical_triangle_area(a, b, c);
-    vec3 e = gram_schmidt(c, a);
+    vec3 e = ac - dot(ac, a) * a;  // the tangent at a toward c
     if (!(area > 0.0) || dot(e, e) == 0.0) return vec3(0.0);
     e = normalize(e);
     pdf = 1.0 / area;
-    // c' on arc a-c with area(a, b, c') = u.x A: tan(phi / 2) = y / x (see above).
+    // c' on arc a-c with area(a, b, c') = u.x A: tan(phi / 2) = y / x (see above), so
+    // c' - a = 2 y (x e - y a) / (x^2 + y^2).
     float half_area = 0.5 * u.x * area;
     float y = sin(half_area) * (1.0 + dot(a, b));
-    float x = abs(dot(a, cross(b, e))) * cos(half_area) - sin(half_area) * dot(b, e);
-    // Never past c: tan(phi / 2) <= tan(arc(a, c) / 2) = e.c / (1 + a.c).
-    vec3 c_sub = c;
-    if (y * (1.0 + dot(a, c)) < x * dot(e, c)) {
-        float r2 = x * x + y * y;
-        c_sub = ((x * x - y * y) * a + 2.0 * x * y * e) / r2;
+    float x = abs(dot(a, cross(ab, e))) * cos(half_area) - sin(half_area) * dot(ab, e);
+    vec3 d = ac - ab;  // c' - b; c' = c unless c' stops short of c:
+    if (y * (1.0 + dot(a, c)) < x * dot(e, ac)) {  // tan(phi/2) < tan(arc(a, c) / 2)
+        d = 2.0 * y * (x * e - y * a) / (x * x + y * y) - ab;
     }
-    // Along the arc b-c': 1 - cos theta uniform in [0, 1 - dot(c', b)).
-    float one_minus_cos = u.y * (1.0 - dot(c_sub, b));
-    float cos_theta = 1.0 - one_minus_cos;
+    // Along the arc b-c': 1 - cos theta uniform in [0, 1 - dot(c', b)), with
+    // 1 - dot(c', b) = |c' - b|^2 / 2 and c' - dot(c', b) b = d + (|d|^2 / 2) b.
+    float arc = 0.5 * dot(d, d);
+    float one_minus_cos = u.y * arc;
     float sin_theta = sqrt(max(0.0, one_minus_cos * (2.0 - one_minus_cos)));
-    return cos_theta * b + sin_theta * normalize(gram_schmidt(c_sub, b));
+    return (1.0 - one_minus_cos) * b + sin_theta * normalize(d + arc * b);
 }
 
 // The u that sample_spherical_triangle maps to the unit direction w (from p, inside the
@@ -60,11 +64,12 @@ vec3 sample_spherical_triangle(vec3 v0, vec3 v1, vec3 v2, vec3 p, vec2 u, out fl
 vec2 invert_spherical_triangle_sample(vec3 v0, vec3 v1, vec3 v2, vec3 p, vec3 w) {
     vec3 a = normalize(v0 - p), b = normalize(v1 - p), c = normalize(v2 - p);
     float area = spherical_triangle_area(a, b, c);
-    vec3 c_sub = cross(cross(b, w), cross(c, a));
+    vec3 c_sub = cross(cross(b, w - b), cross(c - a, a));
     if (!(area > 0.0) || dot(c_sub, c_sub) == 0.0) return vec2(0.5);
     c_sub = normalize(c_sub);
     if (dot(c_sub, a + c) < 0.0) c_sub = -c_sub;
     float u0 = spherical_triangle_area(a, b, c_sub) / area;
-    float u1 = (1.0 - dot(w, b)) / (1.0 - dot(c_sub, b));
+    vec3 wb = w - b, cb = c_sub - b;
+    float u1 = dot(wb, wb) / dot(cb, cb);  // (1 - w.b) / (1 - c'.b)
     return clamp(vec2(u0, u1), 0.0, kOneMinusEpsilon);
 }
