@@ -19,11 +19,51 @@ from .morton import morton_order
 from .tree import BinaryTree, half_area, single_leaf_tree
 
 DEFAULT_BINS = 32
+SMALL_SEGMENT = 48  # segments of at most this many primitives use SMALL_BINS bins
+SMALL_BINS = 8
 MEDIAN_AFTER = 64
 
 
-def _segment_reduce(values: np.ndarray, starts: np.ndarray, op) -> np.ndarray:
-    return op.reduceat(values, starts, axis=0)
+def _best_splits(plo, phi, b, seg, sizes, bins):
+    """Cheapest SAH split (cost, axis, last left bin) of each segment.
+
+    ``plo``/``phi`` (3, P) primitive boxes by component, ``b`` (P, 3) bin indices.
+    """
+    s_count = len(sizes)
+    best_cost = np.full(s_count, np.inf, np.float32)
+    best_axis = np.zeros(s_count, np.int64)
+    best_split = np.zeros(s_count, np.int64)
+    rows = np.arange(s_count)
+    for axis in range(3):
+        key = seg * bins + b[:, axis]
+        cnt = np.bincount(key, minlength=s_count * bins).reshape(s_count, bins)
+        blo = np.full((s_count * bins, 3), np.inf, np.float32)
+        bhi = np.full((s_count * bins, 3), -np.inf, np.float32)
+        for c in range(3):  # one-dimensional ufunc.at is many times faster than on rows
+            col_lo = np.full(s_count * bins, np.inf, np.float32)
+            col_hi = np.full(s_count * bins, -np.inf, np.float32)
+            np.minimum.at(col_lo, key, plo[c])
+            np.maximum.at(col_hi, key, phi[c])
+            blo[:, c], bhi[:, c] = col_lo, col_hi
+        blo = blo.reshape(s_count, bins, 3)
+        bhi = bhi.reshape(s_count, bins, 3)
+        # Split after bin i: left = bins 0..i, right = bins i+1..
+        llo = np.minimum.accumulate(blo, axis=1)[:, :-1]
+        lhi = np.maximum.accumulate(bhi, axis=1)[:, :-1]
+        rlo = np.minimum.accumulate(blo[:, ::-1], axis=1)[:, ::-1][:, 1:]
+        rhi = np.maximum.accumulate(bhi[:, ::-1], axis=1)[:, ::-1][:, 1:]
+        lcnt = np.cumsum(cnt, axis=1)[:, :-1]
+        rcnt = sizes[:, None] - lcnt
+        with np.errstate(invalid="ignore"):
+            cost = half_area(llo, lhi) * lcnt + half_area(rlo, rhi) * rcnt
+        cost = np.where((lcnt > 0) & (rcnt > 0), cost, np.inf)
+        i = np.argmin(cost, axis=1)
+        c = cost[rows, i]
+        better = c < best_cost
+        best_cost = np.where(better, c, best_cost)
+        best_axis = np.where(better, axis, best_axis)
+        best_split = np.where(better, i, best_split)
+    return best_cost, best_axis, best_split
 
 
 def build_binned_sah(lo: np.ndarray, hi: np.ndarray, bins: int = DEFAULT_BINS) -> BinaryTree:
@@ -33,7 +73,9 @@ def build_binned_sah(lo: np.ndarray, hi: np.ndarray, bins: int = DEFAULT_BINS) -
     n = len(lo)
     if n <= 1:
         return single_leaf_tree(lo, hi)
-    cen = 0.5 * (lo.astype(np.float64) + hi)
+    cen = 0.5 * (lo + hi)
+    lo_t, hi_t = np.ascontiguousarray(lo.T), np.ascontiguousarray(hi.T)  # (3, n): contiguous components
+    cen_t = np.ascontiguousarray(cen.T)
     perm = morton_order(cen)
     # Active segments: [start, end) ranges of `perm` that are inner nodes at this level.
     starts = np.array([0], np.int64)
@@ -46,47 +88,34 @@ def build_binned_sah(lo: np.ndarray, hi: np.ndarray, bins: int = DEFAULT_BINS) -
         offsets = np.concatenate([[0], np.cumsum(sizes)[:-1]])
         pos = np.arange(len(seg)) - offsets[seg] + starts[seg]  # positions in perm
         prim = perm[pos]
-        plo, phi, pc = lo[prim], hi[prim], cen[prim]
-        node_lo = _segment_reduce(plo, offsets, np.minimum)
-        node_hi = _segment_reduce(phi, offsets, np.maximum)
+        plo_t, phi_t, pc_t = lo_t[:, prim], hi_t[:, prim], cen_t[:, prim]
+        node_lo = np.minimum.reduceat(plo_t, offsets, axis=1).T
+        node_hi = np.maximum.reduceat(phi_t, offsets, axis=1).T
         split_right = np.zeros(len(seg), bool)
         use_middle = np.ones(s_count, bool)
         if level < MEDIAN_AFTER:
-            cmin = _segment_reduce(pc, offsets, np.minimum)
-            cmax = _segment_reduce(pc, offsets, np.maximum)
-            extent = cmax - cmin
-            scale = np.where(extent > 0, bins / np.where(extent > 0, extent, 1.0), 0.0)
-            b = np.clip(((pc - cmin[seg]) * scale[seg]).astype(np.int64), 0, bins - 1)  # (P, 3)
-            best_cost = np.full(s_count, np.inf)
+            cmin = np.minimum.reduceat(pc_t, offsets, axis=1)  # (3, S)
+            cmax = np.maximum.reduceat(pc_t, offsets, axis=1)
             best_axis = np.zeros(s_count, np.int64)
             best_split = np.zeros(s_count, np.int64)
-            for axis in range(3):
-                key = seg * bins + b[:, axis]
-                cnt = np.bincount(key, minlength=s_count * bins).reshape(s_count, bins)
-                blo = np.full((s_count * bins, 3), np.inf, np.float32)
-                bhi = np.full((s_count * bins, 3), -np.inf, np.float32)
-                np.minimum.at(blo, key, plo)
-                np.maximum.at(bhi, key, phi)
-                blo = blo.reshape(s_count, bins, 3)
-                bhi = bhi.reshape(s_count, bins, 3)
-                # Split after bin i: left = bins 0..i, right = bins i+1..
-                llo = np.minimum.accumulate(blo, axis=1)[:, :-1]
-                lhi = np.maximum.accumulate(bhi, axis=1)[:, :-1]
-                rlo = np.minimum.accumulate(blo[:, ::-1], axis=1)[:, ::-1][:, 1:]
-                rhi = np.maximum.accumulate(bhi[:, ::-1], axis=1)[:, ::-1][:, 1:]
-                lcnt = np.cumsum(cnt, axis=1)[:, :-1]
-                rcnt = sizes[:, None] - lcnt
-                with np.errstate(invalid="ignore"):
-                    cost = half_area(llo, lhi) * lcnt + half_area(rlo, rhi) * rcnt
-                cost = np.where((lcnt > 0) & (rcnt > 0), cost, np.inf)
-                i = np.argmin(cost, axis=1)
-                c = cost[np.arange(s_count), i]
-                better = c < best_cost
-                best_cost = np.where(better, c, best_cost)
-                best_axis = np.where(better, axis, best_axis)
-                best_split = np.where(better, i, best_split)
-            use_middle = ~np.isfinite(best_cost)
-            split_right = b[np.arange(len(seg)), best_axis[seg]] > best_split[seg]
+            best_bin = np.zeros(len(seg), np.int64)
+            # Small segments need few bins: 32 bins for 2 primitives would only cost time.
+            for group, nb in ((sizes > SMALL_SEGMENT, bins), (sizes <= SMALL_SEGMENT, SMALL_BINS)):
+                if not group.any():
+                    continue
+                members = group[seg]
+                local = np.cumsum(group) - 1
+                gseg = local[seg[members]]
+                extent = (cmax - cmin)[:, group]
+                scale = np.where(extent > 0, nb / np.where(extent > 0, extent, 1), 0).astype(np.float32)
+                b = ((pc_t[:, members] - cmin[:, group][:, gseg]) * scale[:, gseg]).astype(np.int64)
+                b = np.clip(b, 0, nb - 1).T  # (P, 3)
+                cost, axis, split = _best_splits(plo_t[:, members], phi_t[:, members], b, gseg,
+                                                 sizes[group], nb)
+                use_middle[group] = ~np.isfinite(cost)
+                best_axis[group], best_split[group] = axis, split
+                best_bin[members] = b[np.arange(len(b)), axis[gseg]]
+            split_right = best_bin > best_split[seg]
         rank = np.arange(len(seg)) - offsets[seg]
         split_right = np.where(use_middle[seg], rank >= sizes[seg] // 2, split_right)
         # Stable partition inside each segment: lefts first, then rights.

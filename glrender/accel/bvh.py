@@ -19,6 +19,7 @@ reads through buffer textures:
 """
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import dataclass, field
 
@@ -28,7 +29,7 @@ from ..errors import UsageError
 from .binned_sah import build_binned_sah
 from .collapse import KIND_EMPTY, KIND_INNER, KIND_LEAF, MAX_LEAF_SIZE, WIDTH, Bvh4Arrays, collapse_to_bvh4
 from .mesh import PreparedTriangles, prepare_triangles
-from .ploc import DEFAULT_RADIUS, build_ploc
+from .ploc import DEFAULT_RADIUS, DEFAULT_TOP_CLUSTERS, build_ploc
 from .quantize import pack_nodes
 from .tree import BinaryTree, half_area
 
@@ -95,10 +96,9 @@ class Bvh:
         if not self.triangle_count:
             return 0.0
         lo, hi = a.child_lo, a.child_hi
-        area = half_area(np.where(a.child_kind[..., None] > 0, lo, 0),
-                         np.where(a.child_kind[..., None] > 0, hi, 0))
+        area = half_area(lo.astype(np.float64), hi.astype(np.float64))  # empty slots: 0
         root_lo, root_hi = self.bounds
-        root_area = float(half_area(root_lo, root_hi))
+        root_area = float(half_area(root_lo.astype(np.float64), root_hi.astype(np.float64)))
         inner = area[a.child_kind == KIND_INNER].sum() + root_area
         leaves = (area * a.child_count)[a.child_kind == KIND_LEAF].sum()
         if root_area <= 0:
@@ -159,6 +159,7 @@ class Bvh:
 
 
 def build_bvh(vertices, triangles, *, method: str = "ploc", radius: int = DEFAULT_RADIUS,
+              top_clusters: int = DEFAULT_TOP_CLUSTERS, threads: int | None = None,
               on_invalid: str = "skip", remove_degenerate: bool = True,
               remove_duplicates: bool = True, max_leaf_size: int = MAX_LEAF_SIZE,
               c_node: float = C_NODE, c_tri: float = C_TRI) -> Bvh:
@@ -181,13 +182,22 @@ def build_bvh(vertices, triangles, *, method: str = "ploc", radius: int = DEFAUL
     c = prepared.corners
     lo = np.minimum(np.minimum(c[:, 0], c[:, 1]), c[:, 2])
     hi = np.maximum(np.maximum(c[:, 0], c[:, 1]), c[:, 2])
-    tree = build_ploc(lo, hi, radius) if method == "ploc" else build_binned_sah(lo, hi)
+    threads = threads or build_threads()
+    tree = build_ploc(lo, hi, radius, top_clusters, threads) if method == "ploc" else build_binned_sah(lo, hi)
     arrays = collapse_tree(tree, max_leaf_size, c_node, c_tri)
     order = arrays.prim_order
     bvh = Bvh(np.ascontiguousarray(c[order]), prepared.source[order], arrays, prepared, method,
               binary_sah=tree.sah_cost())
     bvh.build_seconds = time.perf_counter() - start
     return bvh
+
+
+def build_threads() -> int:
+    """Threads for the parallel parts of a build: the usable cores."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
 
 
 def collapse_tree(tree: BinaryTree, max_leaf_size: int = MAX_LEAF_SIZE, c_node: float = C_NODE,

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .tree import BinaryTree, half_area
+from .tree import BinaryTree
 
 WIDTH = 4
 MAX_LEAF_SIZE = 4
@@ -134,7 +134,7 @@ def collapse_to_bvh4(tree: BinaryTree, leaf: np.ndarray, count: np.ndarray,
     """Collapse ``tree`` given its leaf decisions (``leaf``), counts and first positions."""
     if max_depth < RANGE_LEVELS:
         raise ValueError(f"max_depth must be at least {RANGE_LEVELS}")
-    area = half_area(tree.lo, tree.hi)
+    area = tree.area
     is_inner = ~leaf
     arrays = _collapse(tree, leaf, count, first, area, None, max_depth)
     if len(arrays.depth) and arrays.depth.max() > max_depth:
@@ -156,7 +156,7 @@ def _collapse(tree: BinaryTree, leaf: np.ndarray, count: np.ndarray, first: np.n
     switch_depth = max_depth - RANGE_LEVELS
     prim_order = np.empty(n, np.int64)
     prim_order[first[:n]] = np.arange(n)
-    prim_lo, prim_hi = tree.lo[:n][prim_order], tree.hi[:n][prim_order]
+    prim_lo = prim_hi = None  # triangle boxes in BVH order, gathered if ranges are needed
 
     # The root is always an inner BVH4 node; a tree that is one leaf hangs below it.
     bin_roots = np.zeros(0, np.int64)
@@ -179,28 +179,28 @@ def _collapse(tree: BinaryTree, leaf: np.ndarray, count: np.ndarray, first: np.n
         valid = cand >= 0
         safe = np.maximum(cand, 0)
         inner = valid & is_inner[safe]
-        b_kind = np.where(valid, np.where(inner, KIND_INNER, KIND_LEAF), KIND_EMPTY)
-        b_first, b_size = first[safe], np.where(valid, count[safe], 0)
-        b_lo, b_hi = tree.lo[safe], tree.hi[safe]
+        kind = np.where(valid, np.where(inner, KIND_INNER, KIND_LEAF), KIND_EMPTY).astype(np.int8)
+        start, size = first[safe], np.where(valid, count[safe], 0)
+        lo = np.where(valid[..., None], tree.lo[safe], np.float32(np.inf))
+        hi = np.where(valid[..., None], tree.hi[safe], np.float32(-np.inf))
+        binary_id = cand
         # Inner children whose subtree may end too deep switch to balanced ranges.
-        to_range = np.zeros_like(inner)
+        mode = np.zeros(cand.shape, np.int8)  # 0: binary subtree, 1: range
         if height is not None and depth + 1 == switch_depth:
-            to_range = inner & (depth + height[safe] > max_depth)
-        b_mode = np.where(to_range, 1, 0)
-        # Range rows: four near-equal parts of each range.
-        r_first, r_size = _range_rows(rng_start, rng_size)
-        r_kind = np.where(r_size > MAX_LEAF_SIZE, KIND_INNER,
-                          np.where(r_size > 0, KIND_LEAF, KIND_EMPTY))
-        r_lo, r_hi = _range_boxes(prim_lo, prim_hi, r_first.ravel(), np.maximum(r_size, 1).ravel())
-        kind = np.concatenate([b_kind, r_kind]).astype(np.int8)
-        start = np.concatenate([b_first, r_first])
-        size = np.concatenate([b_size, r_size])
-        mode = np.concatenate([b_mode, np.ones_like(r_size)])  # 0 binary, 1 range
-        binary_id = np.concatenate([cand, np.full_like(r_size, EMPTY)])
-        lo = np.concatenate([b_lo, r_lo.reshape(-1, WIDTH, 3)])
-        hi = np.concatenate([b_hi, r_hi.reshape(-1, WIDTH, 3)])
-        lo = np.where((kind > 0)[..., None], lo, np.float32(np.inf)).astype(np.float32)
-        hi = np.where((kind > 0)[..., None], hi, np.float32(-np.inf)).astype(np.float32)
+            mode[inner & (depth + height[safe] > max_depth)] = 1
+        if len(rng_start):  # range rows: four near-equal parts of each range
+            if prim_lo is None:
+                prim_lo, prim_hi = tree.lo[:n][prim_order], tree.hi[:n][prim_order]
+            r_first, r_size = _range_rows(rng_start, rng_size)
+            r_kind = np.where(r_size > MAX_LEAF_SIZE, KIND_INNER, KIND_LEAF).astype(np.int8)
+            r_lo, r_hi = _range_boxes(prim_lo, prim_hi, r_first.ravel(), r_size.ravel())
+            kind = np.concatenate([kind, r_kind])
+            start = np.concatenate([start, r_first])
+            size = np.concatenate([size, r_size])
+            mode = np.concatenate([mode, np.ones(r_size.shape, np.int8)])
+            binary_id = np.concatenate([cand, np.full_like(r_size, EMPTY)])
+            lo = np.concatenate([lo, r_lo.reshape(-1, WIDTH, 3)])
+            hi = np.concatenate([hi, r_hi.reshape(-1, WIDTH, 3)])
 
         is_child_node = kind == KIND_INNER
         n_inner = int(np.count_nonzero(is_child_node))
@@ -239,3 +239,4 @@ def _renumber(chunk, base: int, order: np.ndarray) -> None:
     new_of_old = np.empty_like(order)
     new_of_old[order] = np.arange(len(order))
     index[inner] = base + new_of_old[old]
+

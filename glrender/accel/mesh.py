@@ -6,8 +6,8 @@ Scene files come from strangers, so the builder never trusts its input:
   can be drawn from them);
 - triangles touching a NaN or infinite vertex are skipped with a count, or raise
   a :class:`SceneError` with ``on_invalid="raise"``;
-- zero-area triangles (the cross product of two edges is exactly zero in
-  float64) are skipped with a count: the watertight test can never report a hit
+- zero-area triangles (the cross product of two edges, computed in float64,
+  is zero) are skipped with a count: the watertight test can never report a hit
   on them (its determinant is zero), so they would only cost traversal time;
 - exact duplicates (the same three vertex positions, in any order) keep their
   first occurrence: duplicates fight for the same hits and, in bulk (10^6 copies
@@ -126,43 +126,45 @@ def prepare_triangles(vertices, triangles, on_invalid: str = "skip",
                          f"got {on_invalid!r}")
     vertices, triangles = _as_arrays(vertices, triangles)
     input_count = len(triangles)
-    source = np.arange(input_count, dtype=np.int64)
 
     # Coordinates beyond float32 become infinite: they are invalid too.
     with np.errstate(over="ignore", invalid="ignore"):
         v32 = vertices.astype(np.float32) + np.float32(0.0)  # + 0 turns -0.0 into +0.0
     finite_vertex = np.all(np.isfinite(v32), axis=1)
+    corners = v32[triangles]
+    keep = np.ones(input_count, bool)
     skipped_invalid = 0
     if not finite_vertex.all():
-        valid = np.all(finite_vertex[triangles], axis=1)
-        skipped_invalid = int(input_count - np.count_nonzero(valid))
+        keep = np.all(finite_vertex[triangles], axis=1)
+        skipped_invalid = int(input_count - np.count_nonzero(keep))
         if skipped_invalid and on_invalid == "raise":
             bad_vertex = int(np.nonzero(~finite_vertex)[0][0])
             raise SceneError(f"{skipped_invalid} of {input_count} triangles use a NaN or infinite "
                              f"vertex (first: vertex {bad_vertex} = "
                              f"{vertices[bad_vertex].tolist()})")
-        triangles, source = triangles[valid], source[valid]
-    corners = v32[triangles]
 
     skipped_degenerate = 0
-    if remove_degenerate and len(corners):
-        # Exact in float64: products of float32 differences need at most 50 bits.
+    if remove_degenerate and input_count:
         p0 = corners[:, 0].astype(np.float64)
         e1 = corners[:, 1] - p0
         e2 = corners[:, 2] - p0
-        nonzero = ((e1[:, 1] * e2[:, 2] != e1[:, 2] * e2[:, 1])
-                   | (e1[:, 2] * e2[:, 0] != e1[:, 0] * e2[:, 2])
-                   | (e1[:, 0] * e2[:, 1] != e1[:, 1] * e2[:, 0]))
-        skipped_degenerate = int(len(corners) - np.count_nonzero(nonzero))
-        if skipped_degenerate:
-            corners, source, triangles = corners[nonzero], source[nonzero], triangles[nonzero]
+        with np.errstate(invalid="ignore"):
+            area = ((e1[:, 1] * e2[:, 2] != e1[:, 2] * e2[:, 1])
+                    | (e1[:, 2] * e2[:, 0] != e1[:, 0] * e2[:, 2])
+                    | (e1[:, 0] * e2[:, 1] != e1[:, 1] * e2[:, 0]))
+        skipped_degenerate = int(np.count_nonzero(keep & ~area))
+        keep &= area
 
     removed_duplicates = 0
-    if remove_duplicates and len(corners) > 1:
-        duplicate = _duplicate_mask(corners, _vertex_hashes(v32)[triangles])
+    if remove_duplicates and input_count > 1:
+        # Exact twins share validity and area, so the first of a group survives the
+        # other filters whenever any of it does.
+        duplicate = _duplicate_mask(corners, _vertex_hashes(v32)[triangles]) & keep
         removed_duplicates = int(np.count_nonzero(duplicate))
-        if removed_duplicates:
-            corners, source = corners[~duplicate], source[~duplicate]
+        keep &= ~duplicate
 
+    source = np.arange(input_count, dtype=np.int64)
+    if not keep.all():
+        corners, source = corners[keep], source[keep]
     return PreparedTriangles(np.ascontiguousarray(corners, np.float32), source, input_count,
                              skipped_invalid, skipped_degenerate, removed_duplicates)

@@ -19,15 +19,18 @@ def _spread_bits(x: np.ndarray) -> np.ndarray:
 
 def morton_codes(points: np.ndarray) -> np.ndarray:
     """63-bit Morton codes of (N, 3) points, quantised over their own bounds per axis."""
-    points = np.asarray(points, np.float64)
+    points = np.asarray(points)
     if len(points) == 0:
         return np.zeros(0, np.uint64)
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    extent = hi - lo
-    scale = np.where(extent > 0, ((1 << BITS_PER_AXIS) - 1) / np.where(extent > 0, extent, 1), 0)
-    q = np.clip((points - lo) * scale, 0, (1 << BITS_PER_AXIS) - 1).astype(np.uint64)
-    return (_spread_bits(q[:, 0]) << np.uint64(2)) | (_spread_bits(q[:, 1]) << np.uint64(1)) \
-        | _spread_bits(q[:, 2])
+    top = (1 << BITS_PER_AXIS) - 1
+    code = np.zeros(len(points), np.uint64)
+    for axis in range(3):
+        x = np.ascontiguousarray(points[:, axis], np.float64)
+        lo, hi = x.min(), x.max()
+        scale = top / (hi - lo) if hi > lo else 0.0
+        q = np.clip((x - lo) * scale, 0, top).astype(np.uint64)
+        code |= _spread_bits(q) << np.uint64(2 - axis)
+    return code
 
 
 def morton_order(points: np.ndarray) -> np.ndarray:

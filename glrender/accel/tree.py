@@ -14,14 +14,18 @@ per level, never once per node).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
 
 def half_area(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """Half the surface area of boxes (..., 3); empty or flat boxes give >= 0."""
-    e = np.maximum(np.asarray(hi, np.float64) - np.asarray(lo, np.float64), 0.0)
-    return e[..., 0] * e[..., 1] + e[..., 1] * e[..., 2] + e[..., 2] * e[..., 0]
+    """Half the surface area of boxes (..., 3), in their dtype; empty boxes (lo > hi) give 0."""
+    with np.errstate(invalid="ignore"):  # inf - inf in empty slots
+        e = np.maximum(hi - lo, 0)
+    e = np.nan_to_num(e, nan=0.0)
+    x, y, z = e[..., 0], e[..., 1], e[..., 2]
+    return x * y + z * (x + y)
 
 
 @dataclass
@@ -33,6 +37,11 @@ class BinaryTree:
     left: np.ndarray  # (2n-1,) int64, -1 for leaves
     right: np.ndarray  # (2n-1,) int64, -1 for leaves
     levels: list[tuple[int, int]] = field(default_factory=list)
+
+    @cached_property
+    def area(self) -> np.ndarray:
+        """Half surface area of every node box (float32)."""
+        return half_area(self.lo, self.hi)
 
     @property
     def n(self) -> int:
@@ -93,7 +102,7 @@ class BinaryTree:
         ``A * count * c_tri <= A * c_node + cost(left) + cost(right)``, the
         usual SAH comparison (costs in area-weighted units; MacDonald & Booth 1990).
         """
-        area = half_area(self.lo, self.hi)
+        area = self.area.astype(np.float64)
         cost = area * c_tri  # single-primitive leaves
         leaf = np.ones(len(self.lo), bool)
         for s, e in self.bottom_up():
@@ -106,7 +115,7 @@ class BinaryTree:
 
     def sah_cost(self, c_node: float = 1.0, c_tri: float = 1.0) -> float:
         """SAH cost of the binary tree with one primitive per leaf, relative to the root box."""
-        area = half_area(self.lo, self.hi)
+        area = self.area.astype(np.float64)
         root_area = area[self.root] if len(area) else 0.0
         if root_area <= 0:
             return float(c_tri * self.n)

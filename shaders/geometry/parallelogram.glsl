@@ -27,3 +27,15 @@ float intersect_triangle_planar(vec3 o, vec3 d, float t_max, vec3 n, float n_dot
     bool inside = ab.x >= 0.0 && ab.y >= 0.0 && ab.x + ab.y <= 1.0;
     return (inside && t > 0.0 && t < t_max) ? t : t_max;
 }
+
+// The parallelogram test when its plane is perpendicular to a coordinate axis: the
+// plane is {x_axis = plane} and the caller passes the ray's origin and reciprocal
+// direction along that axis (one reciprocal per ray instead of a division per quad).
+float intersect_parallelogram_aligned(float o_axis, float inv_d_axis, float plane, vec3 o, vec3 d,
+                                      float t_max, vec3 corner, vec3 dual_a, vec3 dual_b, out vec2 ab) {
+    float t = (plane - o_axis) * inv_d_axis;
+    vec3 q = o + t * d - corner;
+    ab = vec2(dot(q, dual_a), dot(q, dual_b));
+    bool inside = all(greaterThanEqual(ab, vec2(0.0))) && all(lessThanEqual(ab, vec2(1.0)));
+    return (inside && t > 0.0 && t < t_max) ? t : t_max;
+}

@@ -118,7 +118,7 @@ def test05_depth_bound_engages():
 
     v, f = geometric_line(3000, 0.995)
     c = v[f]
-    tree = build_ploc(c.min(axis=1), c.max(axis=1))
+    tree = build_ploc(c.min(axis=1), c.max(axis=1), top_clusters=1)  # PLOC to the root
     count = tree.counts()
     leaf = tree.leaf_mask(count, 4, 1.0, 1.0)
     unbounded = collapse_to_bvh4(tree, leaf, count, tree.first_prim(count), max_depth=1000)
