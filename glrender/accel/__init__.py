@@ -4,5 +4,6 @@
 the result as buffer textures.
 """
 from .bvh import Bvh, build_bvh
+from .instances import MotionInstance, flatten_instances
 
-__all__ = ["Bvh", "build_bvh"]
+__all__ = ["Bvh", "MotionInstance", "build_bvh", "flatten_instances"]

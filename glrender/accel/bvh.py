@@ -28,6 +28,7 @@ import numpy as np
 from ..errors import UsageError
 from .binned_sah import build_binned_sah
 from .collapse import KIND_EMPTY, KIND_INNER, KIND_LEAF, MAX_LEAF_SIZE, WIDTH, Bvh4Arrays, collapse_to_bvh4
+from .instances import MAX_MOTION_INSTANCES, MotionInstance, motion_bounds, pack_instance
 from .mesh import PreparedTriangles, prepare_triangles
 from .ploc import DEFAULT_RADIUS, DEFAULT_TOP_CLUSTERS, build_ploc
 from .quantize import pack_nodes
@@ -51,6 +52,16 @@ C_TRI = 1.0
 
 
 @dataclass
+class MotionBvh:
+    """A motion instance's own tree (object space) and its world box over the shutter."""
+
+    instance: MotionInstance
+    bvh: Bvh
+    world_lo: np.ndarray
+    world_hi: np.ndarray
+
+
+@dataclass
 class Bvh:
     """A 4-wide BVH over triangles, in BVH order (see the module doc for the layout)."""
 
@@ -61,6 +72,7 @@ class Bvh:
     method: str = "ploc"
     build_seconds: float = 0.0
     binary_sah: float = 0.0
+    motion: list[MotionBvh] = field(default_factory=list)
     _packed: dict | None = field(default=None, repr=False)
 
     @property
@@ -73,8 +85,22 @@ class Bvh:
 
     @property
     def depth(self) -> int:
-        """Depth of the deepest inner node (the root is 0)."""
-        return int(self.arrays.depth.max()) if self.node_count else 0
+        """Depth of the deepest inner node (the root is 0), motion instances' trees included."""
+        own = int(self.arrays.depth.max()) if self.node_count else 0
+        return max([own] + [m.bvh.depth for m in self.motion])
+
+    def motion_prim_ranges(self) -> list[tuple[int, int]]:
+        """[begin, end) of each motion instance's triangles in the packed (BVH-order) ids.
+
+        Hits with ``prim < triangle_count`` are static triangles (``prim_order``
+        maps them to input indices); instance k's hit ``prim`` is its triangle
+        ``motion[k].bvh.prim_order[prim - begin]``.
+        """
+        ranges, begin = [], self.triangle_count
+        for m in self.motion:
+            ranges.append((begin, begin + m.bvh.triangle_count))
+            begin += m.bvh.triangle_count
+        return ranges
 
     @property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -107,7 +133,7 @@ class Bvh:
 
     @property
     def nbytes(self) -> int:
-        """Bytes of the packed buffers (nodes, triangles)."""
+        """Bytes of the packed buffers (nodes, triangles, motion instances)."""
         return sum(v.nbytes for v in self.pack().values())
 
     def stats(self) -> dict:
@@ -130,31 +156,52 @@ class Bvh:
             "depth": self.depth,
             "sah_cost": self.sah_cost(),
             "binary_sah_cost": self.binary_sah,
+            "motion_instances": len(self.motion),
+            "motion_triangles": sum(m.bvh.triangle_count for m in self.motion),
             "bytes": nbytes,
-            "bytes_per_triangle": nbytes / max(self.triangle_count, 1),
+            "bytes_per_triangle": nbytes / max(self.triangle_count + sum(
+                m.bvh.triangle_count for m in self.motion), 1),
             "build_seconds": self.build_seconds,
         }
 
-    def child_refs(self) -> np.ndarray:
-        """(N, 4) uint32 child references (see the module doc)."""
+    def child_refs(self, node_offset: int = 0, triangle_offset: int = 0) -> np.ndarray:
+        """(N, 4) uint32 child references (see the module doc), for a tree stored
+        ``node_offset`` nodes and ``triangle_offset`` triangles into the buffers."""
         a = self.arrays
         refs = np.full(a.child_kind.shape, EMPTY_REF, np.uint64)
         inner = a.child_kind == KIND_INNER
         leaf = a.child_kind == KIND_LEAF
-        refs[inner] = a.child_index[inner].astype(np.uint64)
-        refs[leaf] = (LEAF_FLAG | (a.child_count[leaf] << LEAF_COUNT_SHIFT)
-                      | a.child_index[leaf]).astype(np.uint64)
+        refs[inner] = (a.child_index[inner] + node_offset).astype(np.uint64)
+        first = a.child_index[leaf] + triangle_offset
+        if len(first) and first.max() + MAX_LEAF_SIZE > LEAF_FIRST_MASK:
+            raise UsageError(f"too many triangles for a leaf reference (at most {LEAF_FIRST_MASK})")
+        refs[leaf] = (LEAF_FLAG | (a.child_count[leaf] << LEAF_COUNT_SHIFT) | first).astype(np.uint64)
         return refs.astype(np.uint32)
 
     def pack(self) -> dict[str, np.ndarray]:
-        """The arrays of the buffer textures: ``nodes`` (uint32) and ``triangles`` (float32)."""
+        """The arrays of the buffer textures: ``nodes`` (uint32), ``triangles`` and
+        ``instances`` (float32). Motion instances' trees follow the static one."""
         if self._packed is None:
-            a = self.arrays
-            nodes = pack_nodes(a.child_lo, a.child_hi, a.child_kind != KIND_EMPTY,
-                               self.child_refs())
-            tris = np.zeros((self.triangle_count, 3, 4), np.float32)
-            tris[..., :3] = self.corners
-            self._packed = {"nodes": nodes, "triangles": tris.reshape(-1, 4)}
+            trees = [self] + [m.bvh for m in self.motion]
+            nodes, tris, records = [], [], []
+            node_base, tri_base = 0, 0
+            for k, tree in enumerate(trees):
+                a = tree.arrays
+                nodes.append(pack_nodes(a.child_lo, a.child_hi, a.child_kind != KIND_EMPTY,
+                                        tree.child_refs(node_base, tri_base)))
+                t = np.zeros((tree.triangle_count, 3, 4), np.float32)
+                t[..., :3] = tree.corners
+                tris.append(t.reshape(-1, 4))
+                if k:
+                    m = self.motion[k - 1]
+                    records.append(pack_instance(m.instance, node_base, tri_base,
+                                                 tri_base + tree.triangle_count, m.world_lo, m.world_hi))
+                node_base += tree.node_count
+                tri_base += tree.triangle_count
+            header = np.zeros((1, 4), np.float32)
+            header[0, :2] = np.array([len(self.motion), self.triangle_count], np.uint32).view(np.float32)
+            self._packed = {"nodes": np.concatenate(nodes), "triangles": np.concatenate(tris),
+                            "instances": np.concatenate([header] + records)}
         return self._packed
 
 
@@ -162,7 +209,7 @@ def build_bvh(vertices, triangles, *, method: str = "ploc", radius: int = DEFAUL
               top_clusters: int = DEFAULT_TOP_CLUSTERS, threads: int | None = None,
               on_invalid: str = "skip", remove_degenerate: bool = True,
               remove_duplicates: bool = True, max_leaf_size: int = MAX_LEAF_SIZE,
-              c_node: float = C_NODE, c_tri: float = C_TRI) -> Bvh:
+              c_node: float = C_NODE, c_tri: float = C_TRI, motion=()) -> Bvh:
     """Build a 4-wide BVH over ``triangles`` (T, 3) int indexing ``vertices`` (V, 3).
 
     ``method``: ``"ploc"`` (fast, the default) or ``"binned_sah"`` (a full
@@ -170,6 +217,8 @@ def build_bvh(vertices, triangles, *, method: str = "ploc", radius: int = DEFAUL
     ``"skip"`` or ``"raise"`` for triangles with NaN/Inf vertices. Zero-area and
     exactly duplicated triangles are dropped (counted in :meth:`Bvh.stats`)
     unless disabled. ``prim_order`` maps BVH-order triangles to input indices.
+    ``motion``: :class:`~glrender.accel.instances.MotionInstance` objects, each
+    built into its own tree (see :meth:`Bvh.motion_prim_ranges`).
     """
     if method not in METHODS:
         raise UsageError(f"build_bvh: method must be one of {METHODS}, got {method!r}")
@@ -188,6 +237,20 @@ def build_bvh(vertices, triangles, *, method: str = "ploc", radius: int = DEFAUL
     order = arrays.prim_order
     bvh = Bvh(np.ascontiguousarray(c[order]), prepared.source[order], arrays, prepared, method,
               binary_sah=tree.sah_cost())
+    if len(motion) > MAX_MOTION_INSTANCES:
+        raise UsageError(f"build_bvh: at most {MAX_MOTION_INSTANCES} motion instances "
+                         f"(every ray tests each one), got {len(motion)}")
+    for k, instance in enumerate(motion):
+        if not isinstance(instance, MotionInstance):
+            raise UsageError(f"build_bvh: motion[{k}] is not a MotionInstance")
+        tree = build_bvh(instance.vertices, instance.triangles, method=method, radius=radius,
+                         top_clusters=top_clusters, threads=threads, on_invalid=on_invalid,
+                         remove_degenerate=remove_degenerate, remove_duplicates=remove_duplicates,
+                         max_leaf_size=max_leaf_size, c_node=c_node, c_tri=c_tri)
+        lo, hi = tree.bounds
+        if tree.triangle_count:
+            lo, hi = motion_bounds(instance, lo, hi)
+        bvh.motion.append(MotionBvh(instance, tree, lo, hi))
     bvh.build_seconds = time.perf_counter() - start
     return bvh
 

@@ -5,8 +5,6 @@ declares them and nothing else does (a test checks the units below against it).
 """
 from __future__ import annotations
 
-import numpy as np
-
 from ..errors import UsageError
 from ..gl.buffers import BufferTexture
 from .bvh import MAX_DEPTH, Bvh
@@ -31,7 +29,6 @@ class GpuBvh:
             raise UsageError(f"GpuBvh: tree depth {bvh.depth} exceeds the traversal stack "
                              f"bound {MAX_DEPTH} (build it with glrender.accel.build_bvh)")
         packed = bvh.pack()
-        packed.setdefault("instances", np.zeros((1, 4), np.float32))
         self.bvh = bvh
         self.textures = {}
         try:

@@ -81,9 +81,10 @@ void bvh_sort2(inout float ta, inout uint ra, inout float tb, inout uint rb) {
     rb = swap ? r : rb;
 }
 
-// The traversal behind both queries; any_hit is a constant at every call site,
-// so the compiler keeps only one variant's code in each.
-bool bvh_traverse(vec3 o, vec3 d, float t_max, const bool any_hit, out BvhHit hit) {
+// The traversal behind every query, from node `root` (0: the static scene; a
+// motion instance's own tree otherwise). any_hit is a constant at every call
+// site, so the compiler keeps only one variant's code in each.
+bool bvh_traverse(uint root, vec3 o, vec3 d, float t_max, const bool any_hit, out BvhHit hit) {
     hit = BvhHit(t_max, kBvhNoHit, vec2(0.0));
     if (!(t_max > 0.0) || all(equal(d, vec3(0.0)))) {
         return false;
@@ -94,7 +95,7 @@ bool bvh_traverse(vec3 o, vec3 d, float t_max, const bool any_hit, out BvhHit hi
     uint stack[kBvhStackSize];
     float stack_t[kBvhStackSize];
     int sp = 0;
-    uint node = 0u;  // next inner node (the root first), a leaf waiting for the slot, or kNone
+    uint node = root;  // next inner node (the root first), a leaf waiting for the slot, or kNone
     uint leaf_first = 0u;  // the leaf being tested, one triangle per iteration
     uint leaf_count = 0u;
     bool found = false;
@@ -167,13 +168,14 @@ bool bvh_traverse(vec3 o, vec3 d, float t_max, const bool any_hit, out BvhHit hi
     return found;
 }
 
-// Nearest hit of the ray o + t d, t in (0, t_max) (d need not be normalized).
+// Nearest hit of the ray o + t d, t in (0, t_max), in the static scene (d need
+// not be normalized). Motion instances: geometry/motion.glsl.
 bool bvh_intersect_closest(vec3 o, vec3 d, float t_max, out BvhHit hit) {
-    return bvh_traverse(o, d, t_max, false, hit);
+    return bvh_traverse(0u, o, d, t_max, false, hit);
 }
 
 // Whether anything blocks o + t d for t in (0, t_max): shadow rays, early exit.
 bool bvh_intersect_any(vec3 o, vec3 d, float t_max) {
     BvhHit hit;
-    return bvh_traverse(o, d, t_max, true, hit);
+    return bvh_traverse(0u, o, d, t_max, true, hit);
 }

@@ -64,7 +64,7 @@ def test01_structure(method, mesh):
     check_structure(bvh, v, f)
     s = bvh.stats()
     assert s["triangles"] == bvh.triangle_count and s["nodes"] == bvh.node_count
-    assert s["bytes"] == bvh.nbytes == bvh.node_count * 64 + bvh.triangle_count * 48
+    assert s["bytes"] == bvh.nbytes == bvh.node_count * 64 + bvh.triangle_count * 48 + 16  # + header
 
 
 def test02_ploc_quality_near_binned_sah():
