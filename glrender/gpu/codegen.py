@@ -1,9 +1,10 @@
 """Generate the GLSL that intersects one scene's compiled primitives.
 
-The output fills the slot ``@scene_geometry`` of the render kernels with
+The output fills the slot ``@scene`` of the render kernels with
 
+    LightData scene_light(uint index);
     bool scene_intersect(vec3 o, vec3 d, float t_max, float time, out SurfaceHit hit);
-    bool scene_occluded(vec3 o, vec3 d, float t_max, float time);
+    bool scene_occluded(vec3 o, vec3 d, float t_max, float time, uint ignore);
 
 Compiled primitives (parallelograms, planar triangles, spheres) are written out as
 constants, so each costs a handful of selects per ray and no memory traffic;
@@ -17,7 +18,11 @@ import numpy as np
 
 from .pack import PackedScene
 
-GENERATED_PATH = "generated/scene_geometry.glsl"
+GENERATED_PATH = "generated/scene.glsl"
+# Scenes with at most this many lights get them as constants (a select chain the
+# compiler folds; a single light becomes pure constants): an SSBO gather of a whole
+# LightData per light sample measured slower on llvmpipe.
+MAX_CONSTANT_LIGHTS = 8
 
 
 def _f(x: float) -> str:
@@ -36,6 +41,29 @@ def _v2(v) -> str:
     return f"vec2({_f(v[0])}, {_f(v[1])})"
 
 
+def _aligned_axis(q) -> int | None:
+    """The coordinate axis a parallelogram's plane is perpendicular to, if any (exactly)."""
+    n = np.cross(q.e1, q.e2)
+    nz = np.flatnonzero(np.abs(n) > 0)
+    if q.triangle or len(nz) != 1 or np.any(q.e1[nz] != 0) or np.any(q.e2[nz] != 0):
+        return None
+    return int(nz[0])
+
+
+def _planar_call(q, t_max: str) -> str:
+    """The GLSL call intersecting one compiled planar primitive."""
+    axis = _aligned_axis(q)
+    if axis is not None:
+        c = "xyz"[axis]
+        n = np.cross(q.e1, q.e2)
+        nn = float(np.dot(n, n))
+        dual_a, dual_b = np.cross(q.e2, n) / nn, np.cross(n, q.e1) / nn
+        return (f"intersect_parallelogram_aligned(o.{c}, inv_d.{c}, {_f(q.corner[axis])}, o, d, {t_max}, "
+                f"{_v3(q.corner)}, {_v3(dual_a)}, {_v3(dual_b)}, ab)")
+    fn = "intersect_triangle_planar" if q.triangle else "intersect_parallelogram"
+    return f"{fn}(o, d, {t_max}, {_planar_args(q)}, ab)"
+
+
 def _planar_args(q) -> str:
     n = np.cross(q.e1, q.e2)
     nn = float(np.dot(n, n))
@@ -45,7 +73,27 @@ def _planar_args(q) -> str:
             f"{_v3(dual_a)}, {_v3(dual_b)}")
 
 
-def generate(packed: PackedScene, has_bvh: bool) -> str:
+def _light_literal(rec) -> str:
+    vecs = [f"vec4({', '.join(_f(x) for x in rec[name])})" for name in rec.dtype.names[:-1]]
+    info = f"uvec4({', '.join(f'{int(x)}u' for x in rec['info'])})"
+    return f"LightData({', '.join(vecs + [info])})"
+
+
+def generate_lights(lights) -> list[str]:
+    """``LightData scene_light(uint index)``: constants for a few lights, else the SSBO."""
+    lines = ["// Light records (see scene/layout.glsl).", "LightData scene_light(uint index) {"]
+    if 0 < len(lights) <= MAX_CONSTANT_LIGHTS:
+        lines.append(f"    LightData l = {_light_literal(lights[0])};")
+        for k in range(1, len(lights)):
+            lines.append(f"    if (index == {k}u) l = {_light_literal(lights[k])};")
+        lines.append("    return l;")
+    else:
+        lines.append("    return lights[index];")
+    lines += ["}", ""]
+    return lines
+
+
+def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
     lines = [
         f"// Scene geometry: {len(packed.quads)} planar primitives, {len(packed.spheres)} spheres, "
         f"BVH: {'yes' if has_bvh else 'no'}.",
@@ -53,10 +101,12 @@ def generate(packed: PackedScene, has_bvh: bool) -> str:
         '#include "geometry/parallelogram.glsl"',
         '#include "geometry/sphere.glsl"',
         '#include "common/constants.glsl"',
+        '#include "scene/layout.glsl"',
     ]
     if has_bvh:
         lines += ['#include "geometry/bvh.glsl"', '#include "geometry/mesh_surface.glsl"']
     n_compiled = len(packed.quads) + len(packed.spheres)
+    lines += generate_lights(packed.lights if lights is None else lights)
     lines += [f"const uint kCompiledPrimitives = {n_compiled}u;",
               f"const bool kSceneHasBvh = {'true' if has_bvh else 'false'};", ""]
 
@@ -73,15 +123,15 @@ def generate(packed: PackedScene, has_bvh: bool) -> str:
         "    vec4 sphere = vec4(0.0);  // centre and signed radius of the nearest sphere hit",
         "    vec2 ab;",
         "    float tq;",
+        "    vec3 inv_d = 1.0 / d;",
     ]
     for k, q in enumerate(packed.quads):
-        fn = "intersect_triangle_planar" if q.triangle else "intersect_parallelogram"
         if q.uv is not None:
             uv = f"{_v2(q.uv[0])} + ab.x * {_v2(q.uv[1])} + ab.y * {_v2(q.uv[2])}"
         else:
             uv = "ab"
         body += [
-            f"    tq = {fn}(o, d, t, {_planar_args(q)}, ab);",
+            f"    tq = {_planar_call(q, 't')};",
             f"    if (tq < t) {{ t = tq; prim = {k}u; ng = {_v3(q.normal)}; uv = {uv}; "
             f"material = {q.material}u; light = {q.light}u; sphere.w = 0.0; }}",
         ]
@@ -129,10 +179,10 @@ def generate(packed: PackedScene, has_bvh: bool) -> str:
            "// testing it anyway loses grazing rays to rounding).",
            "bool scene_occluded(vec3 o, vec3 d, float t_max, float time, uint ignore) {",
            "    float t = t_max;  // min over primitives: no short-circuit branches",
-           "    vec2 ab;"]
+           "    vec2 ab;",
+           "    vec3 inv_d = 1.0 / d;"]
     for k, q in enumerate(packed.quads):
-        fn = "intersect_triangle_planar" if q.triangle else "intersect_parallelogram"
-        test = f"{fn}(o, d, t_max, {_planar_args(q)}, ab)"
+        test = _planar_call(q, "t_max")
         occ.append(f"    t = min(t, {test if not q.light else f'ignore == {k}u ? t_max : {test}'});")
     for j, s in enumerate(packed.spheres):
         k = len(packed.quads) + j

@@ -132,6 +132,7 @@ class Renderer:
                 rect = (lights["info"][:, 0] == layout.LIGHT_KINDS["parallelogram"]) & \
                     (np.abs(dots) <= 1e-5 * np.maximum(norms, 1e-30))
                 lights["info"][rect, 1] |= 2
+        self.lights_final = lights
         dist = packer.array() if packer.array().size else np.zeros(4, np.float32)
         self._materials = self._buffer(p.materials.tobytes())
         self._lights = self._buffer(lights.tobytes() if n_lights else layout.zeros(layout.LIGHT).tobytes())
@@ -174,7 +175,7 @@ class Renderer:
         s = self.settings
         integ = s.integrator
         p = self.packed
-        geometry = codegen.generate(p, has_bvh=p.mesh is not None)
+        geometry = codegen.generate(p, has_bvh=p.mesh is not None, lights=self.lights_final)
         library = shaders.ShaderLibrary().with_generated({codegen.GENERATED_PATH: geometry})
         self.defines = shader_defines(
             sampler=s.sampler.kind, material_kinds=p.material_kinds, light_kinds=p.light_kinds,
@@ -186,7 +187,7 @@ class Renderer:
         self.program = shaders.compile_compute(
             self.ctx, "kernels/render.comp.glsl", defines=self.defines,
             slots={"integrator": INTEGRATOR_FILES[integ.kind],
-                   "scene_geometry": codegen.GENERATED_PATH},
+                   "scene": codegen.GENERATED_PATH},
             library=library)
         if s.samples_per_pass is not None:
             self.samples_per_pass = max(1, int(s.samples_per_pass))

@@ -8,7 +8,7 @@
 #include "bsdf/material.glsl"
 #include "lights/light.glsl"
 #include "lights/light_selection.glsl"
-#include "@scene_geometry"
+#include "@scene"
 
 // Rays to lights stop this fraction short of the sampled point (pbrt's ShadowEpsilon).
 const float kShadowEpsilon = 1e-4;
@@ -26,7 +26,7 @@ void record_aov(inout Aov aov, SurfaceHit hit) {
 vec3 emitter_hit_contribution_n(SurfaceHit hit, vec3 d, int depth, vec3 prev_p, float prev_pdf,
                                 bool prev_delta, float n_bsdf, float n_light) {
     uint index = hit.light - 1u;
-    LightData l = lights[index];
+    LightData l = scene_light(index);
     vec3 Le = area_light_radiance(l, hit.ng, -d);
     if (depth == 0) return kHideEmitters ? vec3(0.0) : Le;
     if (prev_delta || kStrategy == kStrategyBsdf) return Le;
@@ -46,7 +46,7 @@ vec3 environment_contribution_n(vec3 d, int depth, vec3 prev_p, float prev_pdf, 
     uint env = u_params.counts.z;
     if (env == 0u) return vec3(0.0);
     float pdf_env;
-    vec3 Le = environment_radiance(lights[env - 1u], d, pdf_env);
+    vec3 Le = environment_radiance(scene_light(env - 1u), d, pdf_env);
     if (depth == 0) return kHideEmitters ? vec3(0.0) : Le;
     if (prev_delta || kStrategy == kStrategyBsdf) return Le;
     if (kStrategy == kStrategyLight) return vec3(0.0);
@@ -64,14 +64,15 @@ vec3 next_event_n(vec3 p, SurfaceHit hit, Bsdf b, Frame frame, vec3 wo, float ti
                   vec2 u_light, bool use_mis, float n_light, float n_bsdf) {
     if (u_params.counts.x == 0u) return vec3(0.0);
     LightChoice choice = select_light(u_select);
-    LightSample ls = sample_light(lights[choice.index], p, u_light);
+    LightData light = scene_light(choice.index);
+    LightSample ls = sample_light(light, p, u_light);
     if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return vec3(0.0);
     vec3 wi = frame_to_local(frame, ls.wi);
     vec3 f = bsdf_eval(b, wo, wi, false);
     if (max_component(f) <= 0.0) return vec3(0.0);
     vec3 o = offset_ray_origin(p, hit.ng, ls.wi);
     float t_max = isinf(ls.dist) ? kInfinity : ls.dist * (1.0 - kShadowEpsilon);
-    if (scene_occluded(o, ls.wi, t_max, time, lights[choice.index].info.z)) return vec3(0.0);
+    if (scene_occluded(o, ls.wi, t_max, time, light.info.z)) return vec3(0.0);
     float pdf_light = choice.pmf * ls.pdf;
     float w = (ls.delta || !use_mis) ? 1.0 : mis_weight_n(n_light, pdf_light, n_bsdf, bsdf_pdf(b, wo, wi));
     return f * ls.Le * (w / pdf_light);

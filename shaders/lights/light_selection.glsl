@@ -7,6 +7,7 @@
 #include "common/params.glsl"
 #include "scene/layout.glsl"
 #include "sampling/alias_table.glsl"
+#include "@scene"
 
 struct LightChoice {
     uint index;
@@ -25,5 +26,5 @@ LightChoice select_light(float u) {
 
 // Probability that select_light picks light `index`.
 float light_selection_pmf(uint index) {
-    return lights[index].params.w;
+    return scene_light(index).params.w;
 }

@@ -11,8 +11,8 @@ from ...errors import SceneError
 def load_mesh(path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]:
     """(vertices (V,3), triangles (T,3), vertex normals or None, uvs or None) of one mesh file.
 
-    Files holding several objects are concatenated. Vertex normals are returned only
-    when the file has them (otherwise the renderer shades flat).
+    Files holding several objects are concatenated. Vertex normals come from the file
+    when it has them, else they are computed from the faces.
     """
     import trimesh
 
@@ -25,9 +25,9 @@ def load_mesh(path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarr
         raise SceneError(f"{path}: no triangles found")
     vertices = np.asarray(loaded.vertices, np.float64)
     faces = np.asarray(loaded.faces, np.int64)
-    normals = None
-    if "vertex_normals" in loaded._cache.cache or _file_has_normals(loaded):
-        normals = np.asarray(loaded.vertex_normals, np.float64)
+    # Vertex normals from the file, else computed (area-weighted), as Mitsuba does for
+    # meshes without face_normals; Shape.face_normals asks for flat shading instead.
+    normals = np.asarray(loaded.vertex_normals, np.float64)
     uvs = None
     visual = getattr(loaded, "visual", None)
     if visual is not None and getattr(visual, "uv", None) is not None and len(visual.uv) == len(vertices):
@@ -35,14 +35,3 @@ def load_mesh(path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarr
     if not np.all(np.isfinite(vertices)):
         raise SceneError(f"{path}: vertices contain NaN or infinite coordinates")
     return vertices, faces, normals, uvs
-
-
-def _file_has_normals(mesh) -> bool:
-    meta = getattr(mesh, "metadata", {}) or {}
-    ply = meta.get("_ply_raw", {})
-    if isinstance(ply, dict) and "vertex" in ply:
-        props = ply["vertex"].get("data", {})
-        names = getattr(props, "dtype", None)
-        if names is not None and names.names and "nx" in names.names:
-            return True
-    return False

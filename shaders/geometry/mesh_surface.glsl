@@ -1,0 +1,28 @@
+// The surface record of a BVH triangle hit: normals, texture coordinates, material, light.
+//
+// Shading data lives in per-triangle buffer textures in BVH order (scene/layout.glsl).
+// As in Mitsuba, the geometric normal is flipped to the side of the interpolated
+// shading normal, so that vertex normals decide which side of a mesh is its front.
+#include "geometry/bvh.glsl"
+#include "scene/layout.glsl"
+
+void mesh_surface(uint tri, vec2 bary, out vec3 ng, out vec3 ns, out vec2 uv, out uint material,
+                  out uint light) {
+    vec3 p0 = bvh_triangle_vertex(tri, 0u);
+    vec3 p1 = bvh_triangle_vertex(tri, 1u);
+    vec3 p2 = bvh_triangle_vertex(tri, 2u);
+    ng = normalize(cross(p1 - p0, p2 - p0));
+    float b0 = 1.0 - bary.x - bary.y;
+    int base = 3 * int(tri);
+    vec3 n = b0 * texelFetch(u_tri_normals, base).xyz + bary.x * texelFetch(u_tri_normals, base + 1).xyz +
+             bary.y * texelFetch(u_tri_normals, base + 2).xyz;
+    float len = length(n);
+    ns = len > 0.0 ? n / len : ng;
+    ng = dot(ng, ns) < 0.0 ? -ng : ng;
+    vec4 uv01 = texelFetch(u_tri_uvs, 2 * int(tri));
+    vec2 uv2 = texelFetch(u_tri_uvs, 2 * int(tri) + 1).xy;
+    uv = b0 * uv01.xy + bary.x * uv01.zw + bary.y * uv2;
+    uvec4 info = texelFetch(u_tri_info, int(tri));
+    material = info.x;
+    light = info.y;
+}
