@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from .morton import morton_order
-from .tree import BinaryTree, half_area, single_leaf_tree
+from .tree import BinaryTree, as_boxes, half_area, single_leaf_tree
 
 DEFAULT_BINS = 32
 SMALL_SEGMENT = 48  # segments of at most this many primitives use SMALL_BINS bins
@@ -68,8 +68,7 @@ def _best_splits(plo, phi, b, seg, sizes, bins):
 
 def build_binned_sah(lo: np.ndarray, hi: np.ndarray, bins: int = DEFAULT_BINS) -> BinaryTree:
     """A binary BVH over boxes ``lo``/``hi`` (n, 3) by binned SAH, one primitive per leaf."""
-    lo = np.ascontiguousarray(lo, np.float32)
-    hi = np.ascontiguousarray(hi, np.float32)
+    lo, hi = as_boxes(lo, hi)
     n = len(lo)
     if n <= 1:
         return single_leaf_tree(lo, hi)

@@ -24,7 +24,7 @@ import numpy as np
 
 from .binned_sah import build_binned_sah
 from .morton import morton_order
-from .tree import BinaryTree, single_leaf_tree
+from .tree import BinaryTree, as_boxes, single_leaf_tree
 
 DEFAULT_RADIUS = 6
 DEFAULT_TOP_CLUSTERS = 4096
@@ -142,8 +142,7 @@ def build_ploc(lo: np.ndarray, hi: np.ndarray, radius: int = DEFAULT_RADIUS,
     merging is weakest (measured: 5% fewer traversal steps than PLOC to the root).
     ``threads`` > 1 runs the neighbour search on that many threads.
     """
-    lo = np.ascontiguousarray(lo, np.float32)
-    hi = np.ascontiguousarray(hi, np.float32)
+    lo, hi = as_boxes(lo, hi)
     n = len(lo)
     if n <= 1:
         return single_leaf_tree(lo, hi)

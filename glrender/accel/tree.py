@@ -124,6 +124,12 @@ class BinaryTree:
         return float((c_node * inner + c_tri * leaves) / root_area)
 
 
+def as_boxes(lo, hi) -> tuple[np.ndarray, np.ndarray]:
+    """Box corners as contiguous float32 (n, 3) arrays, the builders' input."""
+    return (np.ascontiguousarray(lo, np.float32).reshape(-1, 3),
+            np.ascontiguousarray(hi, np.float32).reshape(-1, 3))
+
+
 def single_leaf_tree(lo: np.ndarray, hi: np.ndarray) -> BinaryTree:
     """The tree of zero or one primitive."""
     n = len(lo)
