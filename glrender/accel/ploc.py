@@ -112,25 +112,27 @@ def _merge_step(ids, box, next_id, radius, pool, node_box, left, right, levels):
     """
     m = len(ids)
     offset = _nearest_neighbours_threaded(box, radius, pool)
-    pos = np.arange(m)
-    nn = pos + offset
-    first = np.nonzero((offset > 0) & (nn[nn] == pos))[0]  # left members of mutual pairs
-    second = nn[first]
+    # Left members of mutual pairs: i points k ahead and i + k points k back.
+    mutual = np.zeros(m, bool)
+    for k in range(1, min(radius, m - 1) + 1):
+        mutual[:-k] |= (offset[:-k] == k) & (offset[k:] == -k)
+    first = np.nonzero(mutual)[0]
+    second = first + offset[first]
     if len(first) * STALL_FRACTION < m:
         first = np.arange(0, m - 1, 2)  # stalled: merge Morton neighbours pairwise
         second = first + 1
     count = len(first)
-    new = np.arange(next_id, next_id + count)
+    new = slice(next_id, next_id + count)
     left[new], right[new] = ids[first], ids[second]
     merged = np.concatenate([np.minimum(box[:3, first], box[:3, second]),
                              np.maximum(box[3:, first], box[3:, second])])
     node_box[new] = merged.T
     levels.append((next_id, next_id + count))
-    ids[first] = new
+    ids[first] = np.arange(next_id, next_id + count)
     box[:, first] = merged
     keep = np.ones(m, bool)
     keep[second] = False
-    return ids[keep], box[:, keep], next_id + count
+    return ids[keep], np.compress(keep, box, axis=1), next_id + count
 
 
 def build_ploc(lo: np.ndarray, hi: np.ndarray, radius: int = DEFAULT_RADIUS,
