@@ -61,6 +61,7 @@ MATERIAL = np.dtype([
     ("color2", *_V4),
     ("params", *_V4),
     ("info", *_U4),
+    ("table", "<f4", (64,)),   # roughplastic transmittance table (glrender/gpu/microfacet_tables.py)
 ])
 
 LIGHT = np.dtype([
@@ -73,8 +74,9 @@ LIGHT = np.dtype([
     ("info", *_U4),
 ])
 
-# std430/std140 sizes of the GLSL structs (all members are 16-byte vectors/matrices).
-SIZES = {"RenderParams": 288, "MaterialData": 80, "LightData": 112}
+# std430/std140 sizes of the GLSL structs (16-byte vectors and matrices; MaterialData ends
+# with a float[64], std430 stride 4).
+SIZES = {"RenderParams": 288, "MaterialData": 336, "LightData": 112}
 for _name, _dtype in (("RenderParams", RENDER_PARAMS), ("MaterialData", MATERIAL),
                       ("LightData", LIGHT)):
     assert _dtype.itemsize == SIZES[_name], (_name, _dtype.itemsize)

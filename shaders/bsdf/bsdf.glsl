@@ -3,13 +3,34 @@
 // llvmpipe runs every side of a divergent branch, so the host passes the set of
 // material kinds present (kMaterialKinds, common/params.glsl) and each case is
 // guarded by a constant test the compiler folds. Two-sided materials answer on
-// both sides by mirroring the directions into the upper hemisphere.
+// both sides by mirroring the directions into the upper hemisphere (Mitsuba 3's
+// twosided adapter); the dielectric kinds answer on both sides by themselves.
+//
+// Conventions (bsdf/bsdf_common.glsl): local frame, wo toward the previous vertex,
+// wi toward the next; eval = f |cos theta_i|; pdfs per unit solid angle of wi; delta
+// lobes are only sampled (eval and pdf ignore them) and report their discrete
+// probability in BsdfSample.pdf. `adjoint` selects importance transport, which
+// differs from radiance transport only for refraction (dielectric, roughdielectric).
+// Whoever includes this file defines material_table_fetch (bsdf/roughplastic.glsl).
 #include "bsdf/bsdf_common.glsl"
+#include "bsdf/conductor.glsl"
+#include "bsdf/dielectric.glsl"
 #include "bsdf/diffuse.glsl"
+#include "bsdf/fresnel.glsl"
+#include "bsdf/plastic.glsl"
+#include "bsdf/roughconductor.glsl"
+#include "bsdf/roughdielectric.glsl"
+#include "bsdf/roughplastic.glsl"
+#include "bsdf/thindielectric.glsl"
 #include "common/params.glsl"
 
 bool material_present(uint kind) {
     return (kMaterialKinds & (1u << kind)) != 0u;
+}
+
+// True when the material kind is `kind` and the kind is compiled in.
+bool material_is(Bsdf b, uint kind) {
+    return material_present(kind) && b.kind == kind;
 }
 
 // Mirrors directions into the upper hemisphere for two-sided materials.
@@ -24,7 +45,11 @@ void bsdf_two_sided(Bsdf b, inout vec3 wo, inout vec3 wi) {
 vec3 bsdf_eval(Bsdf b, vec3 wo, vec3 wi, bool adjoint) {
     bsdf_two_sided(b, wo, wi);
     vec3 f = vec3(0.0);
-    if (material_present(kMaterialDiffuse) && b.kind == kMaterialDiffuse) f = diffuse_eval(b, wo, wi);
+    if (material_is(b, kMaterialDiffuse)) f = diffuse_eval(b, wo, wi);
+    if (material_is(b, kMaterialRoughConductor)) f = roughconductor_eval(b, wo, wi);
+    if (material_is(b, kMaterialRoughDielectric)) f = roughdielectric_eval(b, wo, wi, adjoint);
+    if (material_is(b, kMaterialPlastic)) f = plastic_eval(b, wo, wi);
+    if (material_is(b, kMaterialRoughPlastic)) f = roughplastic_eval(b, wo, wi);
     return f;
 }
 
@@ -32,7 +57,11 @@ vec3 bsdf_eval(Bsdf b, vec3 wo, vec3 wi, bool adjoint) {
 float bsdf_pdf(Bsdf b, vec3 wo, vec3 wi) {
     bsdf_two_sided(b, wo, wi);
     float pdf = 0.0;
-    if (material_present(kMaterialDiffuse) && b.kind == kMaterialDiffuse) pdf = diffuse_pdf(b, wo, wi);
+    if (material_is(b, kMaterialDiffuse)) pdf = diffuse_pdf(b, wo, wi);
+    if (material_is(b, kMaterialRoughConductor)) pdf = roughconductor_pdf(b, wo, wi);
+    if (material_is(b, kMaterialRoughDielectric)) pdf = roughdielectric_pdf(b, wo, wi);
+    if (material_is(b, kMaterialPlastic)) pdf = plastic_pdf(b, wo, wi);
+    if (material_is(b, kMaterialRoughPlastic)) pdf = roughplastic_pdf(b, wo, wi);
     return pdf;
 }
 
@@ -41,7 +70,16 @@ BsdfSample bsdf_sample(Bsdf b, vec3 wo, float u_lobe, vec2 u, bool adjoint) {
     bool flip = (b.flags & kMaterialFlagTwoSided) != 0u && wo.z < 0.0;
     if (flip) wo.z = -wo.z;
     BsdfSample s = bsdf_sample_invalid();
-    if (material_present(kMaterialDiffuse) && b.kind == kMaterialDiffuse) s = diffuse_sample(b, wo, u);
+    if (material_is(b, kMaterialDiffuse)) s = diffuse_sample(b, wo, u);
+    if (material_is(b, kMaterialConductor)) s = conductor_sample(b, wo);
+    if (material_is(b, kMaterialRoughConductor)) s = roughconductor_sample(b, wo, u);
+    if (material_is(b, kMaterialDielectric)) s = dielectric_sample(b, wo, u_lobe, adjoint);
+    if (material_is(b, kMaterialRoughDielectric)) s = roughdielectric_sample(b, wo, u_lobe, u, adjoint);
+    if (material_is(b, kMaterialThinDielectric)) s = thindielectric_sample(b, wo, u_lobe);
+    if (material_is(b, kMaterialPlastic)) s = plastic_sample(b, wo, u_lobe, u);
+    if (material_is(b, kMaterialRoughPlastic)) s = roughplastic_sample(b, wo, u_lobe, u);
+    // null: the surface is not there (Mitsuba's null BSDF): continue straight on
+    if (material_is(b, kMaterialNull)) s = BsdfSample(-wo, vec3(1.0), 1.0, 1.0, true, true);
     if (flip) s.wi.z = -s.wi.z;
     return s;
 }
@@ -52,9 +90,20 @@ bool bsdf_is_delta(Bsdf b) {
            b.kind == kMaterialThinDielectric || b.kind == kMaterialNull;
 }
 
-// Directional-hemispherical reflectance estimate for the albedo AOV.
+// A reflectance for the albedo AOV: the diffuse reflectance of diffuse and plastic
+// kinds; for the others what the surface reflects (and transmits) at normal incidence.
 vec3 bsdf_albedo(Bsdf b) {
     if (b.kind == kMaterialDiffuse || b.kind == kMaterialPlastic || b.kind == kMaterialRoughPlastic)
         return b.c0;
-    return b.c1;
+    if (b.kind == kMaterialConductor || b.kind == kMaterialRoughConductor)
+        return b.c1 * fresnel_conductor(1.0, b.c0, b.c2);
+    if (b.kind == kMaterialDielectric || b.kind == kMaterialRoughDielectric) {
+        float F = fresnel_dielectric(1.0, b.eta).F;
+        return F * b.c0 + (1.0 - F) * b.c1;
+    }
+    if (b.kind == kMaterialThinDielectric) {
+        float R = thindielectric_reflectance(1.0, b.eta);
+        return R * b.c0 + (1.0 - R) * b.c1;
+    }
+    return vec3(0.0);
 }

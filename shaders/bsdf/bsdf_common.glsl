@@ -34,6 +34,7 @@ struct Bsdf {
     vec3 c2;
     vec2 alpha;   // microfacet roughness along local x and y
     float eta;    // interior IOR / exterior IOR
+    uint material;  // index of the material record, for tabulated data (roughplastic)
 };
 
 // One sampled direction.

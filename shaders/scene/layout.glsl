@@ -31,11 +31,12 @@ layout(std430, binding = 1) buffer AccumM2 { vec4 accum_m2[]; };
 
 // 2: materials. kind: see kMaterial* in bsdf/bsdf.glsl.
 struct MaterialData {
-    vec4 color0;   // diffuse reflectance | conductor eta | specular reflectance (dielectric)
-    vec4 color1;   // specular reflectance (conductor, plastic) | conductor k | specular transmittance
-    vec4 color2;   // conductor k (rgb) for roughconductor tint splitting; w unused
+    vec4 color0;   // diffuse reflectance (diffuse, plastics) | conductor eta | specular reflectance (dielectrics)
+    vec4 color1;   // specular reflectance (conductors, plastics) | specular transmittance (dielectrics)
+    vec4 color2;   // conductor k (rgb) | plastic, roughplastic: x specular sampling weight, y internal reflectance
     vec4 params;   // x: alpha u, y: alpha v, z: relative IOR int/ext, w: unused
     uvec4 info;    // x: kind, y: flags (kMaterialFlag*), z: color0 texture + 1 (0: none), w: color1 texture + 1
+    float table[64];  // roughplastic: the coating's transmittance T(cos theta) at cos theta = i / 63
 };
 layout(std430, binding = 2) readonly buffer Materials { MaterialData materials[]; };
 

@@ -32,7 +32,7 @@ def test01_binding_numbers_agree():
 
 def struct_fields(name):
     body = re.search(r"struct %s \{(.*?)\};" % name, LAYOUT, re.S).group(1)
-    return [(t, n) for t, n in re.findall(r"^\s*(\w+)\s+(\w+);", body, re.M)]
+    return [(t, n) for t, n in re.findall(r"^\s*(\w+)\s+(\w+)(?:\[\d+\])?;", body, re.M)]
 
 
 @pytest.mark.parametrize("struct, dtype", [("MaterialData", layout.MATERIAL), ("LightData", layout.LIGHT)])
@@ -52,6 +52,7 @@ void main() {
     for (uint i = 0u; i < 2u; ++i) {
         MaterialData m = materials[i];
         put(k, m.color0); put(k, m.color1); put(k, m.color2); put(k, m.params); put(k, m.info);
+        for (int j = 0; j < 64; ++j) words[k++] = floatBitsToUint(m.table[j]);
     }
     for (uint i = 0u; i < 2u; ++i) {
         LightData l = lights[i];

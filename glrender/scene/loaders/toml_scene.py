@@ -224,10 +224,27 @@ def _shutter(ctx, t) -> m.Shutter:
 
 
 _MATERIAL_FIELDS = {"type", "reflectance", "specular_reflectance", "specular_transmittance", "eta",
-                    "k", "int_ior", "ext_ior", "alpha", "distribution", "nonlinear", "two_sided"}
+                    "k", "int_ior", "ext_ior", "alpha", "distribution", "nonlinear", "two_sided",
+                    "material"}
+# Mitsuba's default interior IOR per kind ("bk7" for dielectrics, "polypropylene" for plastics)
+_DEFAULT_INT_IOR = {"plastic": "polypropylene", "roughplastic": "polypropylene"}
+
+
+def _ior(ctx, value, key: str) -> float:
+    """An IOR given as a number or by Mitsuba's name ("bk7", "water", "air", ...)."""
+    from ..materials import dielectric_ior
+
+    if isinstance(value, str):
+        try:
+            return dielectric_ior(value)
+        except SceneError as exc:
+            ctx.fail(key, str(exc))
+    return ctx.number(value, key, 1e-3, 100)
 
 
 def _material(ctx, name: str, t) -> m.Material:
+    from ..materials import conductor_ior, dielectric_ior
+
     key = f"materials.{name}"
     t = ctx.table(t, key)
     _check_keys(ctx, t, key, _MATERIAL_FIELDS)
@@ -236,9 +253,22 @@ def _material(ctx, name: str, t) -> m.Material:
     for field_name in ("reflectance", "specular_reflectance", "specular_transmittance", "eta", "k"):
         if field_name in t:
             setattr(mat, field_name, ctx.color(t[field_name], f"{key}.{field_name}"))
+    if "material" in t:
+        # a named conductor, as Mitsuba's `material` parameter ("Au", "Cu", "none", ...)
+        if kind not in ("conductor", "roughconductor"):
+            ctx.fail(f"{key}.material", f"named materials are for conductor and roughconductor, "
+                     f"not {kind}")
+        if "eta" in t or "k" in t:
+            ctx.fail(f"{key}.material", "give either eta and k or material, not both")
+        try:
+            mat.eta, mat.k = conductor_ior(ctx.string(t["material"], f"{key}.material"))
+        except SceneError as exc:
+            ctx.fail(f"{key}.material", str(exc))
+    if kind in _DEFAULT_INT_IOR:
+        mat.int_ior = dielectric_ior(_DEFAULT_INT_IOR[kind])
     for field_name in ("int_ior", "ext_ior"):
         if field_name in t:
-            setattr(mat, field_name, ctx.number(t[field_name], f"{key}.{field_name}", 1e-3, 100))
+            setattr(mat, field_name, _ior(ctx, t[field_name], f"{key}.{field_name}"))
     if "alpha" in t:
         a = t["alpha"]
         mat.alpha = (ctx.vector(a, f"{key}.alpha", 2) if isinstance(a, list)
