@@ -96,6 +96,7 @@ class PackedScene:
     material_kinds: set[str]
     light_kinds: set[str]
     environment: int                        # index + 1 of the environment light, 0 if none
+    env_image: np.ndarray | None = None     # H x W x 3 linear RGB of an envmap light
 
     @property
     def sphere_bounds(self) -> tuple[np.ndarray, float]:
@@ -364,6 +365,7 @@ def pack_scene(scene: m.Scene) -> PackedScene:
     if not np.all(np.isfinite(lo)):
         lo, hi = np.zeros(3), np.zeros(3)
     environment = 0
+    env_image = None
     radius = float(max(np.linalg.norm(hi - lo) / 2, 1e-3))
     for light in scene.lights:
         rec = np.zeros(1, layout.LIGHT)[0]
@@ -390,14 +392,28 @@ def pack_scene(scene: m.Scene) -> PackedScene:
             rec["n"][:3] = d / np.linalg.norm(d)
             rec["radiance"][:3] = _rgb(light.irradiance, "light.irradiance")
             weight = math.pi * radius ** 2 * _luminance(rec["radiance"][:3])
-        elif light.kind == "constant":
+        elif light.kind in ("constant", "envmap"):
             if environment:
                 raise SceneError(f"{scene.source}: more than one environment light")
-            rec["radiance"][:3] = _rgb(light.radiance, "light.radiance")
-            weight = 4 * math.pi * math.pi * radius ** 2 * _luminance(rec["radiance"][:3])
+            if light.kind == "constant":
+                rec["radiance"][:3] = _rgb(light.radiance, "light.radiance")
+                average = _luminance(rec["radiance"][:3])
+            else:
+                image = np.asarray(light.image, np.float32)
+                if image.ndim != 3 or image.shape[2] < 3 or min(image.shape[:2]) < 1 or \
+                        not np.all(np.isfinite(image)) or image.min() < 0:
+                    raise SceneError(f"{scene.source}: light {light.name}: the environment image must "
+                                     f"be H x W x 3 with finite, non-negative values")
+                env_image = np.ascontiguousarray(image[..., :3])
+                R = light.world_from_light[:3, :3]
+                frame = R / np.linalg.norm(R, axis=0)
+                rec["e1"][:3], rec["e2"][:3], rec["n"][:3] = frame[:, 0], frame[:, 1], frame[:, 2]
+                rec["params"][0] = light.scale
+                rows = np.sin((np.arange(env_image.shape[0]) + 0.5) / env_image.shape[0] * math.pi)
+                average = float((_luminance(env_image.reshape(-1, 3).T).reshape(env_image.shape[:2])
+                                 * rows[:, None]).sum() / rows.sum() / env_image.shape[1]) * light.scale
+            weight = 4 * math.pi * math.pi * radius ** 2 * average
             environment = len(lights) + 1
-        else:
-            raise SceneError(f"{scene.source}: {light.kind} lights are not supported yet")
         lights.append(rec)
         weights.append(weight)
 
@@ -410,4 +426,4 @@ def pack_scene(scene: m.Scene) -> PackedScene:
         bounds=(lo, hi), material_kinds={mat.kind for mat in scene.materials},
         light_kinds={k for k, v in layout.LIGHT_KINDS.items()
                      if len(light_arr) and (light_arr["info"][:, 0] == v).any()},
-        environment=environment)
+        environment=environment, env_image=env_image)

@@ -132,6 +132,8 @@ class Renderer:
                 rect = (lights["info"][:, 0] == layout.LIGHT_KINDS["parallelogram"]) & \
                     (np.abs(dots) <= 1e-5 * np.maximum(norms, 1e-30))
                 lights["info"][rect, 1] |= 2
+        if p.env_image is not None:
+            self._upload_envmap(lights, packer)
         self.lights_final = lights
         dist = packer.array() if packer.array().size else np.zeros(4, np.float32)
         self._materials = self._buffer(p.materials.tobytes())
@@ -141,6 +143,28 @@ class Renderer:
         self.n_lights = n_lights
         if p.mesh is not None:
             self._upload_mesh()
+
+    def _upload_envmap(self, lights, packer):
+        """The environment image as a float texture (bilinear, wrapping in u) and its
+        importance distribution: luminance x sin(theta) per texel, dilated to the 3x3
+        neighbourhood maximum so every direction the bilinear lookup lights has pdf > 0."""
+        image = self.packed.env_image
+        h, w = image.shape[:2]
+        lum = image @ np.array([0.212671, 0.715160, 0.072169], np.float32)
+        padded = np.pad(lum, ((1, 1), (1, 1)), mode="edge")
+        padded[:, 0], padded[:, -1] = padded[:, -2], padded[:, 1]   # u wraps around
+        dil = np.max([padded[dy:dy + h, dx:dx + w] for dy in range(3) for dx in range(3)], axis=0)
+        rows = np.sin((np.arange(h) + 0.5) / h * np.pi)
+        weights = dil * rows[:, None]
+        if not weights.sum() > 0:
+            weights = np.ones_like(weights) * rows[:, None]
+        env = self.packed.environment - 1
+        lights[env]["info"][3] = packer.add_distribution_2d(weights)
+        tex = self.gl.texture((w, h), 3, np.ascontiguousarray(image, np.float32).tobytes(), dtype="f4")
+        tex.filter = (self.gl.LINEAR, self.gl.LINEAR)
+        tex.repeat_x, tex.repeat_y = True, False
+        self._env_texture = tex
+        self._buffers.append(tex)
 
     def _upload_mesh(self):
         from ..accel import build_bvh
@@ -253,6 +277,8 @@ class Renderer:
         self._aov.bind_to_storage_buffer(layout.SSBO_AOV)
         self._debug.bind_to_storage_buffer(layout.SSBO_DEBUG)
         self._params.bind_to_uniform_block(layout.UBO_PARAMS)
+        if getattr(self, "_env_texture", None) is not None:
+            self._env_texture.use(layout.TEX_ENVMAP)
         if self._bvh is not None:
             self._bvh.bind()
             for unit, tex in self._mesh_textures:

@@ -15,6 +15,7 @@
 #include "sampling/triangle.glsl"
 #include "sampling/spherical_rectangle.glsl"
 #include "sampling/spherical_triangle.glsl"
+#include "sampling/distribution2d.glsl"
 
 // Light kinds: the values of glrender.gpu.layout.LIGHT_KINDS.
 const uint kLightParallelogram = 0u;
@@ -48,6 +49,30 @@ struct LightSample {
     float pdf;     // solid-angle pdf of wi; 1 for delta lights (selection probability not included)
     bool delta;    // a Dirac light (no MIS)
 };
+
+// Environment maps (Mitsuba's lat-long convention, +y up in the light's frame):
+// u = atan2(x, -z) / 2 pi wrapped to [0, 1), v = theta / pi; the light's frame columns
+// are LightData e1, e2, n (world_from_light's rotation). The importance distribution
+// is piecewise constant over the texels (weighted by sin theta); radiance is looked
+// up bilinearly. theta comes from atan (llvmpipe's acos is off by up to 4e-4).
+vec2 envmap_uv(LightData l, vec3 w_world, out float sin_theta) {
+    vec3 w = vec3(dot(w_world, l.e1.xyz), dot(w_world, l.e2.xyz), dot(w_world, l.n.xyz));
+    sin_theta = length(w.xz);
+    float u = atan(w.x, -w.z) * kInvTwoPi;
+    u = u < 0.0 ? u + 1.0 : u;
+    return vec2(min(u, kOneMinusEpsilon), atan(sin_theta, w.y) * kInvPi);
+}
+
+vec3 envmap_direction(LightData l, vec2 uv, out float sin_theta) {
+    float phi = kTwoPi * uv.x, theta = kPi * uv.y;
+    sin_theta = sin(theta);
+    vec3 w = vec3(sin(phi) * sin_theta, cos(theta), -cos(phi) * sin_theta);
+    return w.x * l.e1.xyz + w.y * l.e2.xyz + w.z * l.n.xyz;
+}
+
+vec3 envmap_lookup(LightData l, vec2 uv) {
+    return textureLod(u_envmap, uv, 0.0).rgb * l.params.x;
+}
 
 // Radiance leaving an area light's surface with normal n toward direction w (unit, away).
 vec3 area_light_radiance(LightData l, vec3 n, vec3 w) {
@@ -175,6 +200,13 @@ LightSample sample_light(LightData l, vec3 p, vec2 u) {
         s.dist = kInfinity;
         s.pdf = uniform_sphere_pdf();
         s.Le = l.radiance.rgb;
+    } else if (light_kind_present(kLightEnvmap) && kind == kLightEnvmap) {
+        float pdf_uv, sin_theta;
+        vec2 uv = sample_distribution_2d(l.info.w, u, pdf_uv);
+        s.wi = envmap_direction(l, uv, sin_theta);
+        s.dist = kInfinity;
+        s.pdf = sin_theta > 0.0 ? pdf_uv / (2.0 * kPi * kPi * sin_theta) : 0.0;
+        s.Le = envmap_lookup(l, uv);
     }
     return s;
 }
@@ -210,6 +242,12 @@ vec3 environment_radiance(LightData l, vec3 w, out float pdf) {
     if (light_kind_present(kLightConstant) && l.info.x == kLightConstant) {
         pdf = uniform_sphere_pdf();
         return l.radiance.rgb;
+    }
+    if (light_kind_present(kLightEnvmap) && l.info.x == kLightEnvmap) {
+        float sin_theta;
+        vec2 uv = envmap_uv(l, w, sin_theta);
+        pdf = sin_theta > 0.0 ? distribution_2d_pdf(l.info.w, uv) / (2.0 * kPi * kPi * sin_theta) : 0.0;
+        return envmap_lookup(l, uv);
     }
     return vec3(0.0);
 }
