@@ -282,7 +282,7 @@ class Integrator:
     strategy: str = "mis-power"        # direct lighting / NEE weighting
     emitter_samples: int = 1           # direct integrator only
     bsdf_samples: int = 1
-    light_selection: str = "power"     # uniform | power
+    light_selection: str = "uniform"   # uniform (as Mitsuba) | power (alias table)
     area_sampling: str = "solid-angle"  # area | solid-angle (for triangle/rectangle lights)
     hide_emitters: bool = False
     ao_distance: float = float("inf")
