@@ -3,6 +3,7 @@
 The output fills the slot ``@scene`` of the render kernels with
 
     LightData scene_light(uint index);
+    MaterialHeader scene_material(uint index);
     bool scene_intersect(vec3 o, vec3 d, float t_max, float time, out SurfaceHit hit);
     bool scene_occluded(vec3 o, vec3 d, float t_max, float time, uint ignore);
 
@@ -23,6 +24,8 @@ GENERATED_PATH = "generated/scene.glsl"
 # compiler folds; a single light becomes pure constants): an SSBO gather of a whole
 # LightData per light sample measured slower on llvmpipe.
 MAX_CONSTANT_LIGHTS = 8
+# Likewise for material headers (scene/layout.glsl MaterialHeader).
+MAX_CONSTANT_MATERIALS = 8
 
 
 def _f(x: float) -> str:
@@ -93,6 +96,27 @@ def generate_lights(lights) -> list[str]:
     return lines
 
 
+def _material_literal(rec) -> str:
+    vecs = [f"vec4({', '.join(_f(x) for x in rec[name])})" for name in ("color0", "color1", "color2", "params")]
+    info = f"uvec4({', '.join(f'{int(x)}u' for x in rec['info'])})"
+    return f"MaterialHeader({', '.join(vecs + [info])})"
+
+
+def generate_materials(materials) -> list[str]:
+    """``MaterialHeader scene_material(uint index)``: constants for a few materials."""
+    lines = ["// Material headers (see scene/layout.glsl).", "MaterialHeader scene_material(uint index) {"]
+    if 0 < len(materials) <= MAX_CONSTANT_MATERIALS:
+        lines.append(f"    MaterialHeader m = {_material_literal(materials[0])};")
+        for k in range(1, len(materials)):
+            lines.append(f"    if (index == {k}u) m = {_material_literal(materials[k])};")
+        lines.append("    return m;")
+    else:
+        lines.append("    return MaterialHeader(materials[index].color0, materials[index].color1, "
+                     "materials[index].color2, materials[index].params, materials[index].info);")
+    lines += ["}", ""]
+    return lines
+
+
 def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
     lines = [
         f"// Scene geometry: {len(packed.quads)} planar primitives, {len(packed.spheres)} spheres, "
@@ -107,6 +131,7 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
         lines += ['#include "geometry/bvh.glsl"', '#include "geometry/mesh_surface.glsl"']
     n_compiled = len(packed.quads) + len(packed.spheres)
     lines += generate_lights(packed.lights if lights is None else lights)
+    lines += generate_materials(packed.materials)
     lines += [f"const uint kCompiledPrimitives = {n_compiled}u;",
               f"const bool kSceneHasBvh = {'true' if has_bvh else 'false'};", ""]
 

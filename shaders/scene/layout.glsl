@@ -40,6 +40,17 @@ struct MaterialData {
 };
 layout(std430, binding = 2) readonly buffer Materials { MaterialData materials[]; };
 
+// The members of a MaterialData that every kind reads (all but the table). The
+// generated scene code returns it from scene_material(index): constants for scenes
+// with few materials, the Materials buffer otherwise.
+struct MaterialHeader {
+    vec4 color0;
+    vec4 color1;
+    vec4 color2;
+    vec4 params;
+    uvec4 info;
+};
+
 // 3: lights. kind: see kLight* in lights/light.glsl.
 struct LightData {
     vec4 p;         // corner (parallelogram), vertex 0 (triangle), centre (sphere, disk), position (point, spot)
