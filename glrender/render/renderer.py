@@ -216,7 +216,10 @@ class Renderer:
         if s.samples_per_pass is not None:
             self.samples_per_pass = max(1, int(s.samples_per_pass))
         else:
-            self.samples_per_pass = 1 if p.mesh is not None else 4
+            # samples per invocation and pass: measured loop counts stay in the hundreds per
+            # sample (tests/render/test_determinism.py), far below llvmpipe's cap; more
+            # samples per dispatch amortise its fixed cost
+            self.samples_per_pass = 4 if p.mesh is not None else 8
 
     def _warm_up(self):
         """llvmpipe compiles a kernel at its first dispatch (seconds for a cold cache):
