@@ -120,20 +120,19 @@ CONDUCTOR_IOR: dict[str, tuple[RGB, RGB]] = {
     "W": ((4.3708167, 3.3002465, 2.9984074), (3.5006406, 2.604874, 2.2732332)),
 }
 
-_CONDUCTOR_BY_LOWER = {name.lower(): name for name in CONDUCTOR_IOR}
+def _lookup(table: dict, name: str, what: str):
+    by_lower = {key.lower(): key for key in table}
+    key = by_lower.get(name.strip().lower())
+    if key is None:
+        raise SceneError(f"unknown {what} {name!r} (expected one of {', '.join(table)})")
+    return table[key]
 
 
 def dielectric_ior(name: str) -> float:
     """The real IOR of a named dielectric (case-insensitive, as in Mitsuba)."""
-    key = name.strip().lower()
-    if key not in DIELECTRIC_IOR:
-        raise SceneError(f"unknown IOR name {name!r} (expected one of {', '.join(DIELECTRIC_IOR)})")
-    return DIELECTRIC_IOR[key]
+    return _lookup(DIELECTRIC_IOR, name, "IOR name")
 
 
 def conductor_ior(name: str) -> tuple[RGB, RGB]:
     """(eta, k) in RGB of a named conductor ("Au", "Cu", ...; case-insensitive)."""
-    key = _CONDUCTOR_BY_LOWER.get(name.strip().lower())
-    if key is None:
-        raise SceneError(f"unknown conductor {name!r} (expected one of {', '.join(CONDUCTOR_IOR)})")
-    return CONDUCTOR_IOR[key]
+    return _lookup(CONDUCTOR_IOR, name, "conductor")

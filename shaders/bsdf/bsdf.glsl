@@ -41,27 +41,34 @@ void bsdf_two_sided(Bsdf b, inout vec3 wo, inout vec3 wi) {
     }
 }
 
-// f(wo, wi) |cos theta_i| of the non-delta lobes.
-vec3 bsdf_eval(Bsdf b, vec3 wo, vec3 wi, bool adjoint) {
+// f(wo, wi) |cos theta_i| of the non-delta lobes and (out) the solid-angle pdf with
+// which bsdf_sample returns wi; each model computes both from one half vector.
+vec3 bsdf_eval_pdf(Bsdf b, vec3 wo, vec3 wi, bool adjoint, out float pdf) {
     bsdf_two_sided(b, wo, wi);
     vec3 f = vec3(0.0);
-    if (material_is(b, kMaterialDiffuse)) f = diffuse_eval(b, wo, wi);
-    if (material_is(b, kMaterialRoughConductor)) f = roughconductor_eval(b, wo, wi);
-    if (material_is(b, kMaterialRoughDielectric)) f = roughdielectric_eval(b, wo, wi, adjoint);
-    if (material_is(b, kMaterialPlastic)) f = plastic_eval(b, wo, wi);
-    if (material_is(b, kMaterialRoughPlastic)) f = roughplastic_eval(b, wo, wi);
+    pdf = 0.0;
+    if (material_is(b, kMaterialDiffuse)) {
+        f = diffuse_eval(b, wo, wi);
+        pdf = diffuse_pdf(b, wo, wi);
+    }
+    if (material_is(b, kMaterialRoughConductor)) f = roughconductor_eval_pdf(b, wo, wi, pdf);
+    if (material_is(b, kMaterialRoughDielectric)) f = roughdielectric_eval_pdf(b, wo, wi, adjoint, pdf);
+    if (material_is(b, kMaterialPlastic)) f = plastic_eval_pdf(b, wo, wi, pdf);
+    if (material_is(b, kMaterialRoughPlastic)) f = roughplastic_eval_pdf(b, wo, wi, pdf);
     return f;
 }
 
-// Solid-angle pdf with which bsdf_sample returns wi (non-delta lobes).
+// f(wo, wi) |cos theta_i| of the non-delta lobes (the pdf's code is dropped as dead).
+vec3 bsdf_eval(Bsdf b, vec3 wo, vec3 wi, bool adjoint) {
+    float pdf;
+    return bsdf_eval_pdf(b, wo, wi, adjoint, pdf);
+}
+
+// Solid-angle pdf with which bsdf_sample returns wi (non-delta lobes; the same for
+// radiance and importance transport).
 float bsdf_pdf(Bsdf b, vec3 wo, vec3 wi) {
-    bsdf_two_sided(b, wo, wi);
-    float pdf = 0.0;
-    if (material_is(b, kMaterialDiffuse)) pdf = diffuse_pdf(b, wo, wi);
-    if (material_is(b, kMaterialRoughConductor)) pdf = roughconductor_pdf(b, wo, wi);
-    if (material_is(b, kMaterialRoughDielectric)) pdf = roughdielectric_pdf(b, wo, wi);
-    if (material_is(b, kMaterialPlastic)) pdf = plastic_pdf(b, wo, wi);
-    if (material_is(b, kMaterialRoughPlastic)) pdf = roughplastic_pdf(b, wo, wi);
+    float pdf;
+    bsdf_eval_pdf(b, wo, wi, false, pdf);
     return pdf;
 }
 

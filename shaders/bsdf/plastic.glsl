@@ -37,21 +37,9 @@ vec3 plastic_eval_pdf(Bsdf b, vec3 wo, vec3 wi, out float pdf) {
     if (!(wo.z > 0.0 && wi.z > 0.0)) return vec3(0.0);
     float F_o = fresnel_dielectric(wo.z, b.eta).F;
     float F_i = fresnel_dielectric(wi.z, b.eta).F;
-    pdf = (1.0 - plastic_specular_probability(b, F_o)) * cosine_hemisphere_pdf(wi.z);
-    return plastic_diffuse_albedo(b) * (cosine_hemisphere_pdf(wi.z) / (b.eta * b.eta) * (1.0 - F_o) * (1.0 - F_i));
-}
-
-// f(wo, wi) |cos theta_i| of the diffuse lobe (local frame, +z up).
-vec3 plastic_eval(Bsdf b, vec3 wo, vec3 wi) {
-    float pdf;
-    return plastic_eval_pdf(b, wo, wi, pdf);
-}
-
-// Solid-angle pdf of the diffuse lobe's samples (the mirror lobe is a delta).
-float plastic_pdf(Bsdf b, vec3 wo, vec3 wi) {
-    float pdf;
-    plastic_eval_pdf(b, wo, wi, pdf);
-    return pdf;
+    float cos_pdf = cosine_hemisphere_pdf(wi.z);  // cos theta_i / pi
+    pdf = (1.0 - plastic_specular_probability(b, F_o)) * cos_pdf;
+    return plastic_diffuse_albedo(b) * (cos_pdf / (b.eta * b.eta) * (1.0 - F_o) * (1.0 - F_i));
 }
 
 // u_lobe in [0,1) picks the mirror (delta, pdf = its probability) or the diffuse lobe

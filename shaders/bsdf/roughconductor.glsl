@@ -22,19 +22,6 @@ vec3 roughconductor_eval_pdf(Bsdf b, vec3 wo, vec3 wi, out float pdf) {
     return b.c1 * fresnel_conductor(dot(wo, m), b.c0, b.c2) * (D * G / (4.0 * wo.z));
 }
 
-// f(wo, wi) |cos theta_i| (local frame, +z up).
-vec3 roughconductor_eval(Bsdf b, vec3 wo, vec3 wi) {
-    float pdf;
-    return roughconductor_eval_pdf(b, wo, wi, pdf);
-}
-
-// Solid-angle pdf with which roughconductor_sample returns wi.
-float roughconductor_pdf(Bsdf b, vec3 wo, vec3 wi) {
-    float pdf;
-    roughconductor_eval_pdf(b, wo, wi, pdf);
-    return pdf;
-}
-
 // Reflects wo about a visible microfacet normal sampled with u in [0,1)^2; invalid when
 // the reflection leaves below the surface (that probability is lost energy, as in Mitsuba).
 BsdfSample roughconductor_sample(Bsdf b, vec3 wo, vec2 u) {

@@ -51,19 +51,6 @@ vec3 roughdielectric_eval_pdf(Bsdf b, vec3 wo, vec3 wi, bool adjoint, out float 
     return b.c1 * abs(scale * (1.0 - F) * D * G * eta * eta * dot_o * dot_i / (wo.z * denom * denom));
 }
 
-// f(wo, wi) |cos theta_i| for radiance (adjoint = false) or importance transport.
-vec3 roughdielectric_eval(Bsdf b, vec3 wo, vec3 wi, bool adjoint) {
-    float pdf;
-    return roughdielectric_eval_pdf(b, wo, wi, adjoint, pdf);
-}
-
-// Solid-angle pdf with which roughdielectric_sample returns wi (either direction).
-float roughdielectric_pdf(Bsdf b, vec3 wo, vec3 wi) {
-    float pdf;
-    roughdielectric_eval_pdf(b, wo, wi, false, pdf);
-    return pdf;
-}
-
 // u in [0,1)^2 picks a visible normal, u_lobe in [0,1) reflection or refraction. A
 // direction that leaves on the wrong side of the surface (shadowed by the
 // macro-surface) is invalid: its probability is energy lost, as in Mitsuba.

@@ -11,7 +11,8 @@
 //   diffuse: f |cos theta_i| = rho' T(cos theta_o) T(cos theta_i) cos theta_i / (pi eta^2),
 //            rho' = rho / (1 - R_int) (or rho / (1 - rho R_int) if nonlinear).
 // Sampling picks the glossy lobe with P = (1 - T_o) w / ((1 - T_o) w + T_o (1 - w))
-// (plastic's rule with the coating reflectance 1 - T_o), then a visible normal or a cosine-weighted direction; pdf is the mixture of both.
+// (plastic's rule with the coating reflectance 1 - T_o), then a visible normal or a
+// cosine-weighted direction; pdf is the mixture of both.
 // One-sided; reflection only, so radiance and importance transport agree.
 #include "bsdf/bsdf_common.glsl"
 #include "bsdf/fresnel.glsl"
@@ -54,19 +55,6 @@ vec3 roughplastic_eval_pdf(Bsdf b, vec3 wo, vec3 wi, out float pdf) {
           (1.0 - p_s) * cosine_hemisphere_pdf(wi.z);
     return b.c1 * (F * D * G / (4.0 * wo.z)) +
            plastic_diffuse_albedo(b) * (kInvPi / (b.eta * b.eta) * wi.z * T_o * T_i);
-}
-
-// f(wo, wi) |cos theta_i| (local frame, +z up).
-vec3 roughplastic_eval(Bsdf b, vec3 wo, vec3 wi) {
-    float pdf;
-    return roughplastic_eval_pdf(b, wo, wi, pdf);
-}
-
-// Solid-angle pdf with which roughplastic_sample returns wi.
-float roughplastic_pdf(Bsdf b, vec3 wo, vec3 wi) {
-    float pdf;
-    roughplastic_eval_pdf(b, wo, wi, pdf);
-    return pdf;
 }
 
 // u_lobe in [0,1) picks the lobe, u in [0,1)^2 the direction; weight = f / pdf of the

@@ -80,3 +80,10 @@ def direction(theta_deg: float, phi_deg: float = 0.0) -> np.ndarray:
 def uniform_sphere(n: int, rng) -> np.ndarray:
     v = rng.standard_normal((n, 3))
     return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+def albedo_and_delta(mat) -> tuple[np.ndarray, bool]:
+    """bsdf_albedo (the albedo AOV) and bsdf_is_delta of a material."""
+    out = _run("Bsdf b = test_bsdf(); vec3 a = bsdf_albedo(b); bool delta = bsdf_is_delta(b);",
+               {"x": np.zeros(1, np.float32)}, {"a": "vec3", "delta": "bool"}, mat, False)
+    return out["a"][0].astype(np.float64), bool(out["delta"][0])

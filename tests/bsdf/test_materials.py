@@ -144,3 +144,33 @@ def test07_coating_tables_match_mitsuba(distribution, alpha, eta):
     t = external_transmittance(alpha, eta32, distribution == "ggx").astype(np.float64)
     np.testing.assert_allclose(t, ref_t, rtol=4e-6)
     assert abs(internal_reflectance(alpha, eta32, distribution == "ggx") / ref_r - 1) < 4e-6
+
+
+def test08_albedo_aov_and_delta_flags(gl_ctx):
+    """bsdf_albedo: the diffuse reflectance of diffuse and plastic kinds, the
+    normal-incidence reflectance (+ transmittance for dielectrics) of the others;
+    bsdf_is_delta for exactly the kinds whose lobes are all Dirac deltas."""
+    import bsdf_glsl as G
+
+    au = conductor_ior("Au")
+    f_au = fresnel_reference(1.0, np.array(au[0]) + 1j * np.array(au[1]))
+    f_glass = fresnel_reference(1.0, 1.5)
+    r_thin = 2 * f_glass / (1 + f_glass)
+    tint, trans = np.array([0.9, 0.6, 0.3]), np.array([0.2, 0.5, 0.8])
+    cases = [
+        (Material(kind="diffuse", reflectance=(0.1, 0.2, 0.3)), [0.1, 0.2, 0.3], False),
+        (Material(kind="plastic", reflectance=(0.1, 0.2, 0.3)), [0.1, 0.2, 0.3], False),
+        (Material(kind="roughplastic", reflectance=(0.1, 0.2, 0.3)), [0.1, 0.2, 0.3], False),
+        (Material(kind="conductor", eta=au[0], k=au[1], specular_reflectance=tint), tint * f_au, True),
+        (Material(kind="roughconductor", eta=au[0], k=au[1]), f_au, False),
+        (Material(kind="dielectric", int_ior=1.5, ext_ior=1.0, specular_reflectance=tint,
+                  specular_transmittance=trans), f_glass * tint + (1 - f_glass) * trans, True),
+        (Material(kind="roughdielectric", int_ior=1.5, ext_ior=1.0), [1.0] * 3, False),
+        (Material(kind="thindielectric", int_ior=1.5, ext_ior=1.0, specular_reflectance=tint,
+                  specular_transmittance=trans), r_thin * tint + (1 - r_thin) * trans, True),
+        (Material(kind="null"), [0.0] * 3, True),
+    ]
+    for mat, expected, delta in cases:
+        albedo, is_delta = G.albedo_and_delta(mat)
+        np.testing.assert_allclose(albedo, expected, rtol=1e-5, atol=1e-6, err_msg=mat.kind)
+        assert is_delta == delta, mat.kind
