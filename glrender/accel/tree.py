@@ -21,9 +21,8 @@ import numpy as np
 
 def half_area(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """Half the surface area of boxes (..., 3), in their dtype; empty boxes (lo > hi) give 0."""
-    with np.errstate(invalid="ignore"):  # inf - inf in empty slots
-        e = np.maximum(hi - lo, 0)
-    e = np.nan_to_num(e, nan=0.0)
+    e = np.subtract(hi, lo)  # empty slots (+inf, -inf): -inf, clamped to 0
+    np.maximum(e, 0, out=e)
     x, y, z = e[..., 0], e[..., 1], e[..., 2]
     return x * y + z * (x + y)
 
