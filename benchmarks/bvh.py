@@ -349,15 +349,19 @@ def format_section(rows, device, threads, repeats, procs):
     return "\n".join(lines) + "\n"
 
 
-def write_section(section, notes=""):
+def write_section(section, notes=None):
+    """Replace the "## BVH" section of RESULTS.md; its "### Notes" stay unless new ones are given."""
     text = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n"
     start = text.find("\n## BVH")
     if start < 0:
-        text = text.rstrip("\n") + "\n\n" + section + notes
+        text = text.rstrip("\n") + "\n\n" + section + (notes or "")
     else:
         end = text.find("\n## ", start + 1)
-        text = text[:start + 1] + section + notes + (text[end:] if end >= 0 else "")
-    RESULTS.write_text(text)
+        old = text[start + 1:end + 1 if end >= 0 else len(text)]
+        if notes is None and "\n### Notes" in old:
+            notes = old[old.find("\n### Notes") + 1:]
+        text = text[:start + 1] + section + "\n" + (notes or "") + (text[end + 1:] if end >= 0 else "")
+    RESULTS.write_text(text.rstrip("\n") + "\n")
 
 
 def main(argv=None):
@@ -366,7 +370,8 @@ def main(argv=None):
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--threads", type=int, default=None, help="default: all usable cores")
     parser.add_argument("--no-reference", action="store_true", help="skip the binned-SAH reference builds")
-    parser.add_argument("--notes", type=Path, help="markdown appended after the tables")
+    parser.add_argument("--notes", type=Path,
+                        help='markdown for the "### Notes" after the tables (default: keep the old ones)')
     parser.add_argument("--dry-run", action="store_true", help="print the section, do not write it")
     args = parser.parse_args(argv)
     threads = args.threads or len(os.sched_getaffinity(0))
@@ -386,8 +391,8 @@ def main(argv=None):
             print(row, flush=True)
             rows.append(row)
     section = format_section(rows, device, threads, args.repeats, threads)
-    notes = args.notes.read_text() if args.notes else ""
-    print(section + notes)
+    notes = args.notes.read_text() if args.notes else None
+    print(section + (notes or ""))
     if not args.dry_run:
         write_section(section, notes)
 

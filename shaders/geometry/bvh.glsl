@@ -6,11 +6,12 @@
 // entry distance so that entries beyond the closest hit found since are dropped
 // when popped.
 //
-// llvmpipe runs 8 invocations per SIMD vector and executes both sides of every
-// branch, so each loop iteration does one node test AND one triangle test for
-// every lane: a lane holds a leaf being tested (one triangle per iteration) and,
-// at the same time, the next inner node. This measured 1.2x faster than one
-// node-or-triangle step per iteration (benchmarks/RESULTS.md, "BVH").
+// llvmpipe runs 8 invocations per SIMD vector and executes a branch for the
+// whole vector whenever one lane takes it, so each loop iteration does one node
+// test AND one triangle test for every lane: a lane holds a leaf being tested
+// (one triangle per iteration) and, at the same time, the next inner node. This
+// measured 1.2x faster than one node-or-triangle step per iteration
+// (benchmarks/RESULTS.md, "BVH").
 //
 // Stack bound: a node pushes at most 3 entries, so a tree whose inner nodes lie
 // at depth <= kBvhMaxDepth needs at most kBvhStackSize = 3 (kBvhMaxDepth + 1)
