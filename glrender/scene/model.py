@@ -283,8 +283,8 @@ class Integrator:
     emitter_samples: int = 1           # direct integrator only
     bsdf_samples: int = 1
     light_selection: str = "uniform"   # uniform (as Mitsuba) | power (alias table)
-    area_sampling: str = "area"        # area | solid-angle (triangle/rectangle lights; area measured
-                                       # 1.25x more efficient on the Cornell box: cheaper, same variance)
+    area_sampling: str = "solid-angle"  # area | solid-angle (triangle/rectangle lights that look
+                                        # large; small ones by area either way: lights/light.glsl)
     hide_emitters: bool = False
     ao_distance: float = float("inf")
 

@@ -88,17 +88,31 @@ float area_to_solid_angle(float pdf_area, float dist, vec3 n, vec3 wi) {
 }
 
 // Whether a planar light is sampled by solid angle as seen from p.
+// Planar lights are sampled by solid angle only where they look large: spherical
+// sampling costs several trigonometric functions, and for a light that subtends a
+// small solid angle uniform area sampling has nearly the same variance. The choice
+// uses a cheap estimate, A |cos theta_l| / d^2 from the light's centre, so that
+// sampling and the MIS pdf always agree, and so that a SIMD vector of points far
+// from every light skips the spherical code altogether.
+const float kSphericalSamplingMinEstimate = 0.5;
+
+bool planar_light_looks_large(LightData l, vec3 p, float centre_weight) {
+    vec3 c = l.p.xyz + centre_weight * (l.e1.xyz + l.e2.xyz) - p;
+    float d2 = dot(c, c);
+    return l.n.w * abs(dot(l.n.xyz, c)) > kSphericalSamplingMinEstimate * d2 * sqrt(d2);
+}
+
 bool use_spherical_sampling_rectangle(LightData l, vec3 p, out float solid_angle) {
     solid_angle = 0.0;
     if (kAreaSampling != kAreaSamplingSolidAngle || (l.info.y & kLightFlagRectangle) == 0u) return false;
-    if (dot(l.p.xyz - p, l.n.xyz) == 0.0) return false;
+    if (!planar_light_looks_large(l, p, 0.5) || dot(l.p.xyz - p, l.n.xyz) == 0.0) return false;
     solid_angle = spherical_rectangle_setup(p, l.p.xyz, l.e1.xyz, l.e2.xyz).solid_angle;
     return solid_angle > kMinSphericalSampleArea && solid_angle < kMaxSphericalSampleArea;
 }
 
 bool use_spherical_sampling_triangle(LightData l, vec3 p, out float solid_angle) {
     solid_angle = 0.0;
-    if (kAreaSampling != kAreaSamplingSolidAngle) return false;
+    if (kAreaSampling != kAreaSamplingSolidAngle || !planar_light_looks_large(l, p, 1.0 / 3.0)) return false;
     vec3 v0 = l.p.xyz, v1 = v0 + l.e1.xyz, v2 = v0 + l.e2.xyz;
     float pdf = spherical_triangle_pdf(v0, v1, v2, p);
     solid_angle = pdf > 0.0 ? 1.0 / pdf : 0.0;
