@@ -39,6 +39,7 @@ class RenderSettings:
     sampler: m.Sampler
     aovs: bool = False
     count_loops: bool = False
+    debug_nonfinite: int = 0              # tests: make sample index % 7 == value - 1 NaN
     samples_per_pass: int | None = None   # None: chosen from the scene
     time_target: float = 0.1              # seconds per dispatch
 
@@ -207,7 +208,7 @@ class Renderer:
             emitter_samples=integ.emitter_samples, bsdf_samples=integ.bsdf_samples,
             hide_emitters=integ.hide_emitters, light_selection=integ.light_selection,
             area_sampling=integ.area_sampling, filter=self.scene.film.filter, aovs=s.aovs,
-            count_loops=s.count_loops)
+            count_loops=s.count_loops, debug_nonfinite=s.debug_nonfinite)
         self.program = shaders.compile_compute(
             self.ctx, "kernels/render.comp.glsl", defines=self.defines,
             slots={"integrator": INTEGRATOR_FILES[integ.kind],
@@ -321,6 +322,10 @@ class Renderer:
             self.spp_done += k
             if callback is not None:
                 callback(self.spp_done, target)
+
+    def image(self) -> Film:
+        """The same as :meth:`film` (the accumulated image with its statistics)."""
+        return self.film()
 
     def film(self) -> Film:
         """Read the accumulation back as a :class:`Film`."""

@@ -9,7 +9,8 @@
     !defined(GLRENDER_EMITTER_SAMPLES) || !defined(GLRENDER_BSDF_SAMPLES) || \
     !defined(GLRENDER_HIDE_EMITTERS) || !defined(GLRENDER_LIGHT_SELECTION) || \
     !defined(GLRENDER_AREA_SAMPLING) || !defined(GLRENDER_FILTER) || \
-    !defined(GLRENDER_AOVS) || !defined(GLRENDER_COUNT_LOOPS)
+    !defined(GLRENDER_AOVS) || !defined(GLRENDER_COUNT_LOOPS) || \
+    !defined(GLRENDER_DEBUG_NONFINITE)
 #error "common/params.glsl: a host define is missing (see glrender/render/params.py)"
 #endif
 
@@ -53,3 +54,6 @@ const int kFilter = GLRENDER_FILTER;
 const bool kAovs = GLRENDER_AOVS != 0;
 // Debug: count loop iterations per invocation (common/loop_counter.glsl).
 const bool kCountLoops = GLRENDER_COUNT_LOOPS != 0;
+// Debug: every sample whose index is kDebugNonFinite - 1 modulo 7 returns NaN, to test that
+// the accumulation drops and counts non-finite samples (0: off).
+const uint kDebugNonFinite = uint(GLRENDER_DEBUG_NONFINITE);

@@ -48,6 +48,7 @@ void main() {
         camera_ray(vec2(pixel) + 0.5 + offset, u_lens, tau, o, d, t_min, t_max);
         Aov aov = Aov(vec3(0.0), vec3(0.0), 0.0);
         vec3 L = filter_weight * integrator_li(o + t_min * d, d, t_max - t_min, tau, s, aov);
+        if (kDebugNonFinite != 0u && (s.index % 7u) == kDebugNonFinite - 1u) L = vec3(uintBitsToFloat(0x7fc00000u));
         if (is_finite(L)) {
             mean.w += 1.0;
             vec3 delta = L - mean.rgb;

@@ -1,0 +1,184 @@
+"""Renderer features one by one: AOVs, non-finite samples, pixel filters, spot and
+directional lights, the thin lens, motion blur, and the direct strategies on Veach's scene."""
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import glrender
+from glrender.render.renderer import Renderer, settings_from_scene
+from glrender.scene import model as m
+from glrender.testing.images import compare_images
+from render_scenes import plane_points, plane_under_light
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def cornell(width=32, height=32):
+    scene = glrender.load(ROOT / "scenes" / "cornell-box" / "scene.toml")
+    scene.film.width, scene.film.height = width, height
+    return scene
+
+
+def test01_aovs(gl_ctx):
+    """First-hit albedo, shading normal and depth, averaged over each pixel's samples."""
+    scene = cornell()
+    film = glrender.render(scene, spp=8, seed=1, aovs=True)
+    albedo, normal, depth = film.aov("albedo"), film.aov("normal"), film.aov("depth")
+    assert albedo.shape == (32, 32, 3) and depth.shape == (32, 32)
+    # the pixel in the middle of the back wall sees the white material straight on
+    np.testing.assert_allclose(albedo[8, 16], [0.885809, 0.698859, 0.666422], rtol=1e-5)
+    np.testing.assert_allclose(normal[8, 16], [0, 0, 1], atol=1e-5)
+    # depth along the ray: camera at z = 3.9, back wall at z = -1
+    assert 4.9 < depth[8, 16] < 5.0
+    assert np.all(film.variance >= 0)
+    with pytest.raises(glrender.UsageError, match="AOV 'albedo' was not rendered"):
+        glrender.render(scene, spp=1, seed=1).aov("albedo")
+
+
+def test02_nonfinite_samples_are_dropped_and_counted(gl_ctx):
+    scene = cornell(16, 16)
+    settings = settings_from_scene(scene, spp=14, seed=2, sampler="independent")
+    bad = replace(settings, debug_nonfinite=4)        # samples 3 and 10 of every pixel are NaN
+    r = Renderer(scene, bad)
+    r.step(14)
+    f = r.film()
+    r.release()
+    assert f.nonfinite_total == 2 * 16 * 16 and (f.count == 12).all()
+    assert np.all(np.isfinite(f.mean)) and np.all(np.isfinite(f.variance))
+
+
+def filter_1d(kind, x, radius, stddev=0.5, b=1 / 3, c=1 / 3):
+    """The filters' 1D profiles as Mitsuba defines them (the 2D filter is separable)."""
+    x = np.abs(x)
+    if kind == "box":
+        return (x <= radius).astype(float)
+    if kind == "tent":
+        return np.maximum(0.0, 1.0 - x / radius)
+    if kind == "gaussian":
+        return np.maximum(0.0, np.exp(-x * x / (2 * stddev ** 2)) - np.exp(-radius ** 2 / (2 * stddev ** 2)))
+    y = 2 * x / radius
+    return np.where(y > 2, 0.0, np.where(
+        y > 1, (-b - 6 * c) * y ** 3 + (6 * b + 30 * c) * y ** 2 + (-12 * b - 48 * c) * y + (8 * b + 24 * c),
+        (12 - 9 * b - 6 * c) * y ** 3 + (-18 + 12 * b + 6 * c) * y ** 2 + (6 - 2 * b))) / 6
+
+
+@pytest.mark.parametrize("filter_kind", ["box", "tent", "gaussian", "mitchell"])
+def test03_pixel_filters(gl_ctx, filter_kind):
+    """Filter importance sampling: each pixel converges to the filter-weighted average of
+    the image around its centre, integral(f L) / integral(f), computed here by quadrature
+    of the analytic radiance of a point-lit plane."""
+    light = m.Light("point", position=(0.3, -0.2, 3.0), intensity=(30.0,) * 3)
+    scene = plane_under_light(light, kind="direct", strategy="light", max_depth=2, width=24, height=24)
+    scene.film.filter = filter_kind
+    radius = scene.film.radius
+    imgs = np.stack([glrender.render(scene, spp=64, seed=s, sampler="independent").mean for s in range(4)])
+    # quadrature over the filter's support, 64 nodes per axis, in the camera's pixel units
+    from glrender.render.renderer import camera_tangents
+
+    w = h = 24
+    tx, ty = camera_tangents(scene.camera, w, h)
+    nodes = (np.arange(64) + 0.5) / 64 * 2 * radius - radius
+    f1 = filter_1d(filter_kind, nodes, radius)
+    px = np.arange(w)[:, None] + 0.5 + nodes[None, :]
+    py = np.arange(h)[:, None] + 0.5 + nodes[None, :]
+    X, Y = px[None, :, None, :] / w, py[:, None, :, None] / h          # (h, w, 64, 64)
+    d = np.stack(np.broadcast_arrays((1 - 2 * X) * tx, (1 - 2 * Y) * ty, np.ones_like(X)), -1)
+    M = scene.camera.world_from_camera
+    d = d @ M[:3, :3].T
+    p = M[:3, 3] + (-M[2, 3] / d[..., 2])[..., None] * d
+    d2 = ((p - np.array([0.3, -0.2, 3.0])) ** 2).sum(-1)
+    L = 0.5 / np.pi * 30.0 * 3.0 / d2 ** 1.5
+    weights = f1[:, None] * f1[None, :]
+    ref = (L * weights).sum((-1, -2)) / weights.sum()
+    ref = np.repeat(ref[..., None], 3, -1)
+    inner = np.zeros((24, 24), bool)
+    inner[3:-3, 3:-3] = True               # the filter support stays on the plane
+    c = compare_images(imgs, ref, block=4, mask=inner)
+    assert c.passed, c.summary() + " " + "; ".join(c.messages)
+
+
+def test04_spot_light_falloff(gl_ctx):
+    """A spot light straight above the plane: full intensity inside the beam width,
+    nothing outside the cutoff (Mitsuba's smooth step between)."""
+    spot = m.Light("spot", intensity=(20.0,) * 3, cutoff_angle=10.0, beam_width=6.0,
+                   world_from_light=m.look_at((0, 0, 5), (0, 0, 0), (0, 1, 0)))
+    scene = plane_under_light(spot, kind="direct", strategy="light", max_depth=2, width=32, height=32)
+    scene.camera.fov = 16
+    film = glrender.render(scene, spp=16, seed=1, sampler="independent").mean[..., 0]
+    p = plane_points(scene, supersample=1)[..., 0, :]
+    r = np.hypot(p[..., 0], p[..., 1])
+    angle = np.degrees(np.arctan2(r, 5.0))
+    inside, outside = angle < 5.5, angle > 10.5
+    expected = 0.5 / np.pi * 20.0 * 5.0 / (r ** 2 + 25.0) ** 1.5
+    np.testing.assert_allclose(film[inside], expected[inside], rtol=0.02)
+    assert film[outside].max() == 0.0
+
+
+def test05_directional_light(gl_ctx):
+    """Irradiance E from a direction theta off the normal: L = rho E cos(theta) / pi."""
+    sun = m.Light("directional", direction=(0.6, 0.0, -0.8), irradiance=(3.0,) * 3)
+    scene = plane_under_light(sun, kind="direct", strategy="light", max_depth=2, width=16, height=16)
+    film = glrender.render(scene, spp=4, seed=1).mean
+    np.testing.assert_allclose(film, 0.5 * 3.0 * 0.8 / np.pi, rtol=1e-5)
+
+
+def test06_thin_lens_blurs_out_of_focus_only(gl_ctx):
+    """With the lens focused on the plane the image equals the pinhole image; focused
+    elsewhere, a sharp edge spreads over the circle of confusion."""
+    light = m.Light("point", position=(0.0, 0.0, 1.0), intensity=(5.0,) * 3)
+    scene = plane_under_light(light, kind="direct", strategy="light", max_depth=2, width=32, height=32)
+    pin = glrender.render(scene, spp=64, seed=1, sampler="sobol").mean
+    scene.camera.aperture_radius, scene.camera.focus_distance = 0.5, 20.0
+    focused = glrender.render(scene, spp=64, seed=1, sampler="sobol").mean
+    np.testing.assert_allclose(focused, pin, rtol=0.01)
+    scene.camera.focus_distance = 5.0
+    blurred = glrender.render(scene, spp=64, seed=1, sampler="sobol").mean
+    # the bright centre spreads over the circle of confusion: its peak drops
+    assert blurred.max() < 0.9 * pin.max()
+
+
+def test07_motion_blur_averages_over_the_shutter(gl_ctx):
+    """A sphere moving across the frame leaves a trail whose mean over the shutter equals
+    the average of still frames at the times the shutter samples."""
+    def scene_at(t_open_pos, t_close_pos, shutter):
+        sc = m.Scene(film=m.Film(width=32, height=16, filter="box"), source="<motion>")
+        sc.camera = m.Camera(world_from_camera=m.look_at((0, 0, 6), (0, 0, 0), (0, 1, 0)), fov=40)
+        mat = sc.add_material(m.Material("diffuse", reflectance=(0.8,) * 3))
+        sph = m.Shape("sphere", material=mat, radius=0.4, world_from_object=m.translate(t_open_pos))
+        if t_close_pos is not None:
+            sph.world_from_object_close = m.translate(t_close_pos)
+        sc.shapes.append(sph)
+        sc.lights.append(m.Light("constant", radiance=(1.0,) * 3))
+        sc.shutter = shutter
+        sc.integrator = m.Integrator(max_depth=2)
+        return sc
+    moving = scene_at((-1.5, 0, 0), (1.5, 0, 0), m.Shutter(0, 1))
+    blur = np.stack([glrender.render(moving, spp=64, seed=s, sampler="independent").mean for s in range(4)])
+    stills = [glrender.render(scene_at((x, 0, 0), None, m.Shutter()), spp=16, seed=7).mean
+              for x in np.linspace(-1.5, 1.5, 61)]
+    ref = np.mean(stills, axis=0)
+    c = compare_images(blur, ref, block=4, eps=0.02, check_mse=False)
+    assert c.passed, c.summary()
+    assert blur.mean(0)[8].std() < 0.5 * np.stack(stills)[30][8].std()   # the trail is smooth
+
+
+@pytest.mark.slow
+def test08_direct_strategies_converge_on_veachs_scene(gl_ctx):
+    """Light, BSDF and MIS sampling give the same image of Veach's scene per 8x8 block,
+    and MIS has the lowest total variance (the variances are reported in the message)."""
+    scene = glrender.load(ROOT / "scenes" / "veach-mis" / "scene.toml")
+    scene.film.width, scene.film.height = 96, 64
+    renders, variances = {}, {}
+    for k, strategy in enumerate(["mis-power", "light", "bsdf", "mis-balance"]):
+        imgs = np.stack([glrender.render(scene, spp=64, seed=10 * k + s, sampler="independent",
+                                         strategy=strategy).mean for s in range(4)])
+        renders[strategy] = imgs
+        variances[strategy] = float(imgs.var(axis=0, ddof=1).mean())
+    ref = renders["mis-power"]
+    for strategy in ("light", "bsdf", "mis-balance"):
+        c = compare_images(renders[strategy], ref.mean(0), ref.std(0, ddof=1) / 2, block=8,
+                           extra_tests=6, check_mse=False)
+        assert c.passed, f"{strategy}: {c.summary()} {c.messages} variances {variances}"
+    assert variances["mis-power"] < min(variances["light"], variances["bsdf"]), variances
