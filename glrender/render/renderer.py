@@ -209,6 +209,7 @@ class Renderer:
             hide_emitters=integ.hide_emitters, light_selection=integ.light_selection,
             area_sampling=integ.area_sampling, filter=self.scene.film.filter, aovs=s.aovs,
             count_loops=s.count_loops, debug_nonfinite=s.debug_nonfinite)
+        self._source_fingerprint = (geometry, sorted(self.defines.items()), INTEGRATOR_FILES[integ.kind])
         self.program = shaders.compile_compute(
             self.ctx, "kernels/render.comp.glsl", defines=self.defines,
             slots={"integrator": INTEGRATOR_FILES[integ.kind],
@@ -221,6 +222,48 @@ class Renderer:
             # sample (tests/render/test_determinism.py), far below llvmpipe's cap; more
             # samples per dispatch amortise its fixed cost
             self.samples_per_pass = 4 if p.mesh is not None else 8
+
+    def fingerprint(self) -> str:
+        """A hash of everything that decides the value of each sample: the kernel's source
+        and defines, the scene data on the device, camera and film, sampler and seed.
+        Accumulation states (checkpoints) can only be merged or resumed between equal ones."""
+        import hashlib
+
+        h = hashlib.sha256()
+        h.update(repr(self._source_fingerprint).encode())
+        for arr in (self.packed.materials, self.lights_final):
+            h.update(np.ascontiguousarray(arr).tobytes())
+        if self.packed.mesh is not None:
+            for arr in self.packed.mesh:
+                h.update(np.ascontiguousarray(arr).tobytes())
+        if self.packed.env_image is not None:
+            h.update(np.ascontiguousarray(self.packed.env_image).tobytes())
+        prm = self._param_block(0, 0)
+        h.update(prm.tobytes())
+        return h.hexdigest()
+
+    def state(self) -> dict:
+        """The accumulation so far (numpy arrays and the sample count): what a checkpoint
+        saves. ``restore(state)`` on a renderer with the same fingerprint continues it, and
+        the final image is bitwise the same as an uninterrupted render."""
+        return {"fingerprint": self.fingerprint(), "spp_done": self.spp_done,
+                "mean": np.frombuffer(self._mean.read(), np.float32).copy(),
+                "m2": np.frombuffer(self._m2.read(), np.float32).copy(),
+                "aov": np.frombuffer(self._aov.read(), np.float32).copy(),
+                "width": self.width, "height": self.height}
+
+    def restore(self, state: dict) -> None:
+        """Continue from ``state()`` of an equal renderer (same fingerprint)."""
+        if state.get("fingerprint") != self.fingerprint():
+            raise UsageError("the saved accumulation belongs to a different scene or different "
+                             "render settings (fingerprints differ)")
+        for name, buf in (("mean", self._mean), ("m2", self._m2), ("aov", self._aov)):
+            data = np.ascontiguousarray(state[name], np.float32)
+            if data.nbytes != buf.size:
+                raise UsageError(f"the saved accumulation's {name} has {data.nbytes} bytes, "
+                                 f"expected {buf.size}")
+            buf.write(data.tobytes())
+        self.spp_done = int(state["spp_done"])
 
     def _warm_up(self):
         """llvmpipe compiles a kernel at its first dispatch (seconds for a cold cache):

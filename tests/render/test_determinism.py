@@ -62,3 +62,24 @@ def test03_loop_counts_stay_far_below_the_cap(gl_ctx, small_cornell):
     r.release()
     assert counts.max() > 8           # the counter works: paths bounce
     assert counts.max() < 30_000
+
+
+def test04_state_and_restore_continue_bitwise(gl_ctx, small_cornell):
+    """Stopping, saving the accumulation and continuing in a new renderer gives the image of
+    an uninterrupted render, bitwise; another seed's state is refused."""
+    whole = film_of(small_cornell, passes=4, time_target=0.1, seed=5, spp=12)
+    settings = settings_from_scene(small_cornell, spp=12, seed=5, sampler="sobol", samples_per_pass=4)
+    first = Renderer(small_cornell, settings)
+    first.step(5)
+    state = first.state()
+    first.release()
+    second = Renderer(small_cornell, settings)
+    second.restore(state)
+    second.step(7)
+    f = second.film()
+    np.testing.assert_array_equal(f.mean, whole.mean)
+    np.testing.assert_array_equal(f.m2, whole.m2)
+    assert f.spp == 12
+    other = Renderer(small_cornell, settings_from_scene(small_cornell, spp=12, seed=6, sampler="sobol"))
+    with pytest.raises(glrender.UsageError, match="different scene or different render settings"):
+        other.restore(state)
