@@ -76,45 +76,40 @@ def _planar_args(q) -> str:
             f"{_v3(dual_a)}, {_v3(dual_b)}")
 
 
-def _light_literal(rec) -> str:
-    vecs = [f"vec4({', '.join(_f(x) for x in rec[name])})" for name in rec.dtype.names[:-1]]
+def _struct_literal(struct: str, rec, fields) -> str:
+    """A GLSL constructor call for one numpy record: vec4 fields, then the uvec4 info."""
+    vecs = [f"vec4({', '.join(_f(x) for x in rec[name])})" for name in fields]
     info = f"uvec4({', '.join(f'{int(x)}u' for x in rec['info'])})"
-    return f"LightData({', '.join(vecs + [info])})"
+    return f"{struct}({', '.join(vecs + [info])})"
+
+
+def _record_accessor(struct: str, name: str, records, fields, limit: int, fallback: str) -> list[str]:
+    """``struct name(uint index)``: a select chain over constants for at most ``limit``
+    records (the compiler folds the fields they share), else ``fallback`` (a buffer read)."""
+    lines = [f"// {struct} records (see scene/layout.glsl).", f"{struct} {name}(uint index) {{"]
+    if 0 < len(records) <= limit:
+        lines.append(f"    {struct} r = {_struct_literal(struct, records[0], fields)};")
+        for k in range(1, len(records)):
+            lines.append(f"    if (index == {k}u) r = {_struct_literal(struct, records[k], fields)};")
+        lines.append("    return r;")
+    else:
+        lines.append(f"    return {fallback};")
+    return lines + ["}", ""]
 
 
 def generate_lights(lights) -> list[str]:
     """``LightData scene_light(uint index)``: constants for a few lights, else the SSBO."""
-    lines = ["// Light records (see scene/layout.glsl).", "LightData scene_light(uint index) {"]
-    if 0 < len(lights) <= MAX_CONSTANT_LIGHTS:
-        lines.append(f"    LightData l = {_light_literal(lights[0])};")
-        for k in range(1, len(lights)):
-            lines.append(f"    if (index == {k}u) l = {_light_literal(lights[k])};")
-        lines.append("    return l;")
-    else:
-        lines.append("    return lights[index];")
-    lines += ["}", ""]
-    return lines
-
-
-def _material_literal(rec) -> str:
-    vecs = [f"vec4({', '.join(_f(x) for x in rec[name])})" for name in ("color0", "color1", "color2", "params")]
-    info = f"uvec4({', '.join(f'{int(x)}u' for x in rec['info'])})"
-    return f"MaterialHeader({', '.join(vecs + [info])})"
+    return _record_accessor("LightData", "scene_light", lights, ("p", "e1", "e2", "n", "radiance", "params"),
+                            MAX_CONSTANT_LIGHTS, "lights[index]")
 
 
 def generate_materials(materials) -> list[str]:
     """``MaterialHeader scene_material(uint index)``: constants for a few materials."""
-    lines = ["// Material headers (see scene/layout.glsl).", "MaterialHeader scene_material(uint index) {"]
-    if 0 < len(materials) <= MAX_CONSTANT_MATERIALS:
-        lines.append(f"    MaterialHeader m = {_material_literal(materials[0])};")
-        for k in range(1, len(materials)):
-            lines.append(f"    if (index == {k}u) m = {_material_literal(materials[k])};")
-        lines.append("    return m;")
-    else:
-        lines.append("    return MaterialHeader(materials[index].color0, materials[index].color1, "
-                     "materials[index].color2, materials[index].params, materials[index].info);")
-    lines += ["}", ""]
-    return lines
+    fields = ("color0", "color1", "color2", "params")
+    fallback = ("MaterialHeader(materials[index].color0, materials[index].color1, "
+                "materials[index].color2, materials[index].params, materials[index].info)")
+    return _record_accessor("MaterialHeader", "scene_material", materials, fields,
+                            MAX_CONSTANT_MATERIALS, fallback)
 
 
 def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
