@@ -68,13 +68,14 @@ vec3 next_event_n(vec3 p, SurfaceHit hit, Bsdf b, Frame frame, vec3 wo, float ti
     LightSample ls = sample_light(light, p, u_light);
     if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return vec3(0.0);
     vec3 wi = frame_to_local(frame, ls.wi);
-    vec3 f = bsdf_eval(b, wo, wi, false);
+    float pdf_bsdf;
+    vec3 f = bsdf_eval_pdf(b, wo, wi, false, pdf_bsdf);
     if (max_component(f) <= 0.0) return vec3(0.0);
     vec3 o = offset_ray_origin(p, hit.ng, ls.wi);
     float t_max = isinf(ls.dist) ? kInfinity : ls.dist * (1.0 - kShadowEpsilon);
     if (scene_occluded(o, ls.wi, t_max, time, light.info.z)) return vec3(0.0);
     float pdf_light = choice.pmf * ls.pdf;
-    float w = (ls.delta || !use_mis) ? 1.0 : mis_weight_n(n_light, pdf_light, n_bsdf, bsdf_pdf(b, wo, wi));
+    float w = (ls.delta || !use_mis) ? 1.0 : mis_weight_n(n_light, pdf_light, n_bsdf, pdf_bsdf);
     return f * ls.Le * (w / pdf_light);
 }
 
