@@ -25,6 +25,7 @@ TEX_TRI_UVS = 5
 TEX_TRI_INFO = 6
 TEX_ENVMAP = 7
 TEX_TEXTURES = 8
+TEX_TEXTURE_RECORDS = 9
 
 SSBO_BINDINGS = {
     "AccumMean": SSBO_ACCUM_MEAN, "AccumM2": SSBO_ACCUM_M2, "Materials": SSBO_MATERIALS,
@@ -34,7 +35,7 @@ SSBO_BINDINGS = {
 UBO_BINDINGS = {"RenderParams": UBO_PARAMS}
 TEXTURE_BINDINGS = {
     "u_tri_normals": TEX_TRI_NORMALS, "u_tri_uvs": TEX_TRI_UVS, "u_tri_info": TEX_TRI_INFO,
-    "u_envmap": TEX_ENVMAP, "u_textures": TEX_TEXTURES,
+    "u_envmap": TEX_ENVMAP, "u_textures": TEX_TEXTURES, "u_texture_records": TEX_TEXTURE_RECORDS,
 }
 
 _V4 = ("<f4", 4)

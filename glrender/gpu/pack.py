@@ -22,6 +22,7 @@ import numpy as np
 from ..errors import SceneError
 from ..scene import model as m
 from . import layout
+from .textures import TextureTable
 
 NO_PRIMITIVE = 0xFFFFFFFF        # geometry/surface.glsl kNoPrimitive
 MAX_COMPILED_TRIANGLES_PER_MESH = 32
@@ -97,6 +98,7 @@ class PackedScene:
     light_kinds: set[str]
     environment: int                        # index + 1 of the environment light, 0 if none
     env_image: np.ndarray | None = None     # H x W x 3 linear RGB of an envmap light
+    textures: TextureTable = field(default_factory=TextureTable)  # materials' textures
 
     @property
     def sphere_bounds(self) -> tuple[np.ndarray, float]:
@@ -136,7 +138,17 @@ def _specular_sampling_weight(mat: m.Material) -> float:
     return s / (d + s) if d + s > 0 else 0.5
 
 
-def pack_material(mat: m.Material) -> np.ndarray:
+def _color(value, what: str, textures: TextureTable | None) -> tuple[np.ndarray, int]:
+    """(constant RGB, texture index + 1) of a material colour: a texture's constant part
+    is its mean (used where a single value is needed), its index goes to the record."""
+    if isinstance(value, m.Texture):
+        if textures is None:
+            raise SceneError(f"{what}: textures are not supported here")
+        return np.full(3, _spectrum_mean(value)), textures.index(value, what)
+    return _rgb(value, what), 0
+
+
+def pack_material(mat: m.Material, textures: TextureTable | None = None) -> np.ndarray:
     """One MaterialData record (scene/layout.glsl) for the BSDFs of shaders/bsdf/.
 
     Per kind: diffuse (c0 reflectance); conductors (c0 eta, c1 specular reflectance,
@@ -145,6 +157,8 @@ def pack_material(mat: m.Material) -> np.ndarray:
     plastics (c0 diffuse reflectance, c1 specular reflectance, c2.x specular sampling
     weight, c2.y internal diffuse reflectance of the coating; roughplastic also the
     transmittance table). params: alpha (clamped to >= 1e-4 as in Mitsuba), eta.
+    Textured colours (``m.Texture``) are numbered in ``textures``; info.z and info.w hold
+    the texture index + 1 of color0 and color1 (0: the constant colour).
     """
     from .microfacet_tables import external_transmittance, internal_reflectance
 
@@ -164,20 +178,25 @@ def pack_material(mat: m.Material) -> np.ndarray:
     if alpha.size != 2 or np.any(alpha <= 0) or np.any(~np.isfinite(alpha)):
         raise SceneError(f"{what}.alpha: expected positive roughness, got {mat.alpha!r}")
     alpha = np.maximum(alpha, 1e-4)
+    tex0 = tex1 = 0
     if kind == "diffuse":
-        out["color0"][:3] = _rgb(mat.reflectance, f"{what}.reflectance")
+        out["color0"][:3], tex0 = _color(mat.reflectance, f"{what}.reflectance", textures)
     elif kind in ("conductor", "roughconductor"):
         out["color0"][:3] = _rgb(mat.eta, f"{what}.eta")
-        out["color1"][:3] = _rgb(mat.specular_reflectance, f"{what}.specular_reflectance")
+        out["color1"][:3], tex1 = _color(mat.specular_reflectance, f"{what}.specular_reflectance",
+                                         textures)
         out["color2"][:3] = _rgb(mat.k, f"{what}.k")
     elif transmissive:
-        out["color0"][:3] = _rgb(mat.specular_reflectance, f"{what}.specular_reflectance")
-        out["color1"][:3] = _rgb(mat.specular_transmittance, f"{what}.specular_transmittance")
+        out["color0"][:3], tex0 = _color(mat.specular_reflectance, f"{what}.specular_reflectance",
+                                         textures)
+        out["color1"][:3], tex1 = _color(mat.specular_transmittance,
+                                         f"{what}.specular_transmittance", textures)
         if kind == "roughdielectric" and eta == 1.0:
             raise SceneError(f"{what}: int_ior and ext_ior must differ for a rough dielectric")
     elif kind in ("plastic", "roughplastic"):
-        out["color0"][:3] = _rgb(mat.reflectance, f"{what}.reflectance")
-        out["color1"][:3] = _rgb(mat.specular_reflectance, f"{what}.specular_reflectance")
+        out["color0"][:3], tex0 = _color(mat.reflectance, f"{what}.reflectance", textures)
+        out["color1"][:3], tex1 = _color(mat.specular_reflectance, f"{what}.specular_reflectance",
+                                         textures)
         out["color2"][0] = _specular_sampling_weight(mat)
         if kind == "plastic":
             out["color2"][1] = _fresnel_diffuse_reflectance(1.0 / eta)
@@ -191,7 +210,7 @@ def pack_material(mat: m.Material) -> np.ndarray:
             out["table"] = external_transmittance(alpha[0], eta, ggx)
             out["color2"][1] = internal_reflectance(alpha[0], eta, ggx)
     out["params"] = (alpha[0], alpha[1], eta, 0.0)
-    out["info"] = (layout.MATERIAL_KINDS[kind], flags, 0, 0)
+    out["info"] = (layout.MATERIAL_KINDS[kind], flags, tex0, tex1)
     return out
 
 
@@ -417,7 +436,8 @@ def pack_scene(scene: m.Scene) -> PackedScene:
         lights.append(rec)
         weights.append(weight)
 
-    materials = np.array([pack_material(mat) for mat in scene.materials], layout.MATERIAL) \
+    textures = TextureTable()
+    materials = np.array([pack_material(mat, textures) for mat in scene.materials], layout.MATERIAL) \
         if scene.materials else layout.zeros(layout.MATERIAL)
     light_arr = np.array(lights, layout.LIGHT) if lights else np.zeros(0, layout.LIGHT)
     return PackedScene(
@@ -426,4 +446,4 @@ def pack_scene(scene: m.Scene) -> PackedScene:
         bounds=(lo, hi), material_kinds={mat.kind for mat in scene.materials},
         light_kinds={k for k, v in layout.LIGHT_KINDS.items()
                      if len(light_arr) and (light_arr["info"][:, 0] == v).any()},
-        environment=environment, env_image=env_image)
+        environment=environment, env_image=env_image, textures=textures)

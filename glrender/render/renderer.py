@@ -144,6 +144,7 @@ class Renderer:
         self.n_lights = n_lights
         if p.mesh is not None:
             self._upload_mesh()
+        self._upload_textures()
 
     def _upload_envmap(self, lights, packer):
         """The environment image as a float texture (bilinear, wrapping in u) and its
@@ -166,6 +167,18 @@ class Renderer:
         tex.repeat_x, tex.repeat_y = True, False
         self._env_texture = tex
         self._buffers.append(tex)
+
+    def _upload_textures(self):
+        """The materials' textures: image layers (unit 8) and records (unit 9), bound with
+        the other scene data in _bind; scenes without textures bind nothing."""
+        from ..gpu import textures
+
+        self._surface_textures = []
+        if len(self.packed.textures):
+            array, records = textures.upload(self.ctx, self.packed.textures)
+            self._buffers += [array, records]
+            self._surface_textures = [(layout.TEX_TEXTURES, array.use),
+                                      (layout.TEX_TEXTURE_RECORDS, records.bind)]
 
     def _upload_mesh(self):
         from ..accel import build_bvh
@@ -238,6 +251,7 @@ class Renderer:
                 h.update(np.ascontiguousarray(arr).tobytes())
         if self.packed.env_image is not None:
             h.update(np.ascontiguousarray(self.packed.env_image).tobytes())
+        h.update(self.packed.textures.fingerprint())
         prm = self._param_block(0, 0)
         h.update(prm.tobytes())
         return h.hexdigest()
@@ -326,6 +340,8 @@ class Renderer:
         self._params.bind_to_uniform_block(layout.UBO_PARAMS)
         if getattr(self, "_env_texture", None) is not None:
             self._env_texture.use(layout.TEX_ENVMAP)
+        for unit, bind in self._surface_textures:
+            bind(unit)
         if self._bvh is not None:
             self._bvh.bind()
             for unit, tex in self._mesh_textures:

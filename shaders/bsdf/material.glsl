@@ -1,12 +1,14 @@
 // From a material record and texture coordinates to the Bsdf of one surface point.
 #include "bsdf/bsdf_common.glsl"
+#include "bsdf/texture.glsl"
 #include "scene/layout.glsl"
 #include "@scene"
 
-// Reads texture layer (index + 1; 0 = none) at uv, or returns the constant colour.
+// A material colour at surface uv: the constant, or texture (index + 1; 0 = none)
+// evaluated there (bsdf/texture.glsl). Linear RGB.
 vec3 material_color(vec3 constant, uint texture_plus_one, vec2 uv) {
     if (texture_plus_one == 0u) return constant;
-    return textureLod(u_textures, vec3(uv, float(texture_plus_one - 1u)), 0.0).rgb;
+    return texture_eval(texture_plus_one - 1u, uv);
 }
 
 // The header comes from the generated scene code (constants when the scene has few

@@ -80,8 +80,11 @@ layout(binding = 5) uniform samplerBuffer u_tri_uvs;      // 2 texels per triang
 layout(binding = 6) uniform usamplerBuffer u_tri_info;    // 1 texel per triangle: material, light + 1, flags, -
 // 7: environment map (lat-long, linear RGB).
 layout(binding = 7) uniform sampler2D u_envmap;
-// 8: surface textures, one layer each, resampled to a common size.
+// 8: surface textures: one layer per bitmap, each in the corner [0, w) x [0, h) of
+// layers as large as the largest (glrender/gpu/textures.py; read by bsdf/texture.glsl).
 layout(binding = 8) uniform sampler2DArray u_textures;
+// 9: texture records, 5 texels each (kind, layer, size; uv transform, filter, wrap; colours).
+layout(binding = 9) uniform samplerBuffer u_texture_records;
 
 // The packed distribution array for sampling/distribution_data.glsl's prototype.
 float distribution_fetch(uint i) {

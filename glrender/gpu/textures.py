@@ -1,0 +1,165 @@
+"""Surface textures on the device: one ``sampler2DArray`` of image layers and a table of
+texture records (``shaders/bsdf/texture.glsl`` reads both).
+
+GLSL cannot index an array of samplers with a value that varies per ray, so every
+bitmap becomes one layer of a single array texture whose layers all have the size of
+the largest bitmap; a bitmap smaller than that occupies the corner ``[0, w) x [0, h)``
+of its layer and the shader addresses it through its own size. Filtering (nearest or
+bilinear, Mitsuba's ``uv * size - 0.5`` texel centres) and wrapping (repeat, mirror,
+clamp) happen in the shader with ``texelFetch``, per texture, so layers need no
+resampling and each texture keeps its own filter and wrap mode.
+
+Layers are stored as half floats (RGBA16F): a linear colour keeps a relative error
+below 2^-11, far below what 8-bit sources resolve. Bitmaps wider or taller than
+:data:`MAX_TEXTURE_SIZE` are box-filtered down by powers of two first.
+
+Texture record (5 RGBA32F texels per texture, in a buffer texture):
+
+    0: kind (0 bitmap, 1 checkerboard), layer, width, height
+    1: first row of the 2x3 uv transform, filter (0 nearest, 1 bilinear)
+    2: second row of the uv transform, wrap (0 repeat, 1 mirror, 2 clamp)
+    3: checkerboard colour 0 (rgb)
+    4: checkerboard colour 1 (rgb)
+"""
+from __future__ import annotations
+
+import hashlib
+
+import numpy as np
+
+from ..errors import SceneError
+from ..scene import model as m
+
+RECORD_TEXELS = 5
+KINDS = {"bitmap": 0, "checkerboard": 1}
+FILTERS = {"nearest": 0, "bilinear": 1}
+WRAPS = {"repeat": 0, "mirror": 1, "clamp": 2}
+MAX_TEXTURE_SIZE = 4096
+MAX_LAYER_BYTES = 1 << 30          # all layers together, as RGBA16F
+
+
+def _box_halve(image: np.ndarray) -> np.ndarray:
+    h, w = image.shape[:2]
+    h2, w2 = max(h // 2, 1), max(w // 2, 1)
+    img = image[:h2 * 2 if h > 1 else 1, :w2 * 2 if w > 1 else 1]
+    fy, fx = (2 if h > 1 else 1), (2 if w > 1 else 1)
+    return img.reshape(h2, fy, w2, fx, -1).mean(axis=(1, 3))
+
+
+def _prepare_image(texture: m.Texture, what: str) -> np.ndarray:
+    image = texture.image
+    if image is None:
+        raise SceneError(f"{what}: a bitmap texture without an image")
+    image = np.asarray(image, np.float32)
+    if image.ndim == 2:
+        image = image[..., None]
+    if image.ndim != 3 or image.shape[0] < 1 or image.shape[1] < 1 or image.shape[2] < 1:
+        raise SceneError(f"{what}: expected an H x W x 3 image, got shape {image.shape}")
+    if image.shape[2] == 1:
+        image = np.repeat(image, 3, axis=2)
+    image = image[..., :3]
+    if not np.all(np.isfinite(image)):
+        raise SceneError(f"{what}: the image holds NaN or infinite values")
+    while max(image.shape[:2]) > MAX_TEXTURE_SIZE:
+        image = _box_halve(image)
+    return image
+
+
+class TextureTable:
+    """The textures of a scene's materials, numbered in order of first use.
+
+    ``index(texture)`` returns the texture's index + 1 (0 means no texture), the
+    value a material record stores in ``info.z`` / ``info.w``.
+    """
+
+    def __init__(self):
+        self.textures: list[m.Texture] = []
+        self._ids: dict[int, int] = {}
+
+    def __len__(self) -> int:
+        return len(self.textures)
+
+    def index(self, texture: m.Texture, what: str = "texture") -> int:
+        key = id(texture)
+        if key not in self._ids:
+            if texture.kind not in KINDS:
+                raise SceneError(f"{what}: unknown texture kind {texture.kind!r} "
+                                 f"(expected bitmap or checkerboard)")
+            for name, table in (("filter", FILTERS), ("wrap", WRAPS)):
+                if getattr(texture, name) not in table:
+                    raise SceneError(f"{what}: {name} must be one of {', '.join(table)}, "
+                                     f"got {getattr(texture, name)!r}")
+            M = np.asarray(texture.uv_transform, np.float64)
+            if M.shape != (3, 3) or not np.all(np.isfinite(M)):
+                raise SceneError(f"{what}: uv_transform must be a finite 3x3 matrix")
+            self.textures.append(texture)
+            self._ids[key] = len(self.textures)
+        return self._ids[key]
+
+    def build(self) -> tuple[np.ndarray, np.ndarray]:
+        """(layers (L, H, W, 4) float16, records (N * RECORD_TEXELS, 4) float32).
+
+        With no bitmap, one 1x1 black layer keeps the array texture valid."""
+        images: list[np.ndarray] = []
+        records = np.zeros((max(len(self.textures), 1) * RECORD_TEXELS, 4), np.float32)
+        for k, tex in enumerate(self.textures):
+            what = f"texture {tex.name or k}"
+            rec = records[k * RECORD_TEXELS:(k + 1) * RECORD_TEXELS]
+            M = np.asarray(tex.uv_transform, np.float64)
+            rec[0, 0] = KINDS[tex.kind]
+            rec[1] = (M[0, 0], M[0, 1], M[0, 2], FILTERS[tex.filter])
+            rec[2] = (M[1, 0], M[1, 1], M[1, 2], WRAPS[tex.wrap])
+            if tex.kind == "bitmap":
+                image = _prepare_image(tex, what)
+                rec[0, 1:] = (len(images), image.shape[1], image.shape[0])
+                images.append(image)
+            else:
+                for row, color in ((3, tex.color0), (4, tex.color1)):
+                    rgb = np.broadcast_to(np.asarray(color, np.float64).reshape(-1), (3,))
+                    if not np.all(np.isfinite(rgb)):
+                        raise SceneError(f"{what}: checkerboard colours must be finite")
+                    rec[row, :3] = rgb
+        if not images:
+            return np.zeros((1, 1, 1, 4), np.float16), records
+        h = max(img.shape[0] for img in images)
+        w = max(img.shape[1] for img in images)
+        while len(images) * h * w * 8 > MAX_LAYER_BYTES:
+            # too much memory for one array: halve the largest images, keep the records right
+            big = max(range(len(images)), key=lambda i: images[i].size)
+            images[big] = _box_halve(images[big])
+            for k, tex in enumerate(self.textures):
+                if tex.kind == "bitmap" and int(records[k * RECORD_TEXELS, 1]) == big:
+                    records[k * RECORD_TEXELS, 2:4] = (images[big].shape[1], images[big].shape[0])
+            h = max(img.shape[0] for img in images)
+            w = max(img.shape[1] for img in images)
+        layers = np.zeros((len(images), h, w, 4), np.float16)
+        for i, img in enumerate(images):
+            layers[i, :img.shape[0], :img.shape[1], :3] = img
+            layers[i, :img.shape[0], :img.shape[1], 3] = 1.0
+        return layers, records
+
+    def fingerprint(self) -> bytes:
+        """A digest of every texture's data (images, colours, transforms, modes)."""
+        h = hashlib.sha256()
+        for tex in self.textures:
+            h.update(repr((tex.kind, tex.filter, tex.wrap, tex.color0, tex.color1)).encode())
+            h.update(np.ascontiguousarray(tex.uv_transform, np.float64).tobytes())
+            if tex.image is not None:
+                h.update(np.ascontiguousarray(tex.image, np.float32).tobytes())
+        return h.digest()
+
+
+def upload(ctx, table: TextureTable):
+    """The array texture and record buffer texture of ``table`` on the device:
+    (moderngl TextureArray, BufferTexture)."""
+    from ..gl.buffers import BufferTexture
+
+    gl = getattr(ctx, "gl", ctx)
+    layers, records = table.build()
+    n, h, w = layers.shape[:3]
+    limit = gl.info.get("GL_MAX_ARRAY_TEXTURE_LAYERS", 256)
+    if n > limit:
+        raise SceneError(f"the scene has {n} bitmap textures; this device holds at most {limit}")
+    array = gl.texture_array((w, h, n), 4, np.ascontiguousarray(layers).tobytes(), dtype="f2")
+    array.filter = (gl.NEAREST, gl.NEAREST)   # the shader filters (texelFetch)
+    return array, BufferTexture(ctx, records, "rgba32f", "texture records")
