@@ -177,7 +177,47 @@ def test05_watertight_from_inside(gl_ctx, offset, scale):
     assert np.all(np.abs(out["t"] - 1.0) < 0.05)
 
 
-def test06_watertight_small(gl_ctx):
+def front_facing_targets(v, f, eyes, rng):
+    """Per eye: vertices and edge points whose every adjacent triangle faces it (with margin).
+
+    A ray from outside aimed at such a point enters the surface there, so it must
+    hit something; silhouette points, where a ray may graze past, are left out.
+    """
+    n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]).astype(np.float64)
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    edges = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+    unique, inverse = np.unique(edges, axis=0, return_inverse=True)
+    a, b = v[unique[:, 0]], v[unique[:, 1]]
+    fraction = rng.random((len(a), 1)).astype(np.float32)
+    points = np.concatenate([v, a + np.float32(0.5) * (b - a), a + fraction * (b - a)]).astype(np.float32)
+    for eye in eyes:
+        to_eye = eye - v[f[:, 0]]
+        facing = np.einsum("ij,ij->i", n, to_eye) / np.linalg.norm(to_eye, axis=1) > 0.05
+        vertex_ok = np.ones(len(v), bool)
+        np.logical_and.at(vertex_ok, f.ravel(), np.repeat(facing, 3))
+        edge_ok = np.ones(len(unique), bool)
+        np.logical_and.at(edge_ok, inverse.ravel(), np.repeat(facing[None], 3, axis=0).ravel())
+        yield eye, points[np.concatenate([vertex_ok, edge_ok, edge_ok])]
+
+
+def test06_watertight_from_outside(gl_ctx):
+    """>= 10^6 rays from outside aimed exactly at front-facing vertices and edges: no misses."""
+    v, f = star_mesh(5)
+    gpu = GpuBvh(gl_ctx, build_bvh(v, f))
+    rng = np.random.default_rng(97)
+    eyes = rng.standard_normal((46, 3))
+    eyes = (3.0 * eyes / np.linalg.norm(eyes, axis=1, keepdims=True)).astype(np.float32)
+    o, d = [], []
+    for eye, targets in front_facing_targets(v, f, eyes, rng):
+        o.append(np.broadcast_to(eye, targets.shape))
+        d.append(targets - eye)
+    o, d = np.concatenate(o).astype(np.float32), np.concatenate(d).astype(np.float32)
+    assert len(o) >= 1_000_000
+    out = trace_glsl(gpu, o, d)
+    assert np.count_nonzero(out["prim"] == NO_HIT) == 0 and out["any"].all()
+
+
+def test06b_watertight_small(gl_ctx):
     """The fast version of test05: the vertices and edge midpoints of a smaller closed mesh."""
     v, f = star_mesh(3)
     gpu = GpuBvh(gl_ctx, build_bvh(v, f))
