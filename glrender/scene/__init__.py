@@ -4,19 +4,38 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..errors import SceneError
+from .loaders.diagnostics import GlrenderWarning
 from .model import (Camera, Emission, Film, Integrator, Light, Material, Sampler, Scene, Shape,
                     Shutter, Texture)
 
-__all__ = ["load", "Scene", "Camera", "Film", "Integrator", "Sampler", "Shutter", "Material",
-           "Shape", "Light", "Emission", "Texture"]
+__all__ = ["load", "FORMATS", "Scene", "Camera", "Film", "Integrator", "Sampler", "Shutter",
+           "Material", "Shape", "Light", "Emission", "Texture", "GlrenderWarning"]
+
+# extension -> (module in glrender.scene.loaders, function)
+FORMATS = {
+    ".toml": ("toml_scene", "load_toml"),
+    ".xml": ("mitsuba_xml", "load_mitsuba"),
+    ".gltf": ("gltf", "load_gltf"),
+    ".glb": ("gltf", "load_gltf"),
+    ".obj": ("obj", "load_obj_scene"),
+    ".ply": ("mesh_scene", "load_mesh_scene"),
+}
 
 
 def load(path, **params) -> Scene:
-    """Load a scene file; the format comes from the extension (.toml)."""
+    """Load a scene file; the format comes from the extension: .toml (native), .xml
+    (Mitsuba 3), .gltf/.glb, .obj (with its MTL files) or .ply (a mesh, with a default
+    camera and material). ``params`` fill ``$name`` references (TOML [params], Mitsuba
+    <default>); loaders warn through :class:`GlrenderWarning`."""
+    import importlib
+
     path = Path(path)
     ext = path.suffix.lower()
-    if ext == ".toml":
-        from .loaders.toml_scene import load_toml
-
-        return load_toml(path, **params)
-    raise SceneError(f"{path}: unsupported scene format {ext or '(no extension)'} (expected .toml)")
+    if ext not in FORMATS:
+        raise SceneError(f"{path}: unsupported scene format {ext or '(no extension)'} "
+                         f"(expected {', '.join(FORMATS)})")
+    if not path.is_file():
+        raise SceneError(f"{path}: no such file")
+    module, function = FORMATS[ext]
+    loader = getattr(importlib.import_module(f".loaders.{module}", __name__), function)
+    return loader(path, **params)

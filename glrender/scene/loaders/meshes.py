@@ -1,37 +1,145 @@
-"""Triangle meshes from files (PLY, OBJ, STL, ...) through trimesh."""
+"""Triangle meshes from files: the format by extension (OBJ, PLY, and STL/OFF/... through
+trimesh), then the checks every mesh gets: finite vertices, indices in range, zero-area
+triangles dropped (with a count in a warning), vertex normals when the file has none."""
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ...errors import SceneError
+from .diagnostics import warn
+
+
+@dataclass
+class MeshData:
+    """One mesh in object space: vertices (V,3), triangles (T,3), optional normals (V,3)
+    and uvs (V,2) in Mitsuba's convention (v = 0 at the first image row)."""
+
+    vertices: np.ndarray
+    triangles: np.ndarray
+    normals: np.ndarray | None = None
+    uvs: np.ndarray | None = None
+
+
+def vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Mitsuba's recomputed vertex normals: face normals weighted by the angle of each
+    face at the vertex (Thürmer and Wüthrich 1998), normalized; 0 where undefined."""
+    v = np.asarray(vertices, np.float64)
+    f = np.asarray(triangles, np.int64)
+    p = v[f]                                               # (T, 3, 3)
+    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    out = np.zeros_like(v)
+    for i in range(3):
+        d0 = p[:, (i + 1) % 3] - p[:, i]
+        d1 = p[:, (i + 2) % 3] - p[:, i]
+        d0 /= np.maximum(np.linalg.norm(d0, axis=1, keepdims=True), 1e-300)
+        d1 /= np.maximum(np.linalg.norm(d1, axis=1, keepdims=True), 1e-300)
+        angle = np.arccos(np.clip(np.einsum("ij,ij->i", d0, d1), -1.0, 1.0))
+        np.add.at(out, f[:, i], n * angle[:, None])
+    length = np.linalg.norm(out, axis=1, keepdims=True)
+    return np.where(length > 0, out / np.where(length > 0, length, 1.0), 0.0)
+
+
+def finish_mesh(mesh: MeshData, source, compute_normals: bool = True) -> MeshData:
+    """Validate a loaded mesh, drop zero-area triangles (one warning with the count) and
+    compute vertex normals if the file has none."""
+    v = np.asarray(mesh.vertices, np.float64).reshape(-1, 3)
+    f = np.asarray(mesh.triangles, np.int64).reshape(-1, 3)
+    if not np.all(np.isfinite(v)):
+        bad = int(np.flatnonzero(~np.isfinite(v).all(axis=1))[0])
+        raise SceneError(f"{source}: vertex {bad} has a NaN or infinite coordinate")
+    if f.size and (f.min() < 0 or f.max() >= len(v)):
+        bad = int(np.flatnonzero((f < 0).any(axis=1) | (f >= len(v)).any(axis=1))[0])
+        raise SceneError(f"{source}: triangle {bad} refers to vertex {f[bad].tolist()}, "
+                         f"outside [0, {len(v)})")
+    if len(f):
+        p = v[f]
+        area2 = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+        keep = area2 > 0
+        dropped = int(len(f) - keep.sum())
+        if dropped:
+            warn(f"{source}: dropped {dropped} zero-area triangle{'s' if dropped > 1 else ''} "
+                 f"of {len(f)}")
+            f = f[keep]
+    if len(f) == 0:
+        raise SceneError(f"{source}: no triangles with non-zero area")
+    normals = mesh.normals
+    if normals is not None:
+        normals = np.asarray(normals, np.float64).reshape(-1, 3)
+        if len(normals) != len(v):
+            raise SceneError(f"{source}: {len(normals)} normals for {len(v)} vertices")
+        normals = np.where(np.isfinite(normals), normals, 0.0)
+    elif compute_normals:
+        normals = vertex_normals(v, f)
+    uvs = mesh.uvs
+    if uvs is not None:
+        uvs = np.asarray(uvs, np.float64).reshape(-1, 2)
+        if len(uvs) != len(v):
+            raise SceneError(f"{source}: {len(uvs)} texture coordinates for {len(v)} vertices")
+        uvs = np.where(np.isfinite(uvs), uvs, 0.0)
+    return MeshData(v, f, normals, uvs)
+
+
+def read_mesh(path, files=None, referrer=None) -> MeshData:
+    """One mesh file as a single mesh (every object and group of an OBJ together)."""
+    path = Path(path)
+    ext = path.suffix.lower()
+    if ext == ".obj":
+        from .obj import read_obj
+
+        return read_obj(path).merged()
+    if ext == ".ply":
+        from .ply import read_ply
+
+        return read_ply(path)
+    if ext == ".serialized":
+        raise SceneError(f"{path}: Mitsuba's .serialized meshes are not supported "
+                         f"(convert the mesh to PLY or OBJ)")
+    return _read_trimesh(path)
 
 
 def load_mesh(path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]:
-    """(vertices (V,3), triangles (T,3), vertex normals or None, uvs or None) of one mesh file.
+    """(vertices, triangles, vertex normals, uvs or None) of one mesh file."""
+    mesh = read_mesh(path)
+    return mesh.vertices, mesh.triangles, mesh.normals, mesh.uvs
 
-    Files holding several objects are concatenated. Vertex normals come from the file
-    when it has them, else they are computed from the faces.
-    """
+
+def _read_trimesh(path: Path) -> MeshData:
     import trimesh
 
-    path = Path(path)
     try:
         loaded = trimesh.load(str(path), force="mesh", process=False, maintain_order=True)
     except Exception as exc:  # trimesh raises many types for malformed files
-        raise SceneError(f"{path}: cannot read mesh ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})") from None
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise SceneError(f"{path}: cannot read mesh ({first})") from None
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise SceneError(f"{path}: no triangles found")
-    vertices = np.asarray(loaded.vertices, np.float64)
-    faces = np.asarray(loaded.faces, np.int64)
-    # Vertex normals from the file, else computed (area-weighted), as Mitsuba does for
-    # meshes without face_normals; Shape.face_normals asks for flat shading instead.
-    normals = np.asarray(loaded.vertex_normals, np.float64)
-    uvs = None
-    visual = getattr(loaded, "visual", None)
-    if visual is not None and getattr(visual, "uv", None) is not None and len(visual.uv) == len(vertices):
-        uvs = np.asarray(visual.uv, np.float64)
-    if not np.all(np.isfinite(vertices)):
-        raise SceneError(f"{path}: vertices contain NaN or infinite coordinates")
-    return vertices, faces, normals, uvs
+    return finish_mesh(MeshData(np.asarray(loaded.vertices, np.float64),
+                                np.asarray(loaded.faces, np.int64)), path)
+
+
+DISK_SEGMENTS = 32
+
+
+def disk_shape(shape):
+    """Mitsuba's ``disk`` (the unit disk at z = 0 facing +z) as a mesh the renderer takes:
+    a fan of DISK_SEGMENTS triangles whose radius is scaled so that the polygon keeps the
+    disk's area (and an area light its power). uv as Mitsuba's disk: (r, phi / 2 pi)."""
+    import math
+    from dataclasses import replace
+
+    n = DISK_SEGMENTS
+    r = math.sqrt(math.pi / (0.5 * n * math.sin(2 * math.pi / n)))
+    phi = np.arange(n + 1) * (2 * math.pi / n)
+    ring = np.stack([r * np.cos(phi), r * np.sin(phi), np.zeros(n + 1)], axis=1)
+    vertices = np.concatenate([np.zeros((n + 1, 3)), ring])       # centre copies keep the uv seam
+    uvs = np.concatenate([np.stack([np.zeros(n + 1), phi / (2 * math.pi)], axis=1),
+                          np.stack([np.ones(n + 1), phi / (2 * math.pi)], axis=1)])
+    k = np.arange(n)
+    triangles = np.stack([k, n + 1 + k, n + 2 + k], axis=1)
+    normals = np.tile([0.0, 0.0, 1.0], (len(vertices), 1))
+    return replace(shape, kind="mesh", vertices=vertices, triangles=triangles, normals=normals,
+                   uvs=uvs, face_normals=True)

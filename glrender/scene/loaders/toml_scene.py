@@ -2,11 +2,15 @@
 
 Every error names the file, the key path and what was expected, e.g.
 ``scenes/x.toml: materials.floor.reflectance: expected 3 numbers, got "red"``.
-See docs/scene-format.md for the fields.
+See docs/scene-format.md for the fields. Beyond the sections: ``include`` (other TOML
+files merged first, depth-bounded, cycles refused), ``[params]`` (defaults for
+``$name`` substitution in string values, overridden by ``load(path, name=value)``)
+and ``[textures]`` (bitmaps and checkerboards that colour fields can name).
 """
 from __future__ import annotations
 
 import math
+import re
 import sys
 from pathlib import Path
 from typing import Any
@@ -15,6 +19,7 @@ import numpy as np
 
 from ...errors import SceneError
 from .. import model as m
+from .diagnostics import SceneFiles, warn
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -25,8 +30,10 @@ MAX_INCLUDE_DEPTH = 16
 
 
 class _Ctx:
-    def __init__(self, path: Path, params: dict[str, Any]):
+    def __init__(self, path: Path, params: dict[str, Any], files: SceneFiles | None = None):
         self.path, self.params = path, params
+        self.files = files or SceneFiles(path.parent)
+        self.textures: dict[str, m.Texture] = {}
 
     def fail(self, key: str, message: str):
         raise SceneError(f"{self.path}: {key}: {message}")
@@ -75,10 +82,22 @@ class _Ctx:
 
     def file(self, value, key: str) -> Path:
         name = self.string(value, key)
-        path = (self.path.parent / name).resolve()
-        if not path.is_file():
+        try:
+            return self.files.resolve(name, self.path, what="file")
+        except SceneError:
             self.fail(key, f"no such file {name!r} (relative to {self.path.parent})")
-        return path
+
+    def spectrum(self, value, key: str):
+        """A colour field: a number, 3 numbers, a texture table, or the name of a texture
+        of the [textures] section."""
+        if isinstance(value, str):
+            if value not in self.textures:
+                self.fail(key, f"no texture named {value!r} (defined: "
+                          f"{', '.join(self.textures) or 'none'})")
+            return self.textures[value]
+        if isinstance(value, dict):
+            return _texture(self, key, value)
+        return self.color(value, key)
 
 
 def _show(value) -> str:
@@ -223,6 +242,46 @@ def _shutter(ctx, t) -> m.Shutter:
     return s
 
 
+_TEXTURE_FIELDS = {"type", "file", "filter", "wrap", "raw", "color0", "color1", "uv_scale",
+                   "uv_offset", "uv_transform"}
+
+
+def _texture(ctx, key: str, t) -> m.Texture:
+    """A bitmap or checkerboard; uv' = uv_transform (3x3, row-major) or scale then offset."""
+    t = ctx.table(t, key)
+    _check_keys(ctx, t, key, _TEXTURE_FIELDS)
+    kind = ctx.string(t.get("type", "bitmap"), f"{key}.type", ("bitmap", "checkerboard"))
+    tex = m.Texture(kind, name=key.split(".")[-1])
+    tex.filter = ctx.string(t.get("filter", "bilinear"), f"{key}.filter", ("bilinear", "nearest"))
+    tex.wrap = ctx.string(t.get("wrap", "repeat"), f"{key}.wrap", ("repeat", "mirror", "clamp"))
+    if "uv_transform" in t:
+        if "uv_scale" in t or "uv_offset" in t:
+            ctx.fail(key, "give uv_transform or uv_scale/uv_offset, not both")
+        tex.uv_transform = np.array(ctx.vector(t["uv_transform"], f"{key}.uv_transform", 9)).reshape(3, 3)
+    else:
+        su, sv = ctx.vector(t.get("uv_scale", 1.0), f"{key}.uv_scale", 2, allow_scalar=True)
+        ou, ov = ctx.vector(t.get("uv_offset", [0.0, 0.0]), f"{key}.uv_offset", 2)
+        tex.uv_transform = np.array([[su, 0, ou], [0, sv, ov], [0, 0, 1]], np.float64)
+    if kind == "bitmap":
+        from ...film.io import read_image, srgb_to_linear
+
+        path = ctx.file(t.get("file"), f"{key}.file")
+        raw = ctx.boolean(t.get("raw", False), f"{key}.raw")
+        try:
+            image = read_image(path)
+        except Exception as exc:
+            ctx.fail(f"{key}.file", f"cannot read image {path.name!r} ({exc})")
+        if raw and path.suffix.lower() in (".png", ".jpg", ".jpeg"):
+            from ...film.io import linear_to_srgb
+
+            image = linear_to_srgb(image).astype(np.float32)   # undo the sRGB decode
+        tex.image = image
+    else:
+        tex.color0 = ctx.color(t.get("color0", 0.4), f"{key}.color0")
+        tex.color1 = ctx.color(t.get("color1", 0.2), f"{key}.color1")
+    return tex
+
+
 _MATERIAL_FIELDS = {"type", "reflectance", "specular_reflectance", "specular_transmittance", "eta",
                     "k", "int_ior", "ext_ior", "alpha", "distribution", "nonlinear", "two_sided",
                     "material"}
@@ -250,7 +309,10 @@ def _material(ctx, name: str, t) -> m.Material:
     _check_keys(ctx, t, key, _MATERIAL_FIELDS)
     kind = ctx.string(t.get("type", "diffuse"), f"{key}.type", m.MATERIAL_KINDS)
     mat = m.Material(kind=kind, name=name)
-    for field_name in ("reflectance", "specular_reflectance", "specular_transmittance", "eta", "k"):
+    for field_name in ("reflectance", "specular_reflectance", "specular_transmittance"):
+        if field_name in t:
+            setattr(mat, field_name, ctx.spectrum(t[field_name], f"{key}.{field_name}"))
+    for field_name in ("eta", "k"):
         if field_name in t:
             setattr(mat, field_name, ctx.color(t[field_name], f"{key}.{field_name}"))
     if "material" in t:
@@ -306,9 +368,15 @@ def _shape(ctx, i: int, t, materials: dict[str, int], scene: m.Scene) -> list[m.
         shape.radius = ctx.number(t.get("radius", 1.0), f"{key}.radius", 1e-9)
     if kind == "mesh":
         path = ctx.file(t.get("file"), f"{key}.file")
-        from .meshes import load_mesh
+        from .meshes import read_mesh
 
-        shape.vertices, shape.triangles, shape.normals, shape.uvs = load_mesh(path)
+        mesh = read_mesh(path)
+        shape.vertices, shape.triangles, shape.normals, shape.uvs = \
+            mesh.vertices, mesh.triangles, mesh.normals, mesh.uvs
+    if kind == "disk":
+        from .meshes import disk_shape
+
+        shape = disk_shape(shape)
     return [shape]
 
 
@@ -353,13 +421,12 @@ def _light(ctx, i: int, t) -> m.Light:
     return light
 
 
-_TOP = {"film", "camera", "integrator", "sampler", "shutter", "materials", "shapes", "lights"}
+_TOP = {"film", "camera", "integrator", "sampler", "shutter", "materials", "shapes", "lights",
+        "textures", "include", "params"}
+_PARAM = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
 
 
-def load_toml(path, **params) -> m.Scene:
-    """Load a native TOML scene."""
-    path = Path(path)
-    ctx = _Ctx(path, params)
+def _read(path: Path) -> dict:
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
@@ -367,33 +434,133 @@ def load_toml(path, **params) -> m.Scene:
     except (OSError, UnicodeDecodeError) as exc:
         raise SceneError(f"{path}: cannot read ({exc})") from None
     try:
-        data = tomllib.loads(text)
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{path}: invalid TOML: {exc}") from None
+    except RecursionError:
+        raise SceneError(f"{path}: invalid TOML: nested too deeply") from None
+
+
+def _convert(value, default, ctx: _Ctx, name: str):
+    """A parameter given from outside (often a string from the command line) in the type
+    of its default."""
+    if not isinstance(value, str) or isinstance(default, str):
+        return value
+    try:
+        if isinstance(default, bool):
+            if value.lower() not in ("true", "false"):
+                raise ValueError
+            return value.lower() == "true"
+        if isinstance(default, int):
+            return int(value)
+        if isinstance(default, float):
+            return float(value)
+        if default is None:
+            return tomllib.loads(f"x = {value}")["x"]
+    except (ValueError, tomllib.TOMLDecodeError):
+        if default is None:
+            return value
+        ctx.fail(f"params.{name}", f"expected a value like {default!r}, got {value!r}")
+    return value
+
+
+def _substitute(ctx: _Ctx, value, key: str, used: set):
+    """Replace $name in strings: a whole-string reference takes the parameter's value and
+    type, a reference inside a longer string its text. Nothing is evaluated."""
+    if isinstance(value, dict):
+        return {k: _substitute(ctx, v, f"{key}.{k}" if key else k, used) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_substitute(ctx, v, f"{key}[{i}]", used) for i, v in enumerate(value)]
+    if not isinstance(value, str) or "$" not in value:
+        return value
+
+    def lookup(name):
+        if name not in ctx.params:
+            ctx.fail(key, f"unknown parameter ${name} (declare it in [params] or pass it in)")
+        used.add(name)
+        return ctx.params[name]
+
+    whole = _PARAM.fullmatch(value)
+    if whole:
+        return lookup(whole.group(1))
+    return _PARAM.sub(lambda mt: str(lookup(mt.group(1))), value)
+
+
+class _State:
+    def __init__(self, scene: m.Scene, files: SceneFiles):
+        self.scene, self.files = scene, files
+        self.materials: dict[str, int] = {}
+        self.textures: dict[str, m.Texture] = {}
+        self.has_camera = False
+        self.used: set[str] = set()
+
+
+def _load_file(path: Path, params: dict, state: _State, stack: tuple) -> None:
+    if len(stack) >= MAX_INCLUDE_DEPTH:
+        raise SceneError(f"{stack[-1]}: includes nest deeper than {MAX_INCLUDE_DEPTH} levels")
+    resolved = path.resolve()
+    if resolved in stack:
+        chain = " -> ".join(str(p) for p in stack + (resolved,))
+        raise SceneError(f"{path}: include cycle: {chain}")
+    data = _read(path)
+    ctx = _Ctx(path, {}, state.files)
+    ctx.textures = state.textures
     _check_keys(ctx, data, "", _TOP)
-    scene = m.Scene(source=str(path))
+    declared = ctx.table(data.pop("params", {}), "params")
+    for name, default in declared.items():
+        if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
+            ctx.fail(f"params.{name}", "expected a name of letters, digits and underscores")
+        ctx.params[name] = _convert(params[name], default, ctx, name) if name in params else default
+    for name, value in params.items():
+        ctx.params.setdefault(name, value if not isinstance(value, str) else _convert(value, None, ctx, name))
+    data = _substitute(ctx, data, "", state.used)
+    scene = state.scene
+    includes = data.get("include", [])
+    if isinstance(includes, str):
+        includes = [includes]
+    if not isinstance(includes, list):
+        ctx.fail("include", f"expected a file name or a list of them, got {_show(includes)}")
+    for i, name in enumerate(includes):
+        inc = ctx.file(name, f"include[{i}]")
+        _load_file(inc, ctx.params, state, stack + (resolved,))
     if "film" in data:
         scene.film = _film(ctx, data["film"])
     if "camera" in data:
         scene.camera = _camera(ctx, data["camera"])
+        state.has_camera = True
     if "integrator" in data:
         scene.integrator = _integrator(ctx, data["integrator"])
     if "sampler" in data:
         scene.sampler = _sampler(ctx, data["sampler"])
     if "shutter" in data:
         scene.shutter = _shutter(ctx, data["shutter"])
-    materials = {}
+    for name, t in ctx.table(data.get("textures", {}), "textures").items():
+        state.textures[name] = _texture(ctx, f"textures.{name}", t)
     for name, t in ctx.table(data.get("materials", {}), "materials").items():
-        materials[name] = scene.add_material(_material(ctx, name, t))
+        state.materials[name] = scene.add_material(_material(ctx, name, t))
     shapes = data.get("shapes", [])
     if not isinstance(shapes, list):
         ctx.fail("shapes", "expected an array of tables ([[shapes]])")
     for i, t in enumerate(shapes):
-        scene.shapes.extend(_shape(ctx, i, t, materials, scene))
+        scene.shapes.extend(_shape(ctx, i, t, state.materials, scene))
     lights = data.get("lights", [])
     if not isinstance(lights, list):
         ctx.fail("lights", "expected an array of tables ([[lights]])")
     for i, t in enumerate(lights):
         scene.lights.append(_light(ctx, i, t))
-    scene.validate()
-    return scene
+
+
+def load_toml(path, **params) -> m.Scene:
+    """Load a native TOML scene; ``params`` override its [params] defaults."""
+    from .finish import finish_scene
+
+    path = Path(path)
+    scene = m.Scene(source=str(path))
+    state = _State(scene, SceneFiles(path.parent))
+    _load_file(path, params, state, ())
+    unused = sorted(set(params) - state.used)
+    if unused:
+        warn(f"{path}: parameters given but not used: {', '.join(unused)}")
+    if not scene.shapes and not scene.lights:
+        raise SceneError(f"{path}: the scene has no shapes and no lights")
+    return finish_scene(scene, state.has_camera)

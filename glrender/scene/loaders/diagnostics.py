@@ -1,0 +1,97 @@
+"""What loaders tell their users besides errors: warnings, and referenced files.
+
+- Warnings go through Python's :mod:`warnings` with the category
+  :class:`GlrenderWarning`; a loader collects what it skipped (unsupported tags,
+  plugins, extensions) and reports it in *one* warning that lists each item with its
+  line number, instead of one warning per occurrence.
+- Files a scene refers to are resolved relative to the referencing file's folder;
+  a path that leaves the scene's folder (``..``, absolute paths) is reported, a
+  missing file is an error that names the referencing file and line.
+"""
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+from ...errors import SceneError
+
+
+class GlrenderWarning(UserWarning):
+    """A scene loaded, but not everything in it is used as written."""
+
+
+def warn(message: str) -> None:
+    warnings.warn(message, GlrenderWarning, stacklevel=3)
+
+
+class Notes:
+    """Things a loader skipped, reported together: ``add(what, line)`` then ``emit()``."""
+
+    def __init__(self, source, title: str):
+        self.source, self.title = str(source), title
+        self.items: dict[str, list] = {}
+
+    def add(self, what: str, line: int | None = None) -> None:
+        lines = self.items.setdefault(what, [])
+        if line is not None and line not in lines:
+            lines.append(line)
+
+    def emit(self) -> None:
+        if not self.items:
+            return
+        parts = []
+        for what, lines in self.items.items():
+            if lines:
+                shown = ", ".join(map(str, lines[:8])) + (", ..." if len(lines) > 8 else "")
+                parts.append(f"{what} (line{'s' if len(lines) > 1 else ''} {shown})")
+            else:
+                parts.append(what)
+        warn(f"{self.source}: {self.title}: {'; '.join(parts)}")
+        self.items = {}
+
+
+class SceneFiles:
+    """Resolves the files a scene refers to, relative to the folder of the scene file
+    that refers to them, and remembers the scene's root folder to report paths that
+    leave it (once per path)."""
+
+    def __init__(self, root: Path):
+        self.root = Path(root).resolve()
+        self._reported: set[Path] = set()
+
+    def resolve(self, name: str, referrer, line: int | None = None, what: str = "file",
+                search: tuple = ()) -> Path:
+        """The existing file ``name`` refers to; ``search`` adds extra folders to try
+        (Mitsuba's <path>). Raises SceneError naming ``referrer`` and ``line``."""
+        where = f"{referrer}:{line}" if line is not None else f"{referrer}"
+        if not isinstance(name, str) or not name.strip() or "\0" in name:
+            raise SceneError(f"{where}: expected a {what} name, got {name!r}")
+        base = Path(referrer).parent
+        candidates = [base / name] + [Path(folder) / name for folder in search]
+        for candidate in candidates:
+            try:
+                path = candidate.resolve()
+                found = path.is_file()
+            except (OSError, RuntimeError):
+                continue
+            if found:
+                self._check_inside(path, name, where)
+                return path
+        raise SceneError(f"{where}: {what} {name!r} not found (looked in {base.resolve()})")
+
+    def _check_inside(self, path: Path, name: str, where: str) -> None:
+        try:
+            path.relative_to(self.root)
+        except ValueError:
+            if path not in self._reported:
+                self._reported.add(path)
+                warn(f"{where}: {name!r} resolves to {path}, outside the scene's folder "
+                     f"{self.root}")
+
+
+def check_size(path: Path, needed: int, what: str) -> None:
+    """A header's promise against the file: ``needed`` bytes must exist."""
+    size = Path(path).stat().st_size
+    if needed > size:
+        raise SceneError(f"{path}: {what} needs at least {needed} bytes, the file has {size} "
+                         f"(truncated or corrupt)")

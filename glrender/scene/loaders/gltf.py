@@ -1,0 +1,556 @@
+"""glTF 2.0 (``.gltf`` with external or data-URI buffers, and binary ``.glb``).
+
+Read: the node hierarchy (matrix or TRS), meshes instanced by several nodes (the
+arrays are shared), triangle / strip / fan primitives with POSITION, NORMAL and
+TEXCOORD_0, metallic-roughness materials, perspective cameras and
+KHR_lights_punctual. Materials map onto the renderer's BSDFs (docs/scene-format.md):
+
+- transmission (KHR_materials_transmission) > 0: a (rough) dielectric of IOR
+  KHR_materials_ior (default 1.5), tinted by the base colour;
+- metallic >= 0.5: a rough conductor that reflects the base colour (texture included);
+- otherwise: a rough plastic with the base colour (texture included) as its diffuse
+  reflectance and IOR 1.5;
+- roughness r becomes GGX alpha = r^2 (glTF's convention); emissive factor times
+  KHR_materials_emissive_strength makes the primitive an area light.
+
+glTF is top-left based: uv (0, 0) is the first texel of the image, which is Mitsuba's
+convention too, so texture coordinates are used as they are. Light intensities are
+photometric in glTF (candela, lux): they are divided by 683 lm/W to become the
+radiometric W/sr and W/m^2 the renderer uses. Every size (chunks, buffers, views,
+accessors) is checked against the bytes that exist before anything is read.
+"""
+from __future__ import annotations
+
+import base64
+import io
+import json
+import math
+import struct
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import SceneError
+from .. import model as m
+from .diagnostics import Notes, SceneFiles
+from .meshes import MeshData, finish_mesh
+
+SUPPORTED_EXTENSIONS = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
+                        "KHR_materials_transmission", "KHR_materials_ior", "KHR_texture_transform",
+                        "KHR_draco_mesh_compression"}
+_COMPONENT = {5120: "i1", 5121: "u1", 5122: "<i2", 5123: "<u2", 5125: "<u4", 5126: "<f4"}
+_NORMALIZE = {5120: 127.0, 5121: 255.0, 5122: 32767.0, 5123: 65535.0}
+_WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
+_WRAP = {10497: "repeat", 33071: "clamp", 33648: "mirror"}
+LUMENS_PER_WATT = 683.0
+MAX_NODE_DEPTH = 256
+
+
+class _Gltf:
+    def __init__(self, path: Path, doc: dict, bin_chunk: bytes | None, files: SceneFiles):
+        self.path, self.doc, self.bin, self.files = path, doc, bin_chunk, files
+        self.notes = Notes(path, "unsupported glTF features")
+        self._buffers: dict[int, bytes] = {}
+        self._meshes: dict[tuple, MeshData] = {}
+        self._materials: dict[tuple, int] = {}
+        self._textures: dict[int, m.Texture] = {}
+
+    def fail(self, where: str, message: str):
+        raise SceneError(f"{self.path}: {where}: {message}")
+
+    def item(self, kind: str, index, where: str) -> dict:
+        items = self.doc.get(kind)
+        if not isinstance(index, int) or isinstance(index, bool) or not isinstance(items, list) \
+                or not 0 <= index < len(items) or not isinstance(items[index], dict):
+            self.fail(where, f"refers to {kind}[{index!r}], which does not exist")
+        return items[index]
+
+    # -- binary data -----------------------------------------------------------------
+    def _uri_bytes(self, uri, where: str) -> bytes:
+        if not isinstance(uri, str):
+            self.fail(where, f"expected a uri string, got {uri!r}")
+        if uri.startswith("data:"):
+            head, _, payload = uri.partition(",")
+            if not head.endswith(";base64"):
+                self.fail(where, "only base64 data URIs are supported")
+            try:
+                return base64.b64decode(payload, validate=False)
+            except ValueError:
+                self.fail(where, "the data URI is not valid base64")
+        from urllib.parse import unquote
+
+        return self.files.resolve(unquote(uri), self.path, None, f"file ({where})").read_bytes()
+
+    def buffer(self, index) -> bytes:
+        if index not in self._buffers:
+            where = f"buffers[{index}]"
+            b = self.item("buffers", index, where)
+            if "uri" in b:
+                data = self._uri_bytes(b["uri"], where)
+            elif index == 0 and self.bin is not None:
+                data = self.bin
+            else:
+                self.fail(where, "has no uri and there is no GLB binary chunk")
+            length = b.get("byteLength")
+            if not isinstance(length, int) or length < 0 or length > len(data):
+                self.fail(where, f"byteLength {length!r} exceeds the {len(data)} bytes available")
+            self._buffers[index] = data[:length]
+        return self._buffers[index]
+
+    def view(self, index, where: str) -> tuple[bytes, int, int, int | None]:
+        """(buffer bytes, offset, length, stride) of a buffer view, checked."""
+        v = self.item("bufferViews", index, where)
+        data = self.buffer(v.get("buffer"))
+        offset, length = v.get("byteOffset", 0), v.get("byteLength")
+        stride = v.get("byteStride")
+        for name, value in (("byteOffset", offset), ("byteLength", length)):
+            if not isinstance(value, int) or value < 0:
+                self.fail(f"bufferViews[{index}]", f"{name} must be a non-negative integer, got {value!r}")
+        if offset + length > len(data):
+            self.fail(f"bufferViews[{index}]", f"bytes [{offset}, {offset + length}) run past the "
+                      f"end of buffer {v.get('buffer')} ({len(data)} bytes)")
+        if stride is not None and (not isinstance(stride, int) or not 4 <= stride <= 252):
+            self.fail(f"bufferViews[{index}]", f"byteStride must be in [4, 252], got {stride!r}")
+        return data, offset, length, stride
+
+    def accessor(self, index, where: str) -> np.ndarray:
+        a = self.item("accessors", index, where)
+        where = f"accessors[{index}]"
+        if "sparse" in a:
+            self.fail(where, "sparse accessors are not supported")
+        ctype, atype, count = a.get("componentType"), a.get("type"), a.get("count")
+        if ctype not in _COMPONENT or atype not in _WIDTH:
+            self.fail(where, f"unknown componentType {ctype!r} or type {atype!r}")
+        if not isinstance(count, int) or count < 0:
+            self.fail(where, f"count must be a non-negative integer, got {count!r}")
+        dtype, width = np.dtype(_COMPONENT[ctype]), _WIDTH[atype]
+        if "bufferView" not in a:
+            return np.zeros((count, width), np.float64)
+        data, view_offset, view_length, stride = self.view(a["bufferView"], where)
+        elem = dtype.itemsize * width
+        stride = stride or elem
+        offset = a.get("byteOffset", 0)
+        if not isinstance(offset, int) or offset < 0:
+            self.fail(where, f"byteOffset must be a non-negative integer, got {offset!r}")
+        need = offset + (stride * (count - 1) + elem if count else 0)
+        if need > view_length:
+            self.fail(where, f"{count} elements need {need} bytes of bufferView {a['bufferView']}, "
+                      f"which has {view_length}")
+        if count == 0:
+            return np.zeros((0, width), dtype)
+        arr = np.ndarray((count, width), dtype, buffer=data, offset=view_offset + offset,
+                         strides=(stride, dtype.itemsize)).copy()
+        if a.get("normalized") and ctype in _NORMALIZE:
+            arr = np.maximum(arr.astype(np.float64) / _NORMALIZE[ctype], -1.0)
+        return arr
+
+    # -- meshes --------------------------------------------------------------------------
+    def primitive_mesh(self, mesh_index: int, k: int, prim: dict) -> MeshData | None:
+        key = (mesh_index, k)
+        if key in self._meshes:
+            return self._meshes[key]
+        where = f"meshes[{mesh_index}].primitives[{k}]"
+        mode = prim.get("mode", 4)
+        if mode not in (4, 5, 6):
+            self.notes.add(f"point and line primitives (mode {mode}), skipped")
+            return None
+        attrs = prim.get("attributes")
+        if not isinstance(attrs, dict) or "POSITION" not in attrs:
+            self.fail(where, "has no POSITION attribute")
+        extensions = prim.get("extensions") or {}
+        for name in extensions:
+            if name not in SUPPORTED_EXTENSIONS:
+                self.notes.add(f"primitive extension {name}")
+        if prim.get("targets"):
+            self.notes.add("morph targets")
+        if "KHR_draco_mesh_compression" in extensions:
+            mesh = finish_mesh(self.draco_mesh(extensions["KHR_draco_mesh_compression"], where),
+                               f"{self.path}: {where}")
+            self._meshes[key] = mesh
+            return mesh
+        positions = self.accessor(attrs["POSITION"], where).astype(np.float64)
+        if positions.shape[1] != 3:
+            self.fail(where, "POSITION must be VEC3")
+        if "indices" in prim:
+            idx = self.accessor(prim["indices"], where).reshape(-1).astype(np.int64)
+        else:
+            idx = np.arange(len(positions), dtype=np.int64)
+        if mode == 4:
+            if len(idx) % 3:
+                self.fail(where, f"{len(idx)} indices do not make whole triangles")
+            tris = idx.reshape(-1, 3)
+        elif mode == 5:   # strip: every other triangle reversed to keep the winding
+            n = max(len(idx) - 2, 0)
+            i = np.arange(n)
+            odd = i % 2 == 1
+            tris = np.stack([idx[i], np.where(odd, idx[i + 2], idx[i + 1]),
+                             np.where(odd, idx[i + 1], idx[i + 2])], axis=1)
+        else:             # fan
+            n = max(len(idx) - 2, 0)
+            tris = np.stack([np.full(n, idx[0] if len(idx) else 0), idx[1:n + 1], idx[2:n + 2]], axis=1)
+        normals = uvs = None
+        if "NORMAL" in attrs:
+            normals = self.accessor(attrs["NORMAL"], where).astype(np.float64)
+        if "TEXCOORD_0" in attrs:
+            uvs = self.accessor(attrs["TEXCOORD_0"], where).astype(np.float64)[:, :2]
+        for name, arr in (("NORMAL", normals), ("TEXCOORD_0", uvs)):
+            if arr is not None and len(arr) != len(positions):
+                self.fail(where, f"{name} has {len(arr)} elements for {len(positions)} positions")
+        mesh = finish_mesh(MeshData(positions, tris, normals, uvs), f"{self.path}: {where}")
+        self._meshes[key] = mesh
+        return mesh
+
+    def draco_mesh(self, ext, where: str) -> MeshData:
+        """A KHR_draco_mesh_compression primitive, decoded by DracoPy."""
+        try:
+            import DracoPy
+        except ImportError:
+            self.fail(where, "is Draco-compressed; decoding it needs DracoPy "
+                      "(pip install 'glrender[draco]')")
+        if not isinstance(ext, dict):
+            self.fail(where, "KHR_draco_mesh_compression must be an object")
+        data, offset, length, _ = self.view(ext.get("bufferView"), where)
+        try:
+            mesh = DracoPy.decode(data[offset:offset + length])
+        except Exception as exc:
+            self.fail(where, f"cannot decode the Draco data ({exc})")
+        faces = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), np.int64).reshape(-1, 3)
+        points = np.asarray(mesh.points, np.float64).reshape(-1, 3)
+        normals = getattr(mesh, "normals", None)
+        uvs = getattr(mesh, "tex_coord", None)
+        normals = np.asarray(normals, np.float64).reshape(-1, 3) if normals is not None and len(normals) else None
+        uvs = np.asarray(uvs, np.float64).reshape(len(points), -1)[:, :2] \
+            if uvs is not None and np.size(uvs) else None
+        return MeshData(points, faces, normals, uvs)
+
+    # -- materials and textures -------------------------------------------------------------
+    def texture(self, info, where: str, srgb: bool = True) -> m.Texture:
+        if not isinstance(info, dict):
+            self.fail(where, f"expected a textureInfo object, got {info!r}")
+        index = info.get("index")
+        tex_def = self.item("textures", index, where)
+        if info.get("texCoord", 0) != 0:
+            self.notes.add("texture coordinate sets other than TEXCOORD_0 (set 0 used)")
+        if index not in self._textures:
+            source = tex_def.get("source")
+            if source is None:
+                for ext in (tex_def.get("extensions") or {}):
+                    self.notes.add(f"texture extension {ext}")
+                self.fail(f"textures[{index}]", "has no source image this loader can read")
+            image = self.image(source, f"textures[{index}]", srgb)
+            tex = m.Texture("bitmap", image=image, name=f"texture {index}")
+            if "sampler" in tex_def:
+                sampler = self.item("samplers", tex_def["sampler"], f"textures[{index}]")
+                wrap_s, wrap_t = sampler.get("wrapS", 10497), sampler.get("wrapT", 10497)
+                tex.wrap = _WRAP.get(wrap_s, "repeat")
+                if wrap_t != wrap_s:
+                    self.notes.add("different wrap modes along s and t (wrapS used)")
+                if sampler.get("magFilter") == 9728:
+                    tex.filter = "nearest"
+            self._textures[index] = tex
+        tex = self._textures[index]
+        transform = (info.get("extensions") or {}).get("KHR_texture_transform")
+        if isinstance(transform, dict):
+            from dataclasses import replace
+
+            tex = replace(tex, uv_transform=_texture_transform(transform))
+        return tex
+
+    def image(self, index, where: str, srgb: bool) -> np.ndarray:
+        img = self.item("images", index, where)
+        if "uri" in img:
+            data = self._uri_bytes(img["uri"], f"images[{index}]")
+        elif "bufferView" in img:
+            buf, offset, length, _ = self.view(img["bufferView"], f"images[{index}]")
+            data = buf[offset:offset + length]
+        else:
+            self.fail(f"images[{index}]", "has neither uri nor bufferView")
+        from PIL import Image
+
+        from ...film.io import srgb_to_linear
+
+        try:
+            with Image.open(io.BytesIO(data)) as im:
+                pixels = np.asarray(im.convert("RGB"), np.float64) / 255.0
+        except Exception as exc:
+            self.fail(f"images[{index}]", f"cannot decode the image ({exc})")
+        return (srgb_to_linear(pixels) if srgb else pixels).astype(np.float32)
+
+    def material(self, index, double_sided_default=False) -> tuple[int, m.Emission | None]:
+        scene_materials = self.scene.materials
+        if index is None:
+            key = (None,)
+            if key not in self._materials:
+                mat = m.Material("roughconductor", eta=(0.0, 0.0, 0.0), k=(1.0, 1.0, 1.0),
+                                 alpha=(1.0, 1.0), distribution="ggx", name="glTF default")
+                self._materials[key] = (self.scene.add_material(mat), None)
+            return self._materials[key]
+        if (index,) in self._materials:
+            return self._materials[(index,)]
+        where = f"materials[{index}]"
+        mdef = self.item("materials", index, where)
+        name = str(mdef.get("name", f"material {index}"))
+        ext = mdef.get("extensions") or {}
+        for e in ext:
+            if e not in SUPPORTED_EXTENSIONS:
+                self.notes.add(f"material extension {e}")
+        for field in ("normalTexture", "occlusionTexture"):
+            if field in mdef:
+                self.notes.add(field)
+        if mdef.get("alphaMode", "OPAQUE") != "OPAQUE":
+            self.notes.add(f"alphaMode {mdef['alphaMode']}")
+        pbr = mdef.get("pbrMetallicRoughness") or {}
+        base = _floats(pbr.get("baseColorFactor", [1, 1, 1, 1]), 4, self, where)[:3]
+        metallic = _floats([pbr.get("metallicFactor", 1.0)], 1, self, where)[0]
+        roughness = min(max(_floats([pbr.get("roughnessFactor", 1.0)], 1, self, where)[0], 0.0), 1.0)
+        if "metallicRoughnessTexture" in pbr:
+            # one material per primitive: the texture's mean metallic (blue) and roughness
+            # (green) scale the factors
+            self.notes.add("metallicRoughnessTexture (its mean is used)")
+            info = pbr["metallicRoughnessTexture"]
+            tex_def = self.item("textures", info.get("index") if isinstance(info, dict) else None,
+                                f"{where}.metallicRoughnessTexture")
+            raw = self.image(tex_def.get("source"), f"{where}.metallicRoughnessTexture", srgb=False)
+            metallic *= float(raw[..., 2].mean())
+            roughness *= float(raw[..., 1].mean())
+        color = tuple(base)
+        if "baseColorTexture" in pbr:
+            tex = self.texture(pbr["baseColorTexture"], f"{where}.baseColorTexture")
+            if any(abs(c - 1.0) > 0 for c in base):
+                from dataclasses import replace
+
+                tex = replace(tex, image=tex.image * np.asarray(base, np.float32))
+            color = tex
+        alpha = max(roughness * roughness, 1e-3)
+        ior = _floats([(ext.get("KHR_materials_ior") or {}).get("ior", 1.5)], 1, self, where)[0]
+        ior = ior if ior > 1.0 else 1.5
+        transmission = _floats([(ext.get("KHR_materials_transmission") or {}).get(
+            "transmissionFactor", 0.0)], 1, self, where)[0]
+        two_sided = bool(mdef.get("doubleSided", double_sided_default))
+        if transmission > 0:
+            kind = "dielectric" if roughness < 0.03 else "roughdielectric"
+            mat = m.Material(kind, int_ior=ior, ext_ior=1.0, alpha=(alpha, alpha), distribution="ggx",
+                             specular_transmittance=color if not isinstance(color, m.Texture) else (1, 1, 1),
+                             name=name)
+        elif metallic >= 0.5:
+            kind = "conductor" if roughness < 0.03 else "roughconductor"
+            mat = m.Material(kind, eta=(0.0, 0.0, 0.0), k=(1.0, 1.0, 1.0), specular_reflectance=color,
+                             alpha=(alpha, alpha), distribution="ggx", two_sided=two_sided, name=name)
+        else:
+            kind = "plastic" if roughness < 0.03 else "roughplastic"
+            mat = m.Material(kind, reflectance=color, int_ior=1.5, ext_ior=1.0, alpha=(alpha, alpha),
+                             distribution="ggx", two_sided=two_sided, name=name)
+        emission = None
+        emissive = _floats(mdef.get("emissiveFactor", [0, 0, 0]), 3, self, where)
+        strength = _floats([(ext.get("KHR_materials_emissive_strength") or {}).get(
+            "emissiveStrength", 1.0)], 1, self, where)[0]
+        if "emissiveTexture" in mdef and max(emissive) > 0:
+            self.notes.add("emissiveTexture (its mean scales the emissive factor)")
+            tex = self.texture(mdef["emissiveTexture"], f"{where}.emissiveTexture")
+            emissive = list(np.asarray(emissive) * tex.image.reshape(-1, 3).mean(axis=0))
+        if max(emissive) * strength > 0:
+            emission = m.Emission(tuple(float(e) * strength for e in emissive), two_sided=two_sided)
+        self._materials[(index,)] = (self.scene.add_material(mat), emission)
+        return self._materials[(index,)]
+
+
+def _floats(value, n: int, g: _Gltf, where: str) -> list[float]:
+    if not isinstance(value, list) or len(value) != n or not all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in value):
+        g.fail(where, f"expected {n} finite numbers, got {value!r}")
+    return [float(x) for x in value]
+
+
+def _texture_transform(t: dict) -> np.ndarray:
+    """KHR_texture_transform: uv' = T(offset) R(rotation) S(scale) uv."""
+    ox, oy = (t.get("offset") or [0.0, 0.0])[:2]
+    sx, sy = (t.get("scale") or [1.0, 1.0])[:2]
+    r = float(t.get("rotation", 0.0))
+    c, s = math.cos(r), math.sin(r)
+    T = np.array([[1, 0, ox], [0, 1, oy], [0, 0, 1]], np.float64)
+    R = np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]], np.float64)
+    S = np.diag([sx, sy, 1.0])
+    return T @ R @ S
+
+
+def _node_matrix(g: _Gltf, node: dict, where: str) -> np.ndarray:
+    if "matrix" in node:
+        M = np.array(_floats(node["matrix"], 16, g, f"{where}.matrix")).reshape(4, 4).T  # column-major
+        return M
+    t = _floats(node.get("translation", [0, 0, 0]), 3, g, f"{where}.translation")
+    x, y, z, w = _floats(node.get("rotation", [0, 0, 0, 1]), 4, g, f"{where}.rotation")
+    s = _floats(node.get("scale", [1, 1, 1]), 3, g, f"{where}.scale")
+    n = math.sqrt(x * x + y * y + z * z + w * w) or 1.0
+    x, y, z, w = x / n, y / n, z / n, w / n
+    R = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                  [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                  [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    M = np.eye(4)
+    M[:3, :3] = R * np.asarray(s)[None, :]
+    M[:3, 3] = t
+    return M
+
+
+def _read_container(path: Path) -> tuple[dict, bytes | None]:
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise SceneError(f"{path}: no such file") from None
+    except OSError as exc:
+        raise SceneError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    bin_chunk = None
+    if data[:4] == b"glTF":
+        if len(data) < 20:
+            raise SceneError(f"{path}: truncated GLB header")
+        version, length = struct.unpack_from("<II", data, 4)
+        if version != 2:
+            raise SceneError(f"{path}: GLB version {version}; only glTF 2.0 is supported")
+        if length > len(data):
+            raise SceneError(f"{path}: the GLB header declares {length} bytes, the file has {len(data)} "
+                             f"(truncated)")
+        offset, chunks = 12, []
+        while offset + 8 <= length:
+            size, kind = struct.unpack_from("<II", data, offset)
+            if offset + 8 + size > length:
+                raise SceneError(f"{path}: a GLB chunk of {size} bytes runs past the end of the file "
+                                 f"(truncated)")
+            chunks.append((kind, data[offset + 8:offset + 8 + size]))
+            offset += 8 + size + (-size % 4 if offset + 8 + size < length else 0)
+        if not chunks or chunks[0][0] != 0x4E4F534A:
+            raise SceneError(f"{path}: the GLB file has no JSON chunk first")
+        text = chunks[0][1]
+        bin_chunk = next((c for k, c in chunks[1:] if k == 0x004E4942), None)
+    else:
+        text = data
+    try:
+        doc = json.loads(text.decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        raise SceneError(f"{path}: invalid glTF JSON ({exc})") from None
+    if not isinstance(doc, dict):
+        raise SceneError(f"{path}: the glTF JSON is not an object")
+    version = str((doc.get("asset") or {}).get("version", ""))
+    if not version.startswith("2"):
+        raise SceneError(f"{path}: glTF version {version or '(none)'}; only glTF 2.0 is supported")
+    return doc, bin_chunk
+
+
+def load_gltf(path, **params) -> m.Scene:
+    from .finish import finish_scene
+
+    path = Path(path)
+    doc, bin_chunk = _read_container(path)
+    g = _Gltf(path, doc, bin_chunk, SceneFiles(path.parent))
+    required = [e for e in doc.get("extensionsRequired", []) if e not in SUPPORTED_EXTENSIONS]
+    if required:
+        raise SceneError(f"{path}: requires the glTF extension{'s' if len(required) > 1 else ''} "
+                         f"{', '.join(map(str, required))}, which glrender does not support")
+    for e in doc.get("extensionsUsed", []):
+        if e not in SUPPORTED_EXTENSIONS:
+            g.notes.add(f"extension {e}")
+    scene = m.Scene(source=str(path))
+    g.scene = scene
+    scenes = doc.get("scenes") or []
+    if scenes:
+        sc = g.item("scenes", doc.get("scene", 0), "scene")
+        roots = sc.get("nodes", [])
+    else:
+        children = {c for n in doc.get("nodes", []) if isinstance(n, dict) for c in n.get("children", [])}
+        roots = [i for i in range(len(doc.get("nodes", []))) if i not in children]
+    light_defs = ((doc.get("extensions") or {}).get("KHR_lights_punctual") or {}).get("lights", [])
+    camera = None
+    stack = [(r, np.eye(4), 0, ()) for r in reversed(roots)]
+    while stack:
+        index, parent, depth, path_nodes = stack.pop()
+        where = f"nodes[{index}]"
+        node = g.item("nodes", index, "scene" if depth == 0 else f"nodes[{path_nodes[-1]}].children")
+        if index in path_nodes:
+            g.fail(where, "the node hierarchy has a cycle")
+        if depth > MAX_NODE_DEPTH:
+            g.fail(where, f"the node hierarchy is deeper than {MAX_NODE_DEPTH}")
+        M = parent @ _node_matrix(g, node, where)
+        if "mesh" in node:
+            mesh_def = g.item("meshes", node["mesh"], where)
+            for k, prim in enumerate(mesh_def.get("primitives", [])):
+                if not isinstance(prim, dict):
+                    g.fail(f"meshes[{node['mesh']}].primitives[{k}]", "expected an object")
+                mesh = g.primitive_mesh(node["mesh"], k, prim)
+                if mesh is None:
+                    continue
+                mat, emission = g.material(prim.get("material"))
+                scene.shapes.append(m.Shape("mesh", material=mat, world_from_object=M,
+                                            vertices=mesh.vertices, triangles=mesh.triangles,
+                                            normals=mesh.normals, uvs=mesh.uvs, emission=emission,
+                                            name=str(node.get("name", f"node {index}"))))
+        if "camera" in node and camera is None:
+            camera = _camera(g, node["camera"], M, scene)
+        light_ref = ((node.get("extensions") or {}).get("KHR_lights_punctual") or {}).get("light")
+        if light_ref is not None:
+            if not isinstance(light_ref, int) or not 0 <= light_ref < len(light_defs):
+                g.fail(where, f"refers to light {light_ref!r}, which does not exist")
+            light = _light(g, light_defs[light_ref], M, f"KHR_lights_punctual.lights[{light_ref}]")
+            if light is not None:
+                scene.lights.append(light)
+        for child in reversed(node.get("children", [])):
+            stack.append((child, M, depth + 1, path_nodes + (index,)))
+    g.notes.emit()
+    if camera is not None:
+        scene.camera = camera
+    if not scene.shapes and not scene.lights:
+        raise SceneError(f"{path}: the scene has no meshes and no lights")
+    return finish_scene(scene, has_camera=camera is not None)
+
+
+# glTF cameras look along -z with +y up and +x right; Mitsuba's along +z with +x left
+_FLIP_XZ = np.diag([-1.0, 1.0, -1.0, 1.0])
+
+
+def _camera(g: _Gltf, index, M: np.ndarray, scene: m.Scene) -> m.Camera | None:
+    cam = g.item("cameras", index, "camera")
+    if cam.get("type") != "perspective":
+        g.notes.add(f"{cam.get('type')} cameras")
+        return None
+    p = cam.get("perspective") or {}
+    yfov = _floats([p.get("yfov", 0.8)], 1, g, f"cameras[{index}].perspective.yfov")[0]
+    if not 0 < yfov < math.pi:
+        g.fail(f"cameras[{index}].perspective.yfov", f"expected radians in (0, pi), got {yfov}")
+    aspect = p.get("aspectRatio")
+    if isinstance(aspect, (int, float)) and not isinstance(aspect, bool) and 0.05 < aspect < 20:
+        scene.film.width = max(1, int(round(scene.film.height * aspect)))
+    # remove scale from the node transform, keep rotation and position
+    R = M[:3, :3] / np.maximum(np.linalg.norm(M[:3, :3], axis=0), 1e-30)
+    W = np.eye(4)
+    W[:3, :3], W[:3, 3] = R, M[:3, 3]
+    znear = p.get("znear", 0.01)
+    zfar = p.get("zfar", 1e4)
+    near = float(znear) if isinstance(znear, (int, float)) and znear > 0 else 0.01
+    far = float(zfar) if isinstance(zfar, (int, float)) and zfar > near else 1e4
+    return m.Camera(world_from_camera=W @ _FLIP_XZ, fov=math.degrees(yfov), fov_axis="y",
+                    near_clip=near, far_clip=far)
+
+
+def _light(g: _Gltf, ldef, M: np.ndarray, where: str) -> m.Light | None:
+    if not isinstance(ldef, dict):
+        g.fail(where, "expected an object")
+    color = _floats(ldef.get("color", [1, 1, 1]), 3, g, f"{where}.color")
+    intensity = _floats([ldef.get("intensity", 1.0)], 1, g, f"{where}.intensity")[0]
+    value = tuple(c * intensity / LUMENS_PER_WATT for c in color)
+    kind = ldef.get("type")
+    R = M[:3, :3] / np.maximum(np.linalg.norm(M[:3, :3], axis=0), 1e-30)
+    if kind == "point":
+        return m.Light("point", position=tuple(M[:3, 3]), intensity=value, name=str(ldef.get("name", "")))
+    if kind == "directional":
+        d = R @ np.array([0.0, 0.0, -1.0])
+        return m.Light("directional", direction=tuple(d), irradiance=value, name=str(ldef.get("name", "")))
+    if kind == "spot":
+        spot = ldef.get("spot") or {}
+        outer = _floats([spot.get("outerConeAngle", math.pi / 4)], 1, g, f"{where}.spot")[0]
+        inner = _floats([spot.get("innerConeAngle", 0.0)], 1, g, f"{where}.spot")[0]
+        W = np.eye(4)
+        W[:3, :3] = R @ np.diag([1.0, -1.0, -1.0])    # the light's +z along the node's -z
+        W[:3, 3] = M[:3, 3]
+        outer_deg = min(max(math.degrees(outer), 0.01), 90.0)
+        return m.Light("spot", world_from_light=W, intensity=value, cutoff_angle=outer_deg,
+                       beam_width=min(max(math.degrees(inner), 0.0), outer_deg),
+                       name=str(ldef.get("name", "")))
+    g.notes.add(f"light type {kind!r}")
+    return None
