@@ -122,8 +122,11 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
         '#include "common/constants.glsl"',
         '#include "scene/layout.glsl"',
     ]
+    moving = bool(packed.moving_meshes)
     if has_bvh:
         lines += ['#include "geometry/bvh.glsl"', '#include "geometry/mesh_surface.glsl"']
+    if moving:
+        lines += ['#include "geometry/mesh_surface_motion.glsl"']
     n_compiled = len(packed.quads) + len(packed.spheres)
     lines += generate_lights(packed.lights if lights is None else lights)
     lines += generate_materials(packed.materials)
@@ -169,10 +172,10 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
     if has_bvh:
         body += [
             "    BvhHit bh;",
-            "    if (bvh_intersect_closest(o, d, t, bh)) {",
+            f"    if ({'bvh_intersect_closest_t(o, d, t, time, bh)' if moving else 'bvh_intersect_closest(o, d, t, bh)'}) {{",
             "        t = bh.t;",
             "        prim = kCompiledPrimitives + bh.prim;",
-            "        mesh_surface(bh.prim, bh.bary, ng, ns, uv, material, light);",
+            f"        {'mesh_surface_t(bh.prim, bh.bary, time, ng, ns, uv, material, light)' if moving else 'mesh_surface(bh.prim, bh.bary, ng, ns, uv, material, light)'};",
             "        sphere.w = 0.0;",
             "    }",
         ]
@@ -212,7 +215,7 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
         occ.append(f"    t = min(t, {test if not s.light else f'ignore == {k}u ? t_max : {test}'});")
     occ.append("    if (t < t_max) return true;")
     if has_bvh:
-        occ.append("    return bvh_intersect_any(o, d, t_max);")
+        occ.append(f"    return {'bvh_intersect_any_t(o, d, t_max, time)' if moving else 'bvh_intersect_any(o, d, t_max)'};")
     else:
         occ.append("    return false;")
     occ += ["}", ""]

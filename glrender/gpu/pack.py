@@ -14,6 +14,7 @@ Materials and lights become std430 arrays (``glrender/gpu/layout.py``).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -86,6 +87,19 @@ class MeshSoup:
 
 
 @dataclass
+class MovingMesh:
+    """A mesh in rigid motion over the shutter: object-space triangles and shading data
+    (its own BVH in the renderer) and its transforms at shutter open and close."""
+
+    positions: np.ndarray     # (T, 3, 3) object space
+    normals: np.ndarray       # (T, 3, 3) object space
+    uvs: np.ndarray           # (T, 3, 2)
+    material: int
+    world_from_object_open: np.ndarray
+    world_from_object_close: np.ndarray
+
+
+@dataclass
 class PackedScene:
     quads: list[Parallelogram]
     spheres: list[Sphere]
@@ -98,6 +112,11 @@ class PackedScene:
     light_kinds: set[str]
     environment: int                        # index + 1 of the environment light, 0 if none
     env_image: np.ndarray | None = None     # H x W x 3 linear RGB of an envmap light
+    moving_meshes: list = field(default_factory=list)   # MovingMesh, for motion blur
+
+    @property
+    def has_bvh(self) -> bool:
+        return self.mesh is not None or bool(self.moving_meshes)
     textures: TextureTable = field(default_factory=TextureTable)  # materials' textures
 
     @property
@@ -302,6 +321,7 @@ def pack_scene(scene: m.Scene) -> PackedScene:
 
     compiled_budget = MAX_COMPILED_PRIMITIVES
     sphere_lights: list[tuple[int, int]] = []   # (light index, sphere index)
+    moving: list[MovingMesh] = []
     for index, shape in enumerate(scene.shapes):
         where = f"{scene.source}: shape {shape.name or index}"
         M = shape.world_from_object
@@ -343,9 +363,22 @@ def pack_scene(scene: m.Scene) -> PackedScene:
             grow([center - radius, center + radius])
         elif shape.kind == "disk":
             raise SceneError(f"{where}: disk shapes are not supported yet; use a mesh")
+        elif shape.kind == "mesh" and shape.moving:
+            if shape.emission is not None:
+                raise SceneError(f"{where}: a moving mesh cannot be an area light")
+            open_, close = shape.world_from_object, shape.world_from_object_close
+            if np.linalg.det(open_[:3, :3]) * np.linalg.det(close[:3, :3]) <= 0:
+                raise SceneError(f"{where}: the transforms at shutter open and close must both "
+                                 f"keep or both flip orientation")
+            object_shape = dataclasses.replace(shape, world_from_object=np.eye(4))
+            tri, normals, uvs, _ = _transform_mesh(object_shape, where)
+            if np.linalg.det(open_[:3, :3]) < 0:   # the winding that faces out in world space
+                tri, normals, uvs = tri[:, [0, 2, 1]], normals[:, [0, 2, 1]], uvs[:, [0, 2, 1]]
+            if len(tri):
+                moving.append(MovingMesh(tri, normals, uvs, shape.material, open_, close))
+                for W in (open_, close):
+                    grow(m.transform_points(W, tri.reshape(-1, 3)))
         elif shape.kind == "mesh":
-            if shape.moving:
-                raise SceneError(f"{where}: motion blur of meshes is not supported yet")
             tri, normals, uvs, ng = _transform_mesh(shape, where)
             if len(tri) == 0:
                 continue
@@ -446,4 +479,4 @@ def pack_scene(scene: m.Scene) -> PackedScene:
         bounds=(lo, hi), material_kinds={mat.kind for mat in scene.materials},
         light_kinds={k for k, v in layout.LIGHT_KINDS.items()
                      if len(light_arr) and (light_arr["info"][:, 0] == v).any()},
-        environment=environment, env_image=env_image, textures=textures)
+        environment=environment, env_image=env_image, textures=textures, moving_meshes=moving)

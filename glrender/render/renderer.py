@@ -102,10 +102,16 @@ class Renderer:
         self._tile_rate = None    # measured seconds per tile-sample
         self._buffers = []
         self._bvh = None
+        self._snapshot = None     # accumulation copies that undo a stopped pass
+        t0 = time.perf_counter()
         self._upload()
+        t1 = time.perf_counter()
         self._compile()
         self.reset()
         self._warm_up()
+        # seconds spent packing and uploading the scene (BVH build included) and compiling
+        # the kernel (llvmpipe's JIT at the first dispatch included)
+        self.timings = {"build": t1 - t0, "compile": time.perf_counter() - t1}
 
     # -- setup -------------------------------------------------------------------------------
     def _upload(self):
@@ -142,7 +148,7 @@ class Renderer:
         self._dist = self._buffer(np.ascontiguousarray(dist, np.float32).tobytes())
         self._params = gl.buffer(reserve=layout.RENDER_PARAMS.itemsize)
         self.n_lights = n_lights
-        if p.mesh is not None:
+        if p.has_bvh:
             self._upload_mesh()
         self._upload_textures()
 
@@ -181,22 +187,36 @@ class Renderer:
                                       (layout.TEX_TEXTURE_RECORDS, records.bind)]
 
     def _upload_mesh(self):
-        from ..accel import build_bvh
+        """BVH over the static mesh triangles (world space) plus one tree per moving mesh
+        (object space), and per-triangle shading data in the BVH's triangle order."""
+        from ..accel import MotionInstance, build_bvh
         from ..accel.gpu import GpuBvh
         from ..gl.buffers import BufferTexture
 
-        positions, normals, uvs, material, light = self.packed.mesh
+        p = self.packed
+        if p.mesh is not None:
+            positions, normals, uvs, material, light = p.mesh
+        else:  # only moving meshes
+            positions, normals = np.zeros((0, 3, 3)), np.zeros((0, 3, 3))
+            uvs, material, light = np.zeros((0, 3, 2)), np.zeros(0, np.uint32), np.zeros(0, np.uint32)
+        motion = [MotionInstance(mm.positions.reshape(-1, 3), np.arange(3 * len(mm.positions)).reshape(-1, 3),
+                                 mm.world_from_object_open, mm.world_from_object_close)
+                  for mm in p.moving_meshes]
         tri = positions.reshape(-1, 3)
-        index = np.arange(len(tri)).reshape(-1, 3)
-        bvh = build_bvh(tri.astype(np.float32), index)
-        order = bvh.prim_order
-        n4 = np.zeros((len(order), 3, 4), np.float32)
-        n4[:, :, :3] = normals[order]
-        uv4 = np.zeros((len(order), 2, 4), np.float32)
-        uv4[:, 0, :2], uv4[:, 0, 2:] = uvs[order, 0], uvs[order, 1]
-        uv4[:, 1, :2] = uvs[order, 2]
-        info = np.zeros((len(order), 4), np.uint32)
-        info[:, 0], info[:, 1] = material[order], light[order]
+        bvh = build_bvh(tri.astype(np.float32), np.arange(len(tri)).reshape(-1, 3), motion=motion)
+        # shading data of every BVH triangle id: the static ones, then each moving mesh's block
+        parts = [(normals, uvs, material, light, bvh.prim_order)]
+        for mm, mbvh in zip(p.moving_meshes, bvh.motion):
+            k = len(mm.positions)
+            parts.append((mm.normals, mm.uvs, np.full(k, mm.material, np.uint32), np.zeros(k, np.uint32),
+                          mbvh.bvh.prim_order))
+        n4 = np.concatenate([np.pad(n[o], ((0, 0), (0, 0), (0, 1))) for n, _, _, _, o in parts]).astype(np.float32)
+        uv_all = np.concatenate([u[o] for _, u, _, _, o in parts])
+        uv4 = np.zeros((len(uv_all), 2, 4), np.float32)
+        uv4[:, 0, :2], uv4[:, 0, 2:], uv4[:, 1, :2] = uv_all[:, 0], uv_all[:, 1], uv_all[:, 2]
+        info = np.zeros((len(uv_all), 4), np.uint32)
+        info[:, 0] = np.concatenate([mt[o] for _, _, mt, _, o in parts])
+        info[:, 1] = np.concatenate([li[o] for _, _, _, li, o in parts])
         self._bvh = GpuBvh(self.ctx, bvh)
         self._mesh_textures = [
             (layout.TEX_TRI_NORMALS, BufferTexture(self.ctx, n4, "rgba32f", "triangle normals")),
@@ -213,7 +233,7 @@ class Renderer:
         s = self.settings
         integ = s.integrator
         p = self.packed
-        geometry = codegen.generate(p, has_bvh=p.mesh is not None, lights=self.lights_final)
+        geometry = codegen.generate(p, has_bvh=p.has_bvh, lights=self.lights_final)
         library = shaders.ShaderLibrary().with_generated({codegen.GENERATED_PATH: geometry})
         self.defines = shader_defines(
             sampler=s.sampler.kind, material_kinds=p.material_kinds, light_kinds=p.light_kinds,
@@ -234,7 +254,7 @@ class Renderer:
             # samples per invocation and pass: measured loop counts stay in the hundreds per
             # sample (tests/render/test_determinism.py), far below llvmpipe's cap; more
             # samples per dispatch amortise its fixed cost
-            self.samples_per_pass = 4 if p.mesh is not None else 8
+            self.samples_per_pass = 4 if p.has_bvh else 8
 
     def fingerprint(self) -> str:
         """A hash of everything that decides the value of each sample: the kernel's source
@@ -295,6 +315,7 @@ class Renderer:
             old = getattr(self, name, None)
             if old is not None:
                 old.release()
+        self._release_snapshot()
         self._mean = self.gl.buffer(reserve=16 * n)
         self._m2 = self.gl.buffer(reserve=16 * n)
         self._aov = self.gl.buffer(reserve=32 * n if self.settings.aovs else 16)
@@ -347,8 +368,12 @@ class Renderer:
             for unit, tex in self._mesh_textures:
                 tex.bind(unit)
 
-    def _run_pass(self, first_sample: int, samples: int, deadline: float | None = None):
-        """Render samples [first_sample, first_sample + samples) in every pixel."""
+    def _run_pass(self, first_sample: int, samples: int, should_stop=None) -> bool:
+        """Render samples [first_sample, first_sample + samples) in every pixel.
+
+        ``should_stop()`` is asked between dispatches; when it answers True the tiles done
+        so far are undone (from a copy taken before the pass) and the pass returns False,
+        so the accumulation always holds whole passes."""
         prm = self._param_block(first_sample, samples)
         tiles = self.tiles_x * self.tiles_y
         self._bind()
@@ -360,6 +385,13 @@ class Renderer:
                 count = int(self.settings.time_target / max(self._tile_rate * samples, 1e-9))
                 count = max(1, min(tiles - start, count, 65535))
             count = min(count, tiles - start)
+            if should_stop is not None:
+                if start == 0 and count < tiles:
+                    self._take_snapshot()
+                elif start > 0 and should_stop():
+                    self._restore_snapshot()
+                    self._bind()
+                    return False
             prm["dispatch"][0], prm["dispatch"][1] = start, count
             self._params.write(prm.tobytes())
             t0 = time.perf_counter()
@@ -369,18 +401,50 @@ class Renderer:
             rate = elapsed / (count * samples)
             self._tile_rate = rate if self._tile_rate is None else 0.7 * self._tile_rate + 0.3 * rate
             start += count
+        return True
 
-    def step(self, spp: int, callback=None) -> None:
-        """Add ``spp`` samples per pixel; ``callback(done, total)`` after every pass."""
+    def _accumulators(self):
+        return (self._mean, self._m2, self._aov, self._debug)
+
+    def _take_snapshot(self):
+        if self._snapshot is None:
+            self._snapshot = [self.gl.buffer(reserve=buf.size) for buf in self._accumulators()]
+        self.gl.memory_barrier()  # the kernel's SSBO writes, visible to the copies
+        for copy, buf in zip(self._snapshot, self._accumulators()):
+            self.gl.copy_buffer(copy, buf)
+
+    def _restore_snapshot(self):
+        self.gl.memory_barrier()
+        for copy, buf in zip(self._snapshot, self._accumulators()):
+            self.gl.copy_buffer(buf, copy)
+        self.gl.finish()
+
+    def _release_snapshot(self):
+        for copy in self._snapshot or ():
+            copy.release()
+        self._snapshot = None
+
+    def step(self, spp: int, callback=None, should_stop=None) -> int:
+        """Add ``spp`` samples per pixel; ``callback(done, total)`` after every pass.
+
+        ``should_stop()``, if given, is asked before every pass and between the dispatches
+        of a pass (at most ~``time_target`` seconds apart): when it answers True, the pass
+        in progress is undone and ``step`` returns early, the accumulation at a whole pass.
+        Returns the samples per pixel added."""
         if spp < 0:
             raise UsageError(f"spp: expected a non-negative integer, got {spp}")
+        first = self.spp_done
         target = self.spp_done + spp
         while self.spp_done < target:
+            if should_stop is not None and should_stop():
+                break
             k = min(self.samples_per_pass, target - self.spp_done)
-            self._run_pass(self.spp_done, k)
+            if not self._run_pass(self.spp_done, k, should_stop):
+                break
             self.spp_done += k
             if callback is not None:
                 callback(self.spp_done, target)
+        return self.spp_done - first
 
     def image(self) -> Film:
         """The same as :meth:`film` (the accumulated image with its statistics)."""
@@ -406,4 +470,5 @@ class Renderer:
     def release(self):
         for buf in self._buffers + [self._mean, self._m2, self._aov, self._debug, self._params]:
             buf.release()
+        self._release_snapshot()
         self._buffers = []

@@ -26,3 +26,4 @@ void mesh_surface(uint tri, vec2 bary, out vec3 ng, out vec3 ns, out vec2 uv, ou
     material = info.x;
     light = info.y;
 }
+

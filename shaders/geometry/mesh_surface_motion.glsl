@@ -1,0 +1,29 @@
+// The surface record of a BVH triangle hit in a scene with moving meshes.
+//
+// Triangles of a motion instance (geometry/motion.glsl) are stored in object space:
+// the hit's geometric normal comes from the triangle moved to the hit's time, and its
+// shading normal is turned by the inverse transpose of the instance's transform,
+// R S^-1 (R a rotation, S the symmetric scale/shear).
+#include "geometry/mesh_surface.glsl"
+#include "geometry/motion.glsl"
+
+void mesh_surface_t(uint tri, vec2 bary, float time, out vec3 ng, out vec3 ns, out vec2 uv,
+                    out uint material, out uint light) {
+    mesh_surface(tri, bary, ng, ns, uv, material, light);
+    int count = motion_instance_count();
+    for (int i = 0; i < count; i++) {
+        LOOP_TICK();
+        int base = 1 + i * kTexelsPerMotionInstance;
+        uint begin = floatBitsToUint(texelFetch(u_bvh_instances, base + 1).w);
+        uint end = floatBitsToUint(texelFetch(u_bvh_instances, base + 2).w);
+        if (tri >= begin && tri < end) {
+            vec3 translation;
+            mat3 rotation, scale;
+            motion_transform(i, time, translation, rotation, scale);
+            mat3 normal_matrix = rotation * inverse(scale);
+            ng = normalize(normal_matrix * ng);
+            ns = normalize(normal_matrix * ns);
+            ng = dot(ng, ns) < 0.0 ? -ng : ng;
+        }
+    }
+}
