@@ -1,31 +1,19 @@
-"""Image files: PNG (tonemapped sRGB), PFM, EXR, NPY by extension; Radiance HDR and EXR input."""
+"""Image files by extension: PNG/JPEG (tonemapped 8-bit), PFM, EXR (with layers), Radiance
+HDR, NPY. Every write is atomic: a temporary file in the same folder, then a rename."""
 from __future__ import annotations
 
 import os
+import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import UsageError
+from .tonemap import linear_to_srgb, srgb_to_linear, tonemap  # noqa: F401 (re-exported)
 
 LDR_FORMATS = (".png", ".jpg", ".jpeg")
 HDR_FORMATS = (".exr", ".pfm", ".npy", ".hdr")
-
-
-def linear_to_srgb(x: np.ndarray) -> np.ndarray:
-    x = np.clip(np.asarray(x, np.float64), 0.0, 1.0)
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
-
-
-def srgb_to_linear(x: np.ndarray) -> np.ndarray:
-    x = np.asarray(x, np.float64)
-    return np.where(x <= 0.04045, x / 12.92, np.power((x + 0.055) / 1.055, 2.4))
-
-
-def tonemap(image: np.ndarray, exposure: float = 0.0) -> np.ndarray:
-    """Linear RGB -> 8-bit sRGB (exposure in stops, then clamp)."""
-    scaled = np.nan_to_num(image, nan=0.0, posinf=1.0, neginf=0.0) * (2.0 ** exposure)
-    return np.round(linear_to_srgb(scaled) * 255.0).astype(np.uint8)
+FORMAT_NAMES = ".exr, .pfm, .hdr, .npy, .png or .jpg"
 
 
 def write_pfm(path: Path, image: np.ndarray) -> None:
@@ -69,7 +57,7 @@ def write_exr(path: Path, image: np.ndarray, aovs: dict | None = None, half: boo
             for k, ch in enumerate("RGB"[:arr.shape[2]] if name != "normal" else "XYZ"):
                 channels[f"{name}.{ch}"] = np.ascontiguousarray(arr[..., k])
         else:
-            channels[f"{name}.Y"] = np.ascontiguousarray(arr)
+            channels[f"{name}.{'Z' if name == 'depth' else 'Y'}"] = np.ascontiguousarray(arr)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     with OpenEXR.File(header, channels) as f:
         f.write(str(path))
@@ -92,35 +80,130 @@ def read_exr(path: Path) -> np.ndarray:
         raise UsageError(f"{path}: no RGB channels (found {', '.join(channels)})")
 
 
-def write_image(path, image: np.ndarray, aovs: dict | None = None, exposure: float = 0.0,
-                half: bool = False) -> None:
-    """Write by extension: .png/.jpg (tonemapped sRGB), .pfm, .exr (with AOV layers), .npy."""
-    path = Path(path)
-    ext = path.suffix.lower()
-    if ext not in LDR_FORMATS + HDR_FORMATS or ext == ".hdr":
-        raise UsageError(f"{path}: unsupported output format {ext or '(none)'} "
-                         f"(expected .png, .jpg, .exr, .pfm or .npy)")
-    if path.parent and not path.parent.exists():
-        raise UsageError(f"{path}: the folder {path.parent} does not exist")
-    tmp = path.with_name(path.name + ".part" + ext)
-    try:
-        if ext in LDR_FORMATS:
-            from PIL import Image
+_CHANNEL_ORDER = {c: i for i, c in enumerate("RGBXYZA")}
 
-            Image.fromarray(tonemap(image[..., :3], exposure)).save(tmp, quality=95) \
-                if ext != ".png" else Image.fromarray(tonemap(image[..., :3], exposure)).save(tmp)
-        elif ext == ".pfm":
-            write_pfm(tmp, image[..., :3])
-        elif ext == ".npy":
-            np.save(tmp, np.asarray(image[..., :3], np.float32))
-            if not tmp.exists() and Path(str(tmp) + ".npy").exists():
-                os.replace(str(tmp) + ".npy", tmp)
-        else:
-            write_exr(tmp, image, aovs=aovs, half=half)
-        os.replace(tmp, path)  # atomic: an interrupted write never leaves a broken file
+
+def read_exr_layers(path) -> dict[str, np.ndarray]:
+    """Every layer of an EXR file: ``{"RGB": (H, W, 3), "albedo": (H, W, 3), "depth": (H, W),
+    ...}`` (a layer's channels in R, G, B / X, Y, Z order; one channel gives a 2D array)."""
+    try:
+        import OpenEXR
+    except ImportError:
+        raise UsageError("EXR input needs the OpenEXR package: pip install 'glrender[exr]'") from None
+    groups: dict[str, list[tuple[str, np.ndarray]]] = {}
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        for name, channel in f.channels().items():
+            layer, _, ch = name.rpartition(".")
+            groups.setdefault(layer or "RGB", []).append((ch, np.asarray(channel.pixels)))
+    layers = {}
+    for layer, chans in groups.items():
+        chans.sort(key=lambda c: _CHANNEL_ORDER.get(c[0], len(_CHANNEL_ORDER)))
+        arrays = [a for _, a in chans]
+        layers[layer] = arrays[0] if len(arrays) == 1 else np.stack(arrays, axis=-1)
+    return layers
+
+
+def _output_format(path: Path) -> str:
+    ext = path.suffix.lower()
+    if ext not in LDR_FORMATS + HDR_FORMATS:
+        raise UsageError(f"{path}: unknown output format {ext or '(no extension)'} "
+                         f"(use {FORMAT_NAMES})")
+    return ext
+
+
+def check_folder(path, what: str = "image") -> Path:
+    """The folder ``path`` goes into, or an error saying why it cannot."""
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    if folder.exists() and not folder.is_dir():
+        raise UsageError(f"{path}: {folder} is a file, not a folder (choose another path for "
+                         f"the {what})")
+    if not folder.is_dir():
+        raise UsageError(f"{path}: the folder {folder} for the {what} does not exist "
+                         f"(create it first)")
+    return folder
+
+
+def check_output(path) -> Path:
+    """Fail early (before a render) if ``path`` cannot be written: unknown extension, a
+    missing or read-only folder, a folder in the way."""
+    path = Path(path)
+    ext = _output_format(path)
+    if ext == ".exr":
+        try:
+            import OpenEXR  # noqa: F401
+        except ImportError:
+            raise UsageError(f"{path}: EXR output needs the OpenEXR package: "
+                             f"pip install 'glrender[exr]' (or write .pfm)") from None
+    folder = check_folder(path)
+    if path.is_dir():
+        raise UsageError(f"{path}: is a folder, expected an image file name")
+    try:  # a real probe: permissions, read-only file systems, quotas
+        fd, probe = tempfile.mkstemp(prefix=".glrender-probe-", dir=folder)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise UsageError(f"{path}: cannot write to the folder {folder} "
+                         f"({exc.strerror or exc}); choose another -o") from None
+    return path
+
+
+def atomic_write(path, write) -> None:
+    """``write(tmp)`` into a temporary file beside ``path``, then rename it over ``path``:
+    an interrupted or failed write never leaves a broken file."""
+    path = Path(path)
+    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part" + path.suffix,
+                                dir=path.parent if str(path.parent) else ".")
+    os.close(fd)
+    tmp = Path(name)
+    try:
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # as open() would create it, not mkstemp's 0600
+        write(tmp)
+        with open(tmp, "rb+") as f:
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except OSError as exc:
+        raise UsageError(f"{path}: cannot write ({exc.strerror or exc})") from None
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def write_image(path, image: np.ndarray, aovs: dict | None = None, exposure: float = 0.0,
+                half: bool = False, curve: str = "clamp", srgb: bool = True) -> None:
+    """Write by extension, atomically: .png/.jpg (exposure, tone curve, sRGB: 8-bit),
+    .exr (float32, or half, with ``aovs`` as extra layers), .pfm, .hdr (Radiance RGBE),
+    .npy (float32). Only EXR stores ``aovs``; other formats write RGB alone."""
+    path = Path(path)
+    ext = _output_format(path)
+    check_folder(path)
+    image = np.asarray(image)
+    rgb = image[..., :3] if image.ndim == 3 else image
+
+    def write(tmp: Path) -> None:
+        if ext in LDR_FORMATS:
+            from PIL import Image
+
+            pixels = tonemap(rgb, exposure, curve, srgb)
+            if ext == ".png":
+                Image.fromarray(pixels).save(tmp, format="PNG")
+            else:
+                Image.fromarray(pixels).save(tmp, format="JPEG", quality=95)
+        elif ext == ".pfm":
+            write_pfm(tmp, rgb)
+        elif ext == ".npy":
+            with open(tmp, "wb") as f:
+                np.save(f, np.asarray(rgb, np.float32))
+        elif ext == ".hdr":
+            from .radiance_hdr import write_hdr
+
+            write_hdr(tmp, rgb)
+        else:
+            write_exr(tmp, image, aovs=aovs, half=half)
+
+    atomic_write(path, write)
 
 
 def read_image(path) -> np.ndarray:
