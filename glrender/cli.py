@@ -1,25 +1,79 @@
-"""The glrender command line: argument parsing only; the work lives in the package.
+"""The glrender command line: argument parsing, error reporting and signals.
 
-Every user error is a :class:`~glrender.errors.GlrenderError`, printed on one line
-to stderr with exit code 2. Ctrl-C exits with 130.
+Every user error is a :class:`~glrender.errors.GlrenderError` (a bad option value
+included), printed as one line on stderr with exit code 2; ``--debug`` adds the
+traceback. SIGINT and SIGTERM during a render stop it after the current dispatch,
+write what was rendered and a checkpoint, and exit with 130 and 143; elsewhere they
+stop at once with the same codes. The render command itself lives in
+:mod:`glrender.render.command`.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import signal
 import sys
+import warnings
 
 from .errors import GlrenderError
 
 
-def _add_device(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--device", default=None, metavar="auto|cpu|gpu|N",
-                        help="EGL device: auto (a GPU if present, else llvmpipe), cpu, gpu or an "
-                             "index (default: $GLRENDER_DEVICE or auto)")
-    parser.add_argument("--threads", type=int, default=None, metavar="N",
-                        help="llvmpipe worker threads (default: all cores; $LP_NUM_THREADS)")
+class Interrupted(KeyboardInterrupt):
+    """A stop signal (SIGINT or SIGTERM) that ends the command at once."""
+
+    def __init__(self, signum: int):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
 
 
+class StopSignals:
+    """SIGINT and SIGTERM handlers for the whole command.
+
+    Outside :meth:`deferred` a signal raises :class:`Interrupted` at once (nothing is
+    lost during loading and compiling). Inside it, the first signal only sets
+    :attr:`received` (the render loop asks :meth:`requested` between dispatches and
+    stops cleanly); a second one raises :class:`Interrupted` (quit without saving).
+    """
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self):
+        self.received: int | None = None
+        self._defer = False
+        self._saved = {}
+
+    def install(self) -> "StopSignals":
+        for signum in self.SIGNALS:
+            self._saved[signum] = signal.signal(signum, self._handle)
+        return self
+
+    def uninstall(self) -> None:
+        for signum, handler in self._saved.items():
+            signal.signal(signum, handler)
+        self._saved = {}
+
+    def _handle(self, signum, frame):
+        first = self.received is None
+        if first:
+            self.received = signum
+        if not (self._defer and first):
+            raise Interrupted(signum)
+
+    def requested(self) -> bool:
+        return self.received is not None
+
+    def defer(self, on: bool = True) -> None:
+        self._defer = on
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, with usage errors on one line (exit 2) like every other error."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+# -- glrender info --------------------------------------------------------------------------
 def cmd_info(args) -> int:
     from .gl import egl
     from .gl.context import create_context
@@ -52,95 +106,139 @@ def cmd_info(args) -> int:
     return 0
 
 
-class _Progress:
-    """A one-line progress bar on stderr: spp done/total, samples/s, elapsed, ETA."""
+# -- glrender sampling ----------------------------------------------------------------------
+def cmd_sampling(args) -> int:
+    from pathlib import Path
 
-    def __init__(self, total: int, pixels: int, enabled: bool):
-        import time
-
-        self.total, self.pixels, self.enabled = total, pixels, enabled and sys.stderr.isatty()
-        self.start = time.perf_counter()
-        self._time = time.perf_counter
-
-    def __call__(self, done: int, total: int) -> None:
-        if not self.enabled:
-            return
-        elapsed = self._time() - self.start
-        rate = done * self.pixels / max(elapsed, 1e-9)
-        eta = (total - done) * elapsed / max(done, 1)
-        width = 30
-        filled = int(width * done / max(total, 1))
-        sys.stderr.write(f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{total} spp  "
-                         f"{rate / 1e6:.2f} Msamples/s  {elapsed:.1f}s  ETA {eta:.1f}s ")
-        sys.stderr.flush()
-
-    def close(self) -> None:
-        if self.enabled:
-            sys.stderr.write("\n")
-
-
-def cmd_render(args) -> int:
-    import time
-
-    from . import load
     from .errors import UsageError
-    from .film.io import HDR_FORMATS, LDR_FORMATS
-    from .gl.context import create_context
-    from .render.renderer import Renderer, settings_from_scene
+    from .sampling.plots import write_sampling_plots
 
-    output = args.output
-    ext = "." + output.rsplit(".", 1)[-1].lower() if "." in output else ""
-    if ext not in LDR_FORMATS + HDR_FORMATS or ext == ".hdr":
-        raise UsageError(f"{output}: unsupported output format {ext or '(none)'} "
-                         f"(expected .png, .jpg, .exr, .pfm or .npy)")
-    scene = load(args.scene)
-    if args.width is not None:
-        scene.film.width = args.width
-    if args.height is not None:
-        scene.film.height = args.height
-    scene.film.__post_init__()
-    settings = settings_from_scene(scene, integrator=args.integrator, spp=args.spp, seed=args.seed,
-                                   sampler=args.sampler, max_depth=args.max_depth,
-                                   strategy=args.strategy, aovs=bool(args.aov))
-    ctx = create_context(args.device, threads=args.threads)
-    t0 = time.perf_counter()
-    renderer = Renderer(scene, settings, ctx=ctx)
-    setup = time.perf_counter() - t0
-    progress = _Progress(settings.sampler.spp, scene.film.width * scene.film.height, not args.quiet)
-    t1 = time.perf_counter()
-    try:
-        renderer.step(settings.sampler.spp, callback=progress)
-    finally:
-        progress.close()
-    seconds = time.perf_counter() - t1
-    film = renderer.film()
-    film.save(output)
-    paths = film.spp * scene.film.width * scene.film.height
-    stats = {"scene": str(args.scene), "output": output, "spp": film.spp,
-             "width": scene.film.width, "height": scene.film.height,
-             "integrator": settings.integrator.kind, "sampler": settings.sampler.kind,
-             "seed": settings.sampler.seed, "max_depth": settings.integrator.max_depth,
-             "render_seconds": seconds, "setup_seconds": setup,
-             "mpaths_per_second": paths / seconds / 1e6 if seconds > 0 else None,
-             "nonfinite_samples": film.nonfinite_total, "mean": [float(v) for v in film.mean.reshape(-1, 3).mean(0)],
-             "device": ctx.renderer, "gl_version": ctx.gl.info["GL_VERSION"]}
-    if args.stats:
-        with open(args.stats, "w") as f:
-            json.dump(stats, f, indent=2)
-    if not args.quiet:
-        print(f"{film.spp} spp in {seconds:.2f} s ({stats['mpaths_per_second']:.2f} Mpaths/s), "
-              f"{film.nonfinite_total} non-finite samples dropped -> {output}", file=sys.stderr)
-    renderer.release()
+    if args.samples < 1000:
+        raise UsageError(f"--samples {args.samples}: the chi-square tests need at least 1000")
+    write_sampling_plots(args.out, seed=args.seed, sample_count=args.samples)
+    print(Path(args.out).resolve())
     return 0
 
 
+# -- glrender render ------------------------------------------------------------------------
+def cmd_render(args) -> int:
+    from .render.command import run_render
+
+    return run_render(args, args.signals)
+
+
+RENDER_DESCRIPTION = """\
+Render SCENE to an image. Options override the scene file's settings; -D fills the
+scene's $parameters. The output format follows the extension of -o:
+  .exr  float32 (or --half) with a variance layer and the --aov layers (OpenEXR package)
+  .pfm  float32 RGB; .hdr  Radiance RGBE; .npy  float32 (H, W, 3) numpy array
+  .png, .jpg  8-bit: --exposure, then --tonemap, then sRGB (unless --no-srgb)
+AOVs of formats without layers go beside the image as OUT-STEM.NAME.pfm (.npy for .npy).
+
+The render runs in passes of a few samples per pixel. --time stops at a budget in
+whole passes. Ctrl-C (SIGINT) or SIGTERM stops after the current dispatch (well under
+a second), writes the image so far and a checkpoint, and exits with 130 or 143; a
+second Ctrl-C quits without writing. --resume continues from the checkpoint: the
+final image is bitwise the one an uninterrupted render gives (same device); options
+not given are taken from the checkpoint, and a checkpoint of another scene or other
+settings is refused."""
+
+RENDER_EPILOG = """\
+examples:
+  glrender render scenes/cornell-box/scene.toml -o cornell.exr --spp 256 --aov albedo,normal
+  glrender render scene.toml -o out.png --time 60 --tonemap aces --exposure 1
+  glrender render scene.toml -o out.exr --spp 4096 --checkpoint-every 300
+  glrender render scene.toml -o out.exr --resume        # after Ctrl-C
+  glrender render scene.xml -D roughness=0.2 -o rough.exr
+
+exit codes: 0 done, 2 error (one line on stderr; --debug adds the traceback),
+130 stopped by SIGINT, 143 stopped by SIGTERM."""
+
+
+def _add_device(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--device", default=None, metavar="auto|cpu|gpu|N",
+                        help="EGL device: auto (a GPU if present, else llvmpipe), cpu, gpu or an "
+                             "index from `glrender info` (default: $GLRENDER_DEVICE or auto)")
+    parser.add_argument("--threads", type=int, default=None, metavar="N",
+                        help="llvmpipe worker threads (default: all cores; $LP_NUM_THREADS)")
+
+
+def _add_render(sub) -> None:
+    from .film.tonemap import TONE_CURVES
+    from .render.command import AOV_NAMES
+    from .render.params import STRATEGIES
+    from .scene.model import INTEGRATORS, SAMPLER_KINDS
+
+    p = sub.add_parser("render", help="render a scene file to an image",
+                       description=RENDER_DESCRIPTION, epilog=RENDER_EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("scene", help="scene file")
+    p.add_argument("-o", "--output", default="render.png", metavar="OUT",
+                   help="output image; the extension picks the format (default: render.png)")
+    g = p.add_argument_group("samples")
+    g.add_argument("--spp", type=int, default=None, metavar="N",
+                   help="samples per pixel (default: the scene's)")
+    g.add_argument("--time", type=float, default=None, metavar="SECONDS",
+                   help="render for this long, in whole passes (with --spp: whichever ends first)")
+    g.add_argument("--sampler", choices=SAMPLER_KINDS, default=None,
+                   help="sample generator (default: the scene's)")
+    g.add_argument("--seed", type=int, default=None, metavar="S",
+                   help="seed: the same seed gives the same image")
+    g = p.add_argument_group("light transport")
+    g.add_argument("--integrator", choices=INTEGRATORS, default=None,
+                   help="path tracer, direct lighting or ambient occlusion (default: the scene's)")
+    g.add_argument("--strategy", choices=tuple(STRATEGIES), default=None,
+                   help="direct-lighting strategy: light or BSDF sampling alone, or both with "
+                        "the balance or power heuristic")
+    g.add_argument("--max-depth", type=int, default=None, metavar="N",
+                   help="path segments: 1 = emitters seen directly, 2 = direct light, "
+                        "-1 = unbounded")
+    g = p.add_argument_group("scene")
+    g.add_argument("--width", type=int, default=None, metavar="W", help="image width in pixels")
+    g.add_argument("--height", type=int, default=None, metavar="H", help="image height in pixels")
+    g.add_argument("-D", dest="define", action="append", default=[], metavar="KEY=VALUE",
+                   help="set the scene parameter $KEY (repeatable)")
+    g = p.add_argument_group("outputs")
+    g.add_argument("--aov", default=None, metavar=",".join(AOV_NAMES),
+                   help="also write these arbitrary output variables: first-hit albedo, "
+                        "normal and depth, and the per-sample variance")
+    g.add_argument("--exposure", type=float, default=0.0, metavar="STOPS",
+                   help="PNG/JPEG: scale by 2^STOPS before the tone curve (default 0)")
+    g.add_argument("--tonemap", choices=TONE_CURVES, default="clamp",
+                   help="PNG/JPEG tone curve: clamp (default), filmic (Hable) or aces (Hill's fit)")
+    g.add_argument("--srgb", action=argparse.BooleanOptionalAction, default=True,
+                   help="PNG/JPEG: sRGB encoding (default), or linear 8-bit with --no-srgb")
+    g.add_argument("--half", action="store_true", help="EXR: half floats instead of float32")
+    g.add_argument("--stats", default=None, metavar="FILE.json",
+                   help="write statistics: device, scene hash, seed, spp, times, samples/s, "
+                        "non-finite samples, mean relative standard error")
+    g = p.add_argument_group("checkpoints")
+    g.add_argument("--checkpoint", default=None, metavar="FILE",
+                   help="checkpoint file (default: OUT.ckpt); written at exit when given")
+    g.add_argument("--checkpoint-every", type=float, default=None, metavar="SECONDS",
+                   help="write a checkpoint every SECONDS of rendering and at exit")
+    g.add_argument("--resume", action="store_true",
+                   help="continue from the checkpoint (bitwise the same final image)")
+    g = p.add_argument_group("device and messages")
+    _add_device(g)
+    g.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    g.add_argument("--debug", action="store_true", help="show the traceback of errors")
+    p.set_defaults(func=cmd_render)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    from . import __version__
+
+    parser = _Parser(
         prog="glrender",
         description="A physically based renderer whose Monte Carlo core runs as GLSL compute "
-                    "shaders (Mesa llvmpipe or a GPU, through EGL).")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+                    "shaders (Mesa llvmpipe or a GPU, through EGL).",
+        epilog="`glrender COMMAND --help` describes each command's options.")
+    parser.add_argument("--version", action="version", version=f"glrender {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
+
+    _add_render(sub)
 
     p = sub.add_parser("info", help="list EGL devices, the chosen one and its limits",
                        description="List the EGL devices, the chosen device, GL_RENDERER, "
@@ -149,44 +247,6 @@ def build_parser() -> argparse.ArgumentParser:
     _add_device(p)
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.set_defaults(func=cmd_info)
-
-    p = sub.add_parser("render", help="render a scene file to an image",
-                       description="Render SCENE to an image. Options override the scene "
-                                   "file's settings. The output format follows the extension: "
-                                   ".png/.jpg (sRGB, tonemapped by clamping), .exr (float, with "
-                                   "AOV layers), .pfm, .npy (float32 linear RGB).")
-    p.add_argument("scene", help="scene file (.toml)")
-    p.add_argument("-o", "--output", default="render.png", help="output image (default render.png)")
-    p.add_argument("--spp", type=int, default=None, help="samples per pixel")
-    p.add_argument("--integrator", choices=("path", "direct", "ao"), default=None)
-    p.add_argument("--sampler", choices=("independent", "stratified", "sobol"), default=None)
-    p.add_argument("--strategy", choices=("light", "bsdf", "mis-balance", "mis-power"), default=None,
-                   help="direct-lighting strategy / MIS heuristic")
-    p.add_argument("--max-depth", type=int, default=None,
-                   help="path segments: 1 = emitters seen directly, 2 = direct light, -1 = unbounded")
-    p.add_argument("--width", type=int, default=None)
-    p.add_argument("--height", type=int, default=None)
-    p.add_argument("--seed", type=int, default=None)
-    p.add_argument("--aov", default=None, metavar="albedo,normal,depth",
-                   help="also accumulate first-hit AOVs (written as EXR layers)")
-    p.add_argument("--stats", default=None, metavar="FILE.json", help="write render statistics")
-    p.add_argument("--quiet", action="store_true", help="print nothing but errors")
-    p.add_argument("--debug", action="store_true", help="show full error messages")
-    _add_device(p)
-    p.set_defaults(func=cmd_render)
-
-    # -- glrender sampling: pictures of every warp and their chi-square table ---------------
-    def cmd_sampling(args) -> int:
-        from pathlib import Path
-
-        from .errors import UsageError
-        from .sampling.plots import write_sampling_plots
-
-        if args.samples < 1000:
-            raise UsageError(f"--samples {args.samples}: the chi-square tests need at least 1000")
-        write_sampling_plots(args.out, seed=args.seed, sample_count=args.samples)
-        print(Path(args.out).resolve())
-        return 0
 
     p = sub.add_parser("sampling", help="plot the sampling warps and tabulate their chi-square tests",
                        description="Write one PNG per 2D warp of the GLSL sampling library (the "
@@ -201,22 +261,47 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    print(f"glrender: warning: {message}", file=sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    debug = getattr(args, "debug", False)
+    if getattr(args, "quiet", False):
+        warnings.simplefilter("ignore")
+    elif not debug:
+        warnings.showwarning = _show_warning
+    signals = args.signals = StopSignals().install()
     try:
         return int(args.func(args) or 0)
     except GlrenderError as exc:
-        message = str(exc) if getattr(args, "debug", False) else str(exc).splitlines()[0]
+        if debug:
+            import traceback
+
+            traceback.print_exc()
+        message = str(exc) if debug else (str(exc).splitlines() or [type(exc).__name__])[0]
         print(f"glrender: error: {message}", file=sys.stderr)
         return exc.exit_code
-    except KeyboardInterrupt:
-        print("glrender: interrupted", file=sys.stderr)
-        return 130
+    except MemoryError:
+        if debug:
+            import traceback
+
+            traceback.print_exc()
+        print("glrender: error: out of memory: render fewer pixels (--width/--height) or "
+              "without --aov", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt as exc:
+        signum = getattr(exc, "signum", signal.SIGINT)
+        print(f"glrender: interrupted ({signal.Signals(signum).name})", file=sys.stderr)
+        return 128 + signum
     except BrokenPipeError:  # output piped into `head` and the like
         import os
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+    finally:
+        signals.uninstall()
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,0 +1,124 @@
+"""Checkpoints: a render's accumulation on disk, to continue it after an interrupt.
+
+A checkpoint holds what :meth:`Renderer.state` returns (per-pixel Welford mean and M2,
+sample and non-finite counts, first-hit AOVs, the next sample index) plus a JSON record:
+the renderer's fingerprint (the hash of the scene as rendered and every setting that
+decides a sample), the settings themselves (to explain a refusal), the target sample
+count and where the render came from. Continuing it with :meth:`Renderer.restore` gives
+the image of an uninterrupted render, bitwise, on the same device.
+
+The file is an uncompressed ``.npz`` (numpy's zip of arrays, read with
+``allow_pickle=False``: nothing in it is executed) written atomically.
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import UsageError
+from ..film.io import atomic_write
+
+FORMAT = "glrender-checkpoint"
+VERSION = 1
+ARRAYS = ("mean", "m2", "aov")
+
+
+@dataclass
+class Checkpoint:
+    """A loaded checkpoint: ``meta`` (the JSON record) and ``state`` (for ``restore``)."""
+
+    path: Path
+    meta: dict
+    state: dict
+
+    @property
+    def spp_done(self) -> int:
+        return int(self.meta["spp_done"])
+
+    @property
+    def fingerprint(self) -> str:
+        return self.meta["fingerprint"]
+
+    @property
+    def settings(self) -> dict:
+        return self.meta["settings"]
+
+
+def settings_record(renderer) -> dict:
+    """The settings that decide a renderer's samples, as plain JSON values."""
+    s = renderer.settings
+    return {"width": renderer.width, "height": renderer.height,
+            "integrator": _json_safe(asdict(s.integrator)), "sampler": asdict(s.sampler),
+            "aovs": bool(s.aovs)}
+
+
+def save_checkpoint(path, renderer, **info) -> None:
+    """Write ``renderer``'s accumulation (whole passes) and its record to ``path``,
+    atomically. ``info`` adds JSON fields to the record (target spp, scene, ...)."""
+    state = renderer.state()
+    meta = {"format": FORMAT, "version": VERSION, "fingerprint": state["fingerprint"],
+            "spp_done": int(state["spp_done"]), "settings": settings_record(renderer), **info}
+
+    def write(tmp: Path) -> None:
+        with open(tmp, "wb") as f:
+            np.savez(f, meta=np.array(json.dumps(meta)),
+                     **{name: np.ascontiguousarray(state[name], np.float32) for name in ARRAYS})
+
+    atomic_write(path, write)
+
+
+def load_checkpoint(path) -> Checkpoint:
+    """Read a checkpoint; anything else is refused with a message naming the file."""
+    path = Path(path)
+    if not path.is_file():
+        raise UsageError(f"{path}: no checkpoint to resume (render without --resume to start, "
+                         f"or name the file with --checkpoint)")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            meta = json.loads(str(data["meta"][()]))
+            arrays = {name: np.array(data[name], np.float32) for name in ARRAYS}
+    except (OSError, ValueError, KeyError, EOFError) as exc:
+        raise UsageError(f"{path}: not a readable glrender checkpoint ({exc})") from None
+    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+        raise UsageError(f"{path}: not a glrender checkpoint")
+    if meta.get("version") != VERSION:
+        raise UsageError(f"{path}: checkpoint version {meta.get('version')} is not supported "
+                         f"(this glrender reads version {VERSION}); render without --resume")
+    state = {"fingerprint": meta["fingerprint"], "spp_done": int(meta["spp_done"]),
+             "width": meta["settings"]["width"], "height": meta["settings"]["height"], **arrays}
+    return Checkpoint(path, meta, state)
+
+
+def check_resumable(checkpoint: Checkpoint, renderer) -> None:
+    """Refuse, with the settings that differ, a checkpoint of another scene or settings."""
+    if checkpoint.fingerprint == renderer.fingerprint():
+        return
+    then, now = _flatten(checkpoint.settings), _flatten(settings_record(renderer))
+    differ = [f"{key} {then.get(key)!r} there, {now.get(key)!r} here"
+              for key in sorted(set(then) | set(now)) if then.get(key) != now.get(key)]
+    fix = "resume with the same options, or render without --resume to start afresh"
+    if differ:
+        raise UsageError(f"{checkpoint.path}: the checkpoint belongs to a render with other "
+                         f"settings ({'; '.join(differ)}): {fix}")
+    raise UsageError(f"{checkpoint.path}: the checkpoint belongs to a different scene (same "
+                     f"settings, but the scene or a file it uses changed since): {fix}")
+
+
+def _flatten(record: dict, prefix: str = "") -> dict:
+    flat = {}
+    for key, value in record.items():
+        if isinstance(value, dict):
+            flat.update(_flatten(value, f"{prefix}{key}."))
+        else:
+            flat[prefix + key] = value
+    return flat
+
+
+def _json_safe(record: dict) -> dict:
+    """Infinite floats as strings, so the record is strict JSON."""
+    return {k: (repr(v) if isinstance(v, float) and not math.isfinite(v) else v)
+            for k, v in record.items()}

@@ -1,0 +1,319 @@
+"""The ``glrender render`` command: options -> scene, renderer, run, outputs, checkpoint, stats.
+
+Everything a user can get wrong is checked before the render starts (output format and
+folder, scene file, option values, memory), so a mistake costs no render time.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import signal
+import sys
+import time
+from contextlib import contextmanager
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import UsageError
+
+AOV_NAMES = ("albedo", "normal", "depth", "variance")
+FIRST_HIT_AOVS = ("albedo", "normal", "depth")
+# sample indices are 32-bit on the device: the open-ended target of a time budget
+SPP_LIMIT = 1 << 31
+# the options a checkpoint remembers; --resume takes those not given again
+RESUMABLE = ("spp", "seed", "sampler", "integrator", "strategy", "max_depth", "width", "height")
+
+
+def parse_defines(items: list[str]) -> dict[str, str]:
+    """``-D key=value`` pairs -> {key: value} (values stay strings; the loader types them)."""
+    params = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        key = key.strip()
+        if not sep or not key.isidentifier():
+            raise UsageError(f"-D {item}: expected KEY=VALUE with KEY a name (letters, digits, _)")
+        params[key] = value
+    return params
+
+
+def parse_aovs(text: str | None) -> list[str]:
+    if text is None:
+        return []
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    unknown = [n for n in names if n not in AOV_NAMES]
+    if unknown or not names:
+        raise UsageError(f"--aov {text}: unknown AOV {', '.join(unknown) or '(none)'} "
+                         f"(choose from {','.join(AOV_NAMES)})")
+    return list(dict.fromkeys(names))
+
+
+def _check_options(args) -> None:
+    def need(name, value, ok, what):
+        if value is not None and not ok(value):
+            raise UsageError(f"{name} {value}: expected {what}")
+
+    need("--spp", args.spp, lambda v: 1 <= v < SPP_LIMIT, "a positive number of samples per pixel")
+    need("--time", args.time, lambda v: math.isfinite(v) and v > 0, "a positive number of seconds")
+    need("--checkpoint-every", args.checkpoint_every, lambda v: math.isfinite(v) and v > 0,
+         "a positive number of seconds")
+    need("--width", args.width, lambda v: 1 <= v <= 65536, "pixels in 1..65536")
+    need("--height", args.height, lambda v: 1 <= v <= 65536, "pixels in 1..65536")
+    need("--threads", args.threads, lambda v: v >= 1, "a positive number of threads")
+    need("--exposure", args.exposure, math.isfinite, "a finite number of stops")
+    need("--seed", args.seed, lambda v: 0 <= v < 1 << 32, "an integer in 0..2^32-1")
+    need("--max-depth", args.max_depth, lambda v: v == -1 or v >= 1,
+         "-1 (unbounded) or a number of path segments >= 1")
+
+
+def _check_scene_file(path: Path) -> None:
+    if path.is_dir():
+        hint = f" (e.g. {path / 'scene.toml'})" if (path / "scene.toml").is_file() else ""
+        raise UsageError(f"{path}: is a folder; give the scene file inside it{hint}")
+    if not path.exists():
+        raise UsageError(f"{path}: no such scene file (check the path)")
+    if not os.access(path, os.R_OK):
+        raise UsageError(f"{path}: cannot read the scene file (permission denied)")
+
+
+def _available_memory() -> int | None:
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return None
+
+
+def _check_memory(width: int, height: int, aovs: bool, on_host_device: bool) -> None:
+    """Refuse images whose buffers cannot fit, before allocating them."""
+    pixels = width * height
+    device = pixels * (16 + 16 + (32 if aovs else 0)) * 2   # accumulators and the undo copy
+    host = pixels * (32 + 76 + 24)                         # read-back, Film arrays, encoding
+    need = host + (device if on_host_device else 0)
+    have = _available_memory()
+    if have is not None and need > have:
+        raise UsageError(f"a {width}x{height} image needs about {need / 2**30:.1f} GiB of memory "
+                         f"for its buffers, more than the {have / 2**30:.1f} GiB available: render "
+                         f"fewer pixels (--width/--height){' or without --aov' if aovs else ''}")
+
+
+class _Timer(dict):
+    @contextmanager
+    def __call__(self, name: str):
+        t0 = time.perf_counter()
+        try:
+            yield
+        finally:
+            self[name] = self.get(name, 0.0) + time.perf_counter() - t0
+
+
+def _aov_sidecar(output: Path, name: str) -> Path:
+    ext = ".npy" if output.suffix.lower() == ".npy" else ".pfm"
+    return output.with_name(f"{output.stem}.{name}{ext}")
+
+
+def _write_outputs(film, output: Path, aov_names: list[str], args) -> list[str]:
+    from ..film.io import write_image
+
+    written = [str(output)]
+    if output.suffix.lower() == ".exr":
+        layers = {name: film.aov(name) for name in aov_names if name != "variance"}
+        layers["variance"] = film.variance
+        write_image(output, film.mean, aovs=layers, half=args.half)
+        return written
+    write_image(output, film.mean, exposure=args.exposure, curve=args.tonemap, srgb=args.srgb)
+    for name in aov_names:
+        side = _aov_sidecar(output, name)
+        write_image(side, film.aov(name))
+        written.append(str(side))
+    return written
+
+
+def _mean_relative_stderr(film) -> float | None:
+    lit = film.mean > 0
+    if not lit.any():
+        return None
+    return float(np.mean(film.stderr[lit] / film.mean[lit]))
+
+
+def _write_stats(path: Path, stats: dict) -> None:
+    from ..film.io import atomic_write
+
+    def write(tmp: Path) -> None:
+        tmp.write_text(json.dumps(stats, indent=2) + "\n")
+
+    atomic_write(path, write)
+
+
+def run_render(args, signals) -> int:
+    """Run ``glrender render`` with parsed ``args``; ``signals`` is the command's
+    :class:`~glrender.cli.StopSignals`. Returns the exit code."""
+    import moderngl
+
+    from .. import __version__, load
+    from ..film.io import check_folder, check_output
+    from ..gl.context import create_context
+    from .checkpoint import check_resumable, load_checkpoint, save_checkpoint
+    from .job import RenderJob
+    from .progress import ProgressBar
+    from .renderer import Renderer, settings_from_scene
+
+    say = (lambda *a: None) if args.quiet else (lambda text: print(text, file=sys.stderr))
+    timer = _Timer()
+    t_start = time.perf_counter()
+
+    # -- options, files, checkpoint: everything checked before any work --------------------
+    _check_options(args)
+    params = parse_defines(args.define)
+    aov_names = parse_aovs(args.aov)
+    output = check_output(args.output)
+    scene_path = Path(args.scene)
+    _check_scene_file(scene_path)
+    ckpt_path = Path(args.checkpoint) if args.checkpoint else Path(str(output) + ".ckpt")
+    check_folder(ckpt_path, "checkpoint")
+    if args.stats:
+        check_folder(args.stats, "statistics")
+    keep_checkpoint = bool(args.checkpoint or args.checkpoint_every or args.resume)
+    ckpt = load_checkpoint(ckpt_path) if args.resume else None
+    options = {k: getattr(args, k) for k in RESUMABLE if getattr(args, k) is not None}
+    if ckpt is not None:
+        saved = ckpt.meta.get("options", {})
+        options = {**{k: v for k, v in saved.items() if k in RESUMABLE}, **options}
+        if not args.define:
+            params = dict(ckpt.meta.get("params", {}))
+        if args.aov is None:
+            aov_names = [n for n in ckpt.meta.get("aov_names", []) if n in AOV_NAMES]
+
+    # -- scene and renderer ------------------------------------------------------------------
+    with timer("load"):
+        scene = load(scene_path, **params)
+    if "width" in options or "height" in options:
+        scene.film = replace(scene.film, width=options.get("width", scene.film.width),
+                             height=options.get("height", scene.film.height))
+    first_hit = any(n in FIRST_HIT_AOVS for n in aov_names)
+    settings = settings_from_scene(scene, integrator=options.get("integrator"),
+                                   spp=options.get("spp"), seed=options.get("seed"),
+                                   sampler=options.get("sampler"),
+                                   max_depth=options.get("max_depth"),
+                                   strategy=options.get("strategy"), aovs=first_hit)
+    if "spp" in options or args.time is None:
+        target = settings.sampler.spp
+    else:
+        target = SPP_LIMIT
+    width, height = scene.film.width, scene.film.height
+    with timer("context"):
+        ctx = create_context(args.device, threads=args.threads)
+    _check_memory(width, height, first_hit, ctx.is_llvmpipe)
+    try:
+        renderer = Renderer(scene, settings, ctx=ctx)
+    except moderngl.Error as exc:
+        raise UsageError(f"cannot allocate the device buffers of a {width}x{height} image "
+                         f"({str(exc).strip()}): render fewer pixels (--width/--height)") from exc
+    timer.update(renderer.timings)
+    if ckpt is not None:
+        check_resumable(ckpt, renderer)
+        renderer.restore(ckpt.state)
+        if ckpt.meta.get("device") != ctx.renderer:
+            import warnings
+
+            warnings.warn(f"{ckpt_path} was rendered on {ckpt.meta.get('device')!r}, this run on "
+                          f"{ctx.renderer!r}: the image will not be bitwise the same as one "
+                          f"uninterrupted render", stacklevel=1)
+    spp_resumed = renderer.spp_done if ckpt is not None else None
+    record = {"options": options, "params": params, "aov_names": aov_names,
+              "scene": str(scene_path.resolve()), "device": ctx.renderer,
+              "glrender": __version__,
+              "spp_target": None if target == SPP_LIMIT else target}
+
+    def write_checkpoint():
+        with timer("checkpoint"):
+            save_checkpoint(ckpt_path, renderer, **record)
+
+    # -- render: from here on a stop signal ends the run cleanly -----------------------------
+    signals.defer(True)
+    budget = f", at most {args.time:g} s" if args.time is not None else ""
+    goal = f"{target} spp" if target != SPP_LIMIT else "open-ended spp"
+    say(f"glrender: rendering {scene_path} ({width}x{height}, {goal}{budget}, "
+        f"{settings.integrator.kind}, {settings.sampler.kind} sampler, seed "
+        f"{settings.sampler.seed}) on {ctx.renderer}")
+    if spp_resumed is not None:
+        say(f"glrender: resuming {ckpt_path} at {spp_resumed} spp")
+    bar = None
+    if not args.quiet and sys.stderr.isatty():
+        bar = ProgressBar(sys.stderr, pixels=width * height, spp_start=renderer.spp_done,
+                          spp_target=None if target == SPP_LIMIT else target, seconds=args.time)
+        bar.update(renderer.spp_done, 0.0, force=True)
+    job = RenderJob(renderer, target, seconds=args.time, stop=signals.requested,
+                    checkpoint=write_checkpoint if keep_checkpoint else None,
+                    checkpoint_every=args.checkpoint_every,
+                    progress=bar.update if bar is not None else None)
+    try:
+        result = job.run()
+        if bar is not None:
+            bar.update(renderer.spp_done, result.seconds, force=True)
+    finally:
+        if bar is not None:
+            bar.close()
+    timer["render"] = result.render_seconds
+
+    # -- outputs -----------------------------------------------------------------------------
+    film = renderer.film()
+    interrupted = result.stopped == "interrupted"
+    written, ckpt_written = [], None
+    if film.spp > 0:
+        with timer("write"):
+            written = _write_outputs(film, output, aov_names, args)
+        if interrupted or keep_checkpoint:
+            write_checkpoint()
+            ckpt_written = str(ckpt_path)
+    new_samples = (result.spp_done - result.spp_start) * width * height
+    rate = new_samples / result.render_seconds if result.render_seconds > 0 else None
+    timer["total"] = time.perf_counter() - t_start
+    stats = {
+        "glrender": __version__, "scene": str(scene_path), "params": params,
+        "output": str(output), "outputs": written, "checkpoint": ckpt_written,
+        "device": {"GL_RENDERER": ctx.renderer, "GL_VERSION": ctx.gl.info["GL_VERSION"],
+                   "index": ctx.device.index, "kind": ctx.device.kind},
+        "scene_hash": renderer.fingerprint(),
+        "width": width, "height": height, "integrator": settings.integrator.kind,
+        "strategy": settings.integrator.strategy, "max_depth": settings.integrator.max_depth,
+        "sampler": settings.sampler.kind, "seed": settings.sampler.seed,
+        "spp": film.spp, "spp_target": record["spp_target"], "spp_this_run": result.spp_done - result.spp_start,
+        "resumed_from_spp": spp_resumed, "time_budget": args.time,
+        "samples_per_pass": renderer.samples_per_pass, "passes": result.passes,
+        "pass_seconds_max": result.pass_seconds_max, "checkpoints_written": result.checkpoints,
+        "stopped": result.stopped,
+        "signal": signal.Signals(signals.received).name if interrupted else None,
+        "seconds": {k: timer.get(k, 0.0) for k in ("load", "context", "build", "compile", "render",
+                                                    "checkpoint", "write", "total")},
+        "samples_per_second": rate,
+        "nonfinite_samples": film.nonfinite_total,
+        "mean_relative_stderr": _mean_relative_stderr(film),
+        "stderr_is_upper_bound": settings.sampler.kind != "independent",
+        "mean": [float(v) for v in film.mean.reshape(-1, 3).mean(0)],
+    }
+    if args.stats:
+        _write_stats(Path(args.stats), stats)
+    renderer.release()
+
+    # -- summary -----------------------------------------------------------------------------
+    speed = f"{rate / 1e6:.2f} Mpaths/s" if rate else "no new samples"
+    if interrupted:
+        name = stats["signal"]
+        if film.spp == 0:
+            say(f"glrender: stopped by {name} before the first pass: nothing written")
+        else:
+            say(f"glrender: stopped by {name} at {film.spp} spp ({speed}, "
+                f"{film.nonfinite_total} non-finite samples): image -> {', '.join(written)}; "
+                f"checkpoint -> {ckpt_path} (continue with --resume)")
+        return 128 + signals.received
+    why = f" (time budget {args.time:g} s)" if result.stopped == "time" else ""
+    say(f"glrender: {film.spp} spp in {result.render_seconds:.2f} s{why} ({speed}), "
+        f"{film.nonfinite_total} non-finite samples -> {', '.join(written)}"
+        + (f"; checkpoint -> {ckpt_written}" if ckpt_written else ""))
+    return 0
