@@ -1,0 +1,126 @@
+"""OBJ + MTL: the own parser against known counts, its traps, the MTL mapping, bad input."""
+import math
+
+import numpy as np
+import pytest
+
+import glrender
+from glrender.errors import SceneError
+from glrender.scene import model as m
+from glrender.scene.loaders.obj import obj_material, phong_alpha, read_obj
+
+from conftest import SCENES
+
+MCGUIRE = SCENES / "cornellbox-mcguire-obj" / "CornellBox-Original.obj"
+
+
+def test01_mcguire_cornell_box_counts_and_bounds(caught):
+    # negative indices, tab-separated vertices, quads: trimesh reads 24 of 72 vertices
+    with caught as messages:
+        scene = glrender.load(MCGUIRE)
+    tris = sum(len(s.triangles) for s in scene.shapes)
+    assert tris == 36 and len(scene.shapes) == 8
+    lo = np.min([s.vertices.min(axis=0) for s in scene.shapes], axis=0)
+    hi = np.max([s.vertices.max(axis=0) for s in scene.shapes], axis=0)
+    np.testing.assert_allclose(lo, [-1.02, 0.0, -1.04], atol=1e-6)
+    np.testing.assert_allclose(hi, [1.0, 1.99, 0.99], atol=1e-6)
+    light = [s for s in scene.shapes if s.emission is not None]
+    assert len(light) == 1 and light[0].emission.radiance == (17.0, 12.0, 4.0)
+    kinds = {scene.materials[s.material].name: scene.materials[s.material].kind for s in scene.shapes}
+    assert kinds["shortBox"] == "roughconductor" and kinds["leftWall"] == "diffuse"
+    assert any("no camera" in w for w in messages)     # the default camera frames it
+
+
+def test02_relative_indices_polygons_and_groups(write):
+    path = write("a.obj", "o first\nv 0 0 0\nv\t1 0 0\nv 1 1 0  \nv 0 1 0\nf -4 -3 -2 -1\n"
+                          "o second\nv 0 0 1\nv 1 0 1\nv 0 1 1\nvt 0 0\nvt 1 0\nvt 0 1\n"
+                          "f -3/-3 -2/-2 -1/-1\n")
+    obj = read_obj(path)
+    assert len(obj.triangles) == 3
+    mesh = obj.merged()
+    assert len(mesh.triangles) == 3 and len(mesh.vertices) == 7
+    # a quad became a fan, and the second triangle uses the last three vertices
+    v = mesh.vertices[mesh.triangles]
+    np.testing.assert_allclose(v[2, :, 2], [1, 1, 1])
+    # uv flipped to Mitsuba's convention v' = 1 - v
+    second = mesh.uvs[mesh.triangles[2]]
+    np.testing.assert_allclose(second, [[0, 1], [1, 1], [0, 0]])
+
+
+def test03_missing_normals_are_angle_weighted(write):
+    # a tetrahedron corner: three faces meet at vertex 0 with different angles
+    path = write("t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\n")
+    mesh = read_obj(path).merged()
+    n0 = mesh.normals[np.argmin(np.linalg.norm(mesh.vertices, axis=1))]
+    np.testing.assert_allclose(n0, -np.ones(3) / math.sqrt(3), atol=1e-12)
+
+
+def test04_mtl_mapping(write):
+    write("tex.png", b"")
+    from PIL import Image
+
+    Image.fromarray(np.full((2, 2, 3), 128, np.uint8)).save(write("t.png", b""))
+    path = write("m.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl glass\nf 1 2 3\n")
+    write("m.mtl", "newmtl glass\nKd 0 0 0\nNi 1.33\nillum 7\n"
+                   "newmtl shiny\nKd 0.5 0.4 0.3\nKs 0.2 0.2 0.2\nNs 198\n"
+                   "newmtl metal\nKd 0 0 0\nKs 0.9 0.9 0.9\nNs 1000\n"
+                   "newmtl lamp\nKd 0.1 0.1 0.1\nKe 5 4 3\n"
+                   "newmtl wood\nKd 1 1 1\nmap_Kd -s 2 3 1 t.png\n")
+    mtl = read_obj(path).materials
+    glass, _ = obj_material(mtl["glass"], "glass")
+    assert glass.kind == "dielectric" and glass.int_ior == 1.33
+    shiny, _ = obj_material(mtl["shiny"], "shiny")
+    assert shiny.kind == "roughplastic" and shiny.alpha == pytest.approx((0.1, 0.1))   # sqrt(2 / 200)
+    metal, _ = obj_material(mtl["metal"], "metal")
+    assert metal.kind == "roughconductor" and metal.alpha[0] == pytest.approx(phong_alpha(1000))
+    _, emission = obj_material(mtl["lamp"], "lamp")
+    assert emission.radiance == (5.0, 4.0, 3.0)
+    wood, _ = obj_material(mtl["wood"], "wood")
+    tex = wood.reflectance
+    assert isinstance(tex, m.Texture) and tex.image.shape == (2, 2, 3)
+    # -s 2 3 in OBJ's v-up space becomes v' -> 3 v' + (1 - 3) in the flipped convention
+    np.testing.assert_allclose(tex.uv_transform, [[2, 0, 0], [0, 3, -2], [0, 0, 1]])
+    np.testing.assert_allclose(tex.image, ((128 / 255 + 0.055) / 1.055) ** 2.4, rtol=1e-6)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("v 0 0 0\nv 1 0 0\nf 1 2\n", ":3: a face needs at least 3 vertices"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", "refers to vertex 4"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n", ":4: relative index -4"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", ":4: index 0"),
+    ("v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n", ":2: vertex with a NaN"),
+    ("v 0 0 0\nv 1 0\n", ":2: v needs at least 3 numbers"),          # truncated mid-file
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/x 2 3\n", ":4: malformed face vertex"),
+    ("# nothing\n", "no faces found"),
+])
+def test05_bad_input_names_file_and_line(write, text, message):
+    path = write("bad.obj", text)
+    with pytest.raises(SceneError, match="bad.obj") as info:
+        glrender.load(path)
+    assert message in str(info.value)
+
+
+def test06_zero_area_triangles_dropped_with_a_count(write, caught):
+    path = write("z.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\nf 1 1 3\n")
+    with caught as messages:
+        mesh = read_obj(path).merged()
+    assert len(mesh.triangles) == 1
+    assert any("dropped 2 zero-area triangles of 3" in w for w in messages)
+
+
+def test07_missing_texture_names_the_mtl_file_and_line(write):
+    path = write("m.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n")
+    write("m.mtl", "newmtl a\nKd 1 1 1\nmap_Kd missing.png\n")
+    with pytest.raises(SceneError, match=r"m\.mtl:3: texture 'missing.png' not found"):
+        glrender.load(path)
+
+
+def test08_missing_mtl_is_a_warning_and_unknown_statements_one_warning(write, caught):
+    path = write("m.obj", "mtllib none.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\ncurv 0 1\nl 2 3\nf 1 2 3\n")
+    with caught as messages:
+        scene = glrender.load(path)
+    assert len(scene.shapes) == 1
+    ignored = [w for w in messages if "ignored OBJ statements" in w]
+    assert len(ignored) == 1 and "'l' (lines 5, 7)" in ignored[0] and "'curv' (line 6)" in ignored[0]
+    assert any("none.mtl" in w and "not found" in w for w in messages)
+    assert any("no lights" in w for w in messages)
