@@ -6,6 +6,7 @@
 #include "integrators/integrator_common.glsl"
 #include "integrators/shading.glsl"
 #include "sampling/hemisphere.glsl"
+#include "integrators/pixel_loop.glsl"
 
 vec3 integrator_li(vec3 o, vec3 d, float t_max, float time, inout SamplerState s, inout Aov aov) {
     SurfaceHit hit;

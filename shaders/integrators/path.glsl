@@ -7,69 +7,122 @@
 // light samples and `bsdf` only BSDF hits). Depth counts segments as in Mitsuba.
 // Russian roulette from depth kRrDepth on: survive with q = min(max(beta) eta^2, 0.95)
 // (Mitsuba's rule; eta^2 keeps paths alive inside refractive media) and divide by q.
+//
+// Path regeneration: llvmpipe runs 8 pixels in lock step, so a loop over whole paths
+// waits for the longest of the 8 each time (measured: 72% of lane work useful on the
+// Cornell box, 52% on the caustic scene). integrator_pixel instead advances every
+// lane one segment per iteration and starts a lane's next sample as soon as its path
+// ends; each sample still sees exactly the numbers and operations it would alone.
 #include "integrators/integrator_common.glsl"
 #include "integrators/shading.glsl"
+#include "integrators/pixel.glsl"
 
-vec3 integrator_li(vec3 o, vec3 d, float t_max, float time, inout SamplerState s, inout Aov aov) {
-    vec3 L = vec3(0.0);
-    vec3 beta = vec3(1.0);
-    float eta_product = 1.0;
-    float prev_pdf = 0.0;      // solid-angle pdf of the BSDF sample that made this segment
-    bool prev_delta = true;    // that sample was specular (or this is the camera ray)
-    vec3 prev_p = o;
+// The state of one path between segments.
+struct PathState {
+    vec3 o;
+    vec3 d;
+    float t_max;
+    float time;
+    vec3 L;
+    vec3 beta;
+    float eta_product;
+    float prev_pdf;      // solid-angle pdf of the BSDF sample that made this segment
+    bool prev_delta;     // that sample was specular (or this is the camera ray)
+    vec3 prev_p;
+    int depth;           // segments traced so far
+    Aov aov;
+};
+
+PathState path_start(vec3 o, vec3 d, float t_max, float time) {
+    return PathState(o, d, t_max, time, vec3(0.0), vec3(1.0), 1.0, 0.0, true, o, 0,
+                     Aov(vec3(0.0), vec3(0.0), 0.0));
+}
+
+// Traces one segment of the path and shades its end; false when the path has ended.
+bool path_segment(inout PathState st, inout SamplerState s) {
     int max_segments = kMaxDepth < 0 ? kUnboundedDepthCap : kMaxDepth;
-    for (int depth = 0; depth < max_segments; ++depth) {
-        LOOP_TICK();
-        SurfaceHit hit;
-        if (!scene_intersect(o, d, t_max, time, hit)) {
-            L += beta * environment_contribution(d, depth, prev_p, prev_pdf, prev_delta);
-            break;
-        }
-        vec3 p = o + hit.t * d;
-        if (depth == 0) record_aov(aov, hit);
-
-        // Emission of an area light found by the camera ray or by BSDF sampling
-        if (hit.light != 0u)
-            L += beta * emitter_hit_contribution(hit, d, depth, prev_p, prev_pdf, prev_delta);
-
-        // Possibly stop: the next segment would exceed the maximum depth
-        if (depth + 1 >= max_segments) break;
-
-        Bsdf b = bsdf_from_material(hit.material, hit.uv);
-        Frame frame = frame_from_z(hit.ns);
-        vec3 wo = frame_to_local(frame, -d);
-
-        // Next-event estimation (its numbers are drawn even when unused, so that
-        // later dimensions keep their meaning and their stratification)
-        vec2 u_choice = sampler_2d(s);   // x: light selection, y: BSDF lobe
-        vec2 u_light = sampler_2d(s);
-        vec2 u_bsdf = sampler_2d(s);
-        float u_rr = sampler_1d(s);
-        if (kStrategy != kStrategyBsdf && !bsdf_is_delta(b))
-            L += beta * next_event(p, hit, b, frame, wo, time, u_choice.x, u_light, kStrategy != kStrategyLight);
-
-        // Sample the BSDF to continue the path
-        BsdfSample bs = bsdf_sample(b, wo, u_choice.y, u_bsdf, false);
-        if (!bs.valid) break;
-        vec3 wi = frame_from_local(frame, bs.wi);
-        // a direction on the wrong side of the geometric surface leaks light: end the path
-        if (dot(wi, hit.ng) * bs.wi.z <= 0.0) break;
-        beta *= bs.weight;
-        eta_product *= bs.eta;
-        prev_pdf = bs.pdf;
-        prev_delta = bs.delta;
-        prev_p = p;
-
-        // Possibly terminate the path with Russian roulette
-        if (depth + 1 >= kRrDepth) {
-            float q = min(max_component(beta) * eta_product * eta_product, 0.95);
-            if (!(u_rr < q)) break;
-            beta /= q;
-        }
-        if (max_component(beta) <= 0.0) break;
-        o = offset_ray_origin(p, hit.ng, wi);
-        d = wi;
-        t_max = kInfinity;
+    int depth = st.depth;
+    st.depth += 1;
+    SurfaceHit hit;
+    if (!scene_intersect(st.o, st.d, st.t_max, st.time, hit)) {
+        st.L += st.beta * environment_contribution(st.d, depth, st.prev_p, st.prev_pdf, st.prev_delta);
+        return false;
     }
-    return L;
+    vec3 p = st.o + hit.t * st.d;
+    if (depth == 0) record_aov(st.aov, hit);
+
+    // Emission of an area light found by the camera ray or by BSDF sampling
+    if (hit.light != 0u)
+        st.L += st.beta * emitter_hit_contribution(hit, st.d, depth, st.prev_p, st.prev_pdf, st.prev_delta);
+
+    // Possibly stop: the next segment would exceed the maximum depth
+    if (depth + 1 >= max_segments) return false;
+
+    Bsdf b = bsdf_from_material(hit.material, hit.uv);
+    Frame frame = frame_from_z(hit.ns);
+    vec3 wo = frame_to_local(frame, -st.d);
+
+    // Next-event estimation (its numbers are drawn even when unused, so that later
+    // dimensions keep their meaning and their stratification)
+    vec2 u_choice = sampler_2d(s);   // x: light selection, y: BSDF lobe
+    vec2 u_light = sampler_2d(s);
+    vec2 u_bsdf = sampler_2d(s);
+    float u_rr = sampler_1d(s);
+    if (kStrategy != kStrategyBsdf && !bsdf_is_delta(b))
+        st.L += st.beta * next_event(p, hit, b, frame, wo, st.time, u_choice.x, u_light,
+                                     kStrategy != kStrategyLight);
+
+    // Sample the BSDF to continue the path
+    BsdfSample bs = bsdf_sample(b, wo, u_choice.y, u_bsdf, false);
+    if (!bs.valid) return false;
+    vec3 wi = frame_from_local(frame, bs.wi);
+    // a direction on the wrong side of the geometric surface leaks light: end the path
+    if (dot(wi, hit.ng) * bs.wi.z <= 0.0) return false;
+    st.beta *= bs.weight;
+    st.eta_product *= bs.eta;
+    st.prev_pdf = bs.pdf;
+    st.prev_delta = bs.delta;
+    st.prev_p = p;
+
+    // Possibly terminate the path with Russian roulette
+    if (depth + 1 >= kRrDepth) {
+        float q = min(max_component(st.beta) * st.eta_product * st.eta_product, 0.95);
+        if (!(u_rr < q)) return false;
+        st.beta /= q;
+    }
+    if (max_component(st.beta) <= 0.0) return false;
+    st.o = offset_ray_origin(p, hit.ng, wi);
+    st.d = wi;
+    st.t_max = kInfinity;
+    return true;
+}
+
+// The radiance of one camera ray, segment by segment.
+vec3 integrator_li(vec3 o, vec3 d, float t_max, float time, inout SamplerState s, inout Aov aov) {
+    PathState st = path_start(o, d, t_max, time);
+    while (path_segment(st, s)) {
+        LOOP_TICK();
+    }
+    aov = st.aov;
+    return st.L;
+}
+
+// Samples [first, first + count) of a pixel with path regeneration.
+void integrator_pixel(uvec2 pixel, uint pixel_hash, uint first, uint count, inout Accumulator acc) {
+    if (count == 0u) return;
+    uint k = 0u;
+    SamplerState s = pixel_sampler(pixel_hash, first);
+    CameraSample c = camera_sample(pixel, s);
+    PathState st = path_start(c.o, c.d, c.t_max, c.time);
+    while (true) {
+        LOOP_TICK();
+        if (!path_segment(st, s)) {
+            accumulate(acc, c.weight * st.L, st.aov, first + k);
+            k += 1u;
+            if (k >= count) break;
+            s = pixel_sampler(pixel_hash, first + k);
+            c = camera_sample(pixel, s);
+            st = path_start(c.o, c.d, c.t_max, c.time);
+        }
+    }
 }
