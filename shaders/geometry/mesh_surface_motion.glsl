@@ -10,20 +10,13 @@
 void mesh_surface_t(uint tri, vec2 bary, float time, out vec3 ng, out vec3 ns, out vec2 uv,
                     out uint material, out uint light) {
     mesh_surface(tri, bary, ng, ns, uv, material, light);
-    int count = motion_instance_count();
-    for (int i = 0; i < count; i++) {
-        LOOP_TICK();
-        int base = 1 + i * kTexelsPerMotionInstance;
-        uint begin = floatBitsToUint(texelFetch(u_bvh_instances, base + 1).w);
-        uint end = floatBitsToUint(texelFetch(u_bvh_instances, base + 2).w);
-        if (tri >= begin && tri < end) {
-            vec3 translation;
-            mat3 rotation, scale;
-            motion_transform(i, time, translation, rotation, scale);
-            mat3 normal_matrix = rotation * inverse(scale);
-            ng = normalize(normal_matrix * ng);
-            ns = normalize(normal_matrix * ns);
-            ng = dot(ng, ns) < 0.0 ? -ng : ng;
-        }
-    }
+    int i = motion_instance_of(tri);
+    if (i < 0) return;
+    vec3 translation;
+    mat3 rotation, scale;
+    motion_transform(i, time, translation, rotation, scale);
+    mat3 normal_matrix = rotation * inverse(scale);
+    ng = normalize(normal_matrix * ng);
+    ns = normalize(normal_matrix * ns);
+    ng = dot(ng, ns) < 0.0 ? -ng : ng;
 }

@@ -110,22 +110,27 @@ bool bvh_intersect_any_t(vec3 o, vec3 d, float t_max, float time) {
     return bvh_traverse_t(o, d, t_max, time, true, hit);
 }
 
-// Corner k of triangle prim in world space at the given time (static triangles
-// do not move; a motion instance's are moved by its transform at that time).
-vec3 bvh_triangle_vertex_t(uint prim, uint k, float time) {
-    vec3 p = bvh_triangle_vertex(prim, k);
+// The motion instance whose triangles include prim (BVH-order id), or -1 for a static one.
+int motion_instance_of(uint prim) {
     int count = motion_instance_count();
     for (int i = 0; i < count; i++) {
         LOOP_TICK();
         int base = 1 + i * kTexelsPerMotionInstance;
         uint begin = floatBitsToUint(texelFetch(u_bvh_instances, base + 1).w);
         uint end = floatBitsToUint(texelFetch(u_bvh_instances, base + 2).w);
-        if (prim >= begin && prim < end) {
-            vec3 translation;
-            mat3 rotation, scale;
-            motion_transform(i, time, translation, rotation, scale);
-            return translation + rotation * (scale * p);
-        }
+        if (prim >= begin && prim < end) return i;
     }
-    return p;
+    return -1;
+}
+
+// Corner k of triangle prim in world space at the given time (static triangles
+// do not move; a motion instance's are moved by its transform at that time).
+vec3 bvh_triangle_vertex_t(uint prim, uint k, float time) {
+    vec3 p = bvh_triangle_vertex(prim, k);
+    int i = motion_instance_of(prim);
+    if (i < 0) return p;
+    vec3 translation;
+    mat3 rotation, scale;
+    motion_transform(i, time, translation, rotation, scale);
+    return translation + rotation * (scale * p);
 }
