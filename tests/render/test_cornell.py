@@ -38,7 +38,7 @@ def test01_cornell_box_matches_mitsuba(gl_ctx, cornell, sampler):
 def test02_cornell_box_with_the_bunny_matches_mitsuba(gl_ctx):
     """The BVH path: 69k triangles with smooth vertex normals computed at load (as Mitsuba
     does) against Mitsuba 3's render of the same scene (tests/data/refs/cornell-bunny-ref.*,
-    600 s of multijitter, ~5,500 spp; its own noise, about 1/20 of these renders' variance,
+    647 s of multijitter, 4,352 spp; its own noise, about 1/15 of these renders' variance,
     is not subtracted). Detects an image-mean bias of about 0.03%."""
     scene = glrender.load(ROOT / "scenes" / "cornell-bunny" / "scene.toml")
     ref = np.load(REFS / "cornell-bunny-ref.npy")
