@@ -124,3 +124,26 @@ def test08_missing_mtl_is_a_warning_and_unknown_statements_one_warning(write, ca
     assert len(ignored) == 1 and "'l' (lines 5, 7)" in ignored[0] and "'curv' (line 6)" in ignored[0]
     assert any("none.mtl" in w and "not found" in w for w in messages)
     assert any("no lights" in w for w in messages)
+
+
+def test09_bulk_parser_agrees_with_the_general_one(write, monkeypatch):
+    from glrender.scene.loaders import obj as obj_module
+
+    rng = np.random.default_rng(3)
+    n = 3000
+    lines = [f"v {x:.5f} {y:.5f} {z:.5f}" for x, y, z in rng.random((n, 3))]
+    lines += [f"vt {u:.4f} {v:.4f}" for u, v in rng.random((n, 2))]
+    lines += [f"vn {x:.4f} {y:.4f} {z:.4f}" for x, y, z in rng.normal(size=(n, 3))]
+    for k, (a, b, c) in enumerate(rng.integers(1, n + 1, (4000, 3))):
+        if k % 1000 == 0:
+            lines += [f"o part{k // 2000}", f"usemtl m{k // 1000 % 3}"]
+        lines.append(f"f {a}/{b}/{c} {b}/{c}/{a} {c}/{a}/{b}")
+    path = write("big.obj", "\n".join(lines) + "\n")
+    assert path.stat().st_size > obj_module.FAST_PATH_BYTES
+    assert obj_module._read_obj_fast(path.read_text(), path) is not None   # the bulk path runs
+    fast = read_obj(path)
+    monkeypatch.setattr(obj_module, "FAST_PATH_BYTES", 1 << 40)
+    slow = read_obj(path)
+    for name in ("positions", "texcoords", "normals", "corners", "triangles", "tri_material", "tri_object"):
+        np.testing.assert_array_equal(getattr(fast, name), getattr(slow, name), err_msg=name)
+    assert fast.material_names == slow.material_names and fast.object_names == slow.object_names

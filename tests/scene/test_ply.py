@@ -20,7 +20,10 @@ def _header(fmt, nv, nf, extra_vertex="", face="property list uchar int vertex_i
 def test01_ascii_counts_match_the_sources(name, vertices, triangles):
     mesh = read_ply(DATA / "meshes" / name)
     assert mesh.vertices.shape == (vertices, 3) and mesh.triangles.shape == (triangles, 3)
-    assert mesh.normals is not None and np.allclose(np.linalg.norm(mesh.normals, axis=1), 1.0)
+    length = np.linalg.norm(mesh.normals, axis=1)
+    # unit, or 0 where the faces around a vertex cancel (a fold in the scan): the renderer
+    # uses the face normal there
+    assert np.all(np.isclose(length, 1.0) | (length == 0)) and np.mean(length == 0) < 0.01
 
 
 @pytest.mark.parametrize("order", ["<", ">"])
