@@ -42,7 +42,7 @@ SHAPE = ('<shape type="sphere"><float name="radius" value="1"/>'
 
 
 def test03_subset_plugins(write):
-    path = write("s.xml", _scene(f"""
+    path = write("s.xml", _scene("""
     <default name="kind" value="roughconductor"/>
     <bsdf type="$kind" id="metal"><string name="material" value="Au"/><float name="alpha" value="0.2"/>
         <string name="distribution" value="ggx"/></bsdf>

@@ -89,9 +89,15 @@ class SceneFiles:
                      f"{self.root}")
 
 
-def check_size(path: Path, needed: int, what: str) -> None:
-    """A header's promise against the file: ``needed`` bytes must exist."""
-    size = Path(path).stat().st_size
-    if needed > size:
-        raise SceneError(f"{path}: {what} needs at least {needed} bytes, the file has {size} "
-                         f"(truncated or corrupt)")
+def read_bytes(path, limit: int | None = None) -> bytes:
+    """A whole file, with errors that name it (and refuse files above ``limit`` bytes)."""
+    path = Path(path)
+    try:
+        if limit is not None and path.stat().st_size > limit:
+            raise SceneError(f"{path}: {path.stat().st_size} bytes is more than this loader reads "
+                             f"({limit})")
+        return path.read_bytes()
+    except FileNotFoundError:
+        raise SceneError(f"{path}: no such file") from None
+    except OSError as exc:
+        raise SceneError(f"{path}: cannot read ({exc.strerror or exc})") from None

@@ -32,7 +32,7 @@ import numpy as np
 
 from ...errors import SceneError
 from .. import model as m
-from .diagnostics import Notes, SceneFiles
+from .diagnostics import Notes, SceneFiles, read_bytes
 from .meshes import MeshData, finish_mesh
 
 SUPPORTED_EXTENSIONS = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
@@ -277,7 +277,6 @@ class _Gltf:
         return (srgb_to_linear(pixels) if srgb else pixels).astype(np.float32)
 
     def material(self, index, double_sided_default=False) -> tuple[int, m.Emission | None]:
-        scene_materials = self.scene.materials
         if index is None:
             key = (None,)
             if key not in self._materials:
@@ -392,12 +391,7 @@ def _node_matrix(g: _Gltf, node: dict, where: str) -> np.ndarray:
 
 
 def _read_container(path: Path) -> tuple[dict, bytes | None]:
-    try:
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise SceneError(f"{path}: no such file") from None
-    except OSError as exc:
-        raise SceneError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    data = read_bytes(path)
     bin_chunk = None
     if data[:4] == b"glTF":
         if len(data) < 20:

@@ -67,21 +67,21 @@ def finish_mesh(mesh: MeshData, source, compute_normals: bool = True) -> MeshDat
             f = f[keep]
     if len(f) == 0:
         raise SceneError(f"{source}: no triangles with non-zero area")
-    normals = mesh.normals
-    if normals is not None:
-        normals = np.asarray(normals, np.float64).reshape(-1, 3)
-        if len(normals) != len(v):
-            raise SceneError(f"{source}: {len(normals)} normals for {len(v)} vertices")
-        normals = np.where(np.isfinite(normals), normals, 0.0)
-    elif compute_normals:
+    normals = _per_vertex(mesh.normals, len(v), 3, "normals", source)
+    if normals is None and compute_normals:
         normals = vertex_normals(v, f)
-    uvs = mesh.uvs
-    if uvs is not None:
-        uvs = np.asarray(uvs, np.float64).reshape(-1, 2)
-        if len(uvs) != len(v):
-            raise SceneError(f"{source}: {len(uvs)} texture coordinates for {len(v)} vertices")
-        uvs = np.where(np.isfinite(uvs), uvs, 0.0)
-    return MeshData(v, f, normals, uvs)
+    return MeshData(v, f, normals, _per_vertex(mesh.uvs, len(v), 2, "texture coordinates", source))
+
+
+def _per_vertex(values, count: int, width: int, what: str, source) -> np.ndarray | None:
+    """An optional per-vertex attribute, checked against the vertex count; non-finite
+    entries become 0 (the renderer falls back to the face normal / uv 0 there)."""
+    if values is None:
+        return None
+    arr = np.asarray(values, np.float64).reshape(-1, width)
+    if len(arr) != count:
+        raise SceneError(f"{source}: {len(arr)} {what} for {count} vertices")
+    return np.where(np.isfinite(arr), arr, 0.0)
 
 
 def read_mesh(path, files=None, referrer=None) -> MeshData:

@@ -22,7 +22,7 @@ import numpy as np
 
 from ...errors import SceneError
 from .. import model as m
-from .diagnostics import Notes, SceneFiles, warn
+from .diagnostics import Notes, SceneFiles, read_bytes, warn
 
 MAX_INCLUDE_DEPTH = 16
 MAX_FILE_BYTES = 64 << 20
@@ -56,15 +56,7 @@ def _parse_xml(path: Path) -> ET.Element:
     from defusedxml import DTDForbidden, EntitiesForbidden, ExternalReferenceForbidden
     from defusedxml.ElementTree import DefusedXMLParser
 
-    try:
-        size = path.stat().st_size
-        if size > MAX_FILE_BYTES:
-            raise SceneError(f"{path}: {size} bytes is more than a scene description may have")
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise SceneError(f"{path}: no such file") from None
-    except OSError as exc:
-        raise SceneError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    data = read_bytes(path, MAX_FILE_BYTES)
 
     class Builder(ET.TreeBuilder):
         def start(self, tag, attrs):
@@ -437,14 +429,9 @@ class _Builder:
             T = self.prop(node, "to_uv", "transform")
             M = np.array([[T[0, 0], T[0, 1], T[0, 3]], [T[1, 0], T[1, 1], T[1, 3]], [0, 0, 1]])
         if node.type == "bitmap":
-            from ...film.io import linear_to_srgb, read_image
+            from ...film.io import linear_to_srgb
 
-            path = self.r.files.resolve(self.prop(node, "filename", "string", ""), node.file, node.line,
-                                        "texture", tuple(self.r.search))
-            try:
-                image = read_image(path)
-            except Exception as exc:
-                raise SceneError(f"{node.where}: cannot read texture {path.name!r} ({exc})") from None
+            path, image = self.image(node, "texture")
             if self.prop(node, "raw", "bool", False) and path.suffix.lower() in (".png", ".jpg", ".jpeg"):
                 image = linear_to_srgb(image).astype(np.float32)
             filt = self.prop(node, "filter_type", "string", "bilinear")
@@ -466,6 +453,17 @@ class _Builder:
             tex = m.Texture("checkerboard", color0=(0.5,) * 3, color1=(0.5,) * 3)
         self.textures[id(node)] = tex
         return tex
+
+    def image(self, node: Node, what: str) -> tuple[Path, np.ndarray]:
+        """The image file a plugin's ``filename`` names, read (linear RGB)."""
+        from ...film.io import read_image
+
+        path = self.r.files.resolve(self.prop(node, "filename", "string", ""), node.file, node.line,
+                                    what, tuple(self.r.search))
+        try:
+            return path, read_image(path)
+        except Exception as exc:
+            raise SceneError(f"{node.where}: cannot read {what} {path.name!r} ({exc})") from None
 
     def alpha(self, node: Node) -> tuple[float, float]:
         if "alpha_u" in node.props or "alpha_v" in node.props:
@@ -630,14 +628,7 @@ class _Builder:
         elif t == "constant":
             self.scene.lights.append(m.Light("constant", radiance=rgb("radiance", (1.0,) * 3)))
         elif t == "envmap":
-            from ...film.io import read_image
-
-            path = self.r.files.resolve(self.prop(node, "filename", "string", ""), node.file, node.line,
-                                        "environment map", tuple(self.r.search))
-            try:
-                image = read_image(path)
-            except Exception as exc:
-                raise SceneError(f"{node.where}: cannot read {path.name!r} ({exc})") from None
+            _, image = self.image(node, "environment map")
             self.scene.lights.append(m.Light("envmap", image=image, scale=self.prop(node, "scale", "float", 1.0),
                                              world_from_light=M if M is not None else np.eye(4)))
         elif t == "area":

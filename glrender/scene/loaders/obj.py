@@ -26,7 +26,7 @@ import numpy as np
 
 from ...errors import SceneError
 from .. import model as m
-from .diagnostics import Notes, SceneFiles, warn
+from .diagnostics import Notes, SceneFiles, read_bytes, warn
 from .meshes import MeshData, finish_mesh
 
 MAX_FILE_BYTES = 1 << 31
@@ -93,15 +93,15 @@ def _floats(parts, lo: int, hi: int, path, lineno: int, what: str) -> list[float
 
 
 def _read_text(path: Path) -> str:
-    try:
-        size = path.stat().st_size
-        if size > MAX_FILE_BYTES:
-            raise SceneError(f"{path}: {size} bytes is more than this loader reads ({MAX_FILE_BYTES})")
-        return path.read_bytes().decode("utf-8", errors="replace")
-    except FileNotFoundError:
-        raise SceneError(f"{path}: no such file") from None
-    except OSError as exc:
-        raise SceneError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    return read_bytes(path, MAX_FILE_BYTES).decode("utf-8", errors="replace")
+
+
+def _statements(text: str):
+    """(line number, stripped line, its tokens) of every line that is not blank or a comment."""
+    for lineno, raw in enumerate(text.splitlines(), 1):
+        line = raw.strip()
+        if line and line[0] != "#":
+            yield lineno, line, line.split()
 
 
 def _numbers(text: str, dtype) -> np.ndarray:
@@ -240,11 +240,7 @@ def read_obj(path, files: SceneFiles | None = None, read_materials: bool = True)
     cur_mat = cur_obj = 0
     mtl_files = []
     late_positive = False
-    for lineno, raw in enumerate(text.splitlines(), 1):
-        line = raw.strip()
-        if not line or line[0] == "#":
-            continue
-        parts = line.split()
+    for lineno, line, parts in _statements(text):
         key = parts[0]
         if key == "v":
             pos.append(_floats(parts, 3, 3, path, lineno, "v"))
@@ -401,11 +397,7 @@ def read_mtl(path: Path, files: SceneFiles) -> dict[str, MtlMaterial]:
     notes = Notes(path, "ignored MTL statements")
     out: dict[str, MtlMaterial] = {}
     cur = None
-    for lineno, raw in enumerate(text.splitlines(), 1):
-        line = raw.strip()
-        if not line or line[0] == "#":
-            continue
-        parts = line.split()
+    for lineno, line, parts in _statements(text):
         key = parts[0]
         if key == "newmtl":
             name = line[len(key):].strip()

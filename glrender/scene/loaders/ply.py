@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import SceneError
+from .diagnostics import read_bytes
 from .meshes import MeshData, finish_mesh
 
 _TYPES = {
@@ -84,12 +85,7 @@ def _header(data: bytes, path: Path):
 
 def read_ply(path) -> MeshData:
     path = Path(path)
-    try:
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise SceneError(f"{path}: no such file") from None
-    except OSError as exc:
-        raise SceneError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    data = read_bytes(path)
     fmt, elements, start = _header(data, path)
     names = [e.name for e in elements]
     if "vertex" not in names or "face" not in names:
