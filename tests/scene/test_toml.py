@@ -127,3 +127,15 @@ def test07_fuzz_obj(tmp_path_factory, lines, noise):
         glrender.load(path)
     except SceneError:
         pass
+
+
+def test08_include_depth_is_bounded_and_paths_outside_are_reported(write, caught):
+    for i in range(20):
+        write(f"d{i}.toml", f'include = "d{i + 1}.toml"\n' if i < 19 else BASE + SPHERE)
+    with pytest.raises(SceneError, match="deeper than 16"):
+        glrender.load(write("d0.toml", 'include = "d1.toml"\n'))
+    outer = write("shared.toml", BASE + SPHERE)
+    inner = write("scene/main.toml", 'include = "../shared.toml"\n')
+    with caught as messages:
+        glrender.load(inner)
+    assert any(f"resolves to {outer}" in w and "outside the scene's folder" in w for w in messages)
