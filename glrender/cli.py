@@ -43,8 +43,11 @@ class StopSignals:
         self._saved = {}
 
     def install(self) -> "StopSignals":
-        for signum in self.SIGNALS:
-            self._saved[signum] = signal.signal(signum, self._handle)
+        import threading
+
+        if threading.current_thread() is threading.main_thread():   # signal.signal's rule
+            for signum in self.SIGNALS:
+                self._saved[signum] = signal.signal(signum, self._handle)
         return self
 
     def uninstall(self) -> None:

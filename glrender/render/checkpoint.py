@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import math
+import zipfile
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -77,19 +78,24 @@ def load_checkpoint(path) -> Checkpoint:
     if not path.is_file():
         raise UsageError(f"{path}: no checkpoint to resume (render without --resume to start, "
                          f"or name the file with --checkpoint)")
+    unreadable = (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile)
     try:
         with np.load(path, allow_pickle=False) as data:
             meta = json.loads(str(data["meta"][()]))
-            arrays = {name: np.array(data[name], np.float32) for name in ARRAYS}
-    except (OSError, ValueError, KeyError, EOFError) as exc:
+            if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+                raise UsageError(f"{path}: not a glrender checkpoint")
+            if meta.get("version") != VERSION:
+                raise UsageError(f"{path}: checkpoint version {meta.get('version')} is not "
+                                 f"supported (this glrender reads version {VERSION}); render "
+                                 f"without --resume")
+            state = {"fingerprint": str(meta["fingerprint"]), "spp_done": int(meta["spp_done"]),
+                     "width": int(meta["settings"]["width"]),
+                     "height": int(meta["settings"]["height"]),
+                     **{name: np.array(data[name], np.float32) for name in ARRAYS}}
+    except unreadable as exc:
+        if isinstance(exc, UsageError):
+            raise
         raise UsageError(f"{path}: not a readable glrender checkpoint ({exc})") from None
-    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
-        raise UsageError(f"{path}: not a glrender checkpoint")
-    if meta.get("version") != VERSION:
-        raise UsageError(f"{path}: checkpoint version {meta.get('version')} is not supported "
-                         f"(this glrender reads version {VERSION}); render without --resume")
-    state = {"fingerprint": meta["fingerprint"], "spp_done": int(meta["spp_done"]),
-             "width": meta["settings"]["width"], "height": meta["settings"]["height"], **arrays}
     return Checkpoint(path, meta, state)
 
 

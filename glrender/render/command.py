@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import UsageError
+from ..errors import DeviceError, UsageError
 
 AOV_NAMES = ("albedo", "normal", "depth", "variance")
 FIRST_HIT_AOVS = ("albedo", "normal", "depth")
@@ -207,7 +207,11 @@ def run_render(args, signals) -> int:
         target = SPP_LIMIT
     width, height = scene.film.width, scene.film.height
     with timer("context"):
-        ctx = create_context(args.device, threads=args.threads)
+        try:
+            ctx = create_context(args.device, threads=args.threads)
+        except DeviceError as exc:
+            raise DeviceError(f"{exc}; `glrender info` lists the devices (choose with --device "
+                              f"or $GLRENDER_DEVICE)") from exc
     _check_memory(width, height, first_hit, ctx.is_llvmpipe)
     try:
         renderer = Renderer(scene, settings, ctx=ctx)

@@ -43,6 +43,8 @@ class Running:
     def wait(self, timeout: float = 60) -> int:
         rc = self.proc.wait(timeout=timeout)
         self._reader.join(timeout=5)
+        self.proc.stdout.close()
+        self.proc.stderr.close()
         return rc
 
     @property

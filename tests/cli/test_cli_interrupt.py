@@ -38,6 +38,7 @@ def interrupt(tmp_path, signum, *extra, after=0.8):
     return run, rc, time.monotonic() - t0, json.loads(stats.read_text()), out
 
 
+@pytest.mark.slow
 def test01_sigint_then_resume_equals_uninterrupted(tmp_path, uninterrupted):
     run, rc, seconds, stats, out = interrupt(tmp_path, signal.SIGINT)
     assert rc == 130, run.stderr

@@ -1,0 +1,85 @@
+"""`glrender --help` and each command's help list every option, and match the README."""
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from cli_run import ROOT, glrender
+from glrender.cli import build_parser
+
+OPTION = re.compile(r"(?<![\w-])(--[a-z][a-z-]*[a-z]|-[a-zA-Z])(?![\w-])")
+# what issue 8 asks `glrender render` for
+REQUIRED = ["-o", "--spp", "--time", "--integrator", "--strategy", "--max-depth", "--width",
+            "--height", "--seed", "--device", "--threads", "--aov", "--stats", "--checkpoint-every",
+            "--resume", "-D", "--quiet", "--debug"]
+
+
+def readme_options() -> set[str]:
+    """The options the README's "Command line" section names: in its usage block and in
+    code spans of its prose that start with an option (`--time SECONDS`)."""
+    text = (ROOT / "README.md").read_text()
+    start = text.index("## Command line")
+    end = text.find("\n## ", start + 1)
+    section = text[start:end if end > 0 else None]
+    usage = [line for line in section.splitlines() if line.startswith("    ")]
+    spans = [span for span in re.findall(r"`([^`]+)`", section) if span.startswith("-")]
+    return set(OPTION.findall("\n".join(usage + spans)))
+
+
+def parser_options() -> dict[str, set[str]]:
+    """Each command's option strings, from the parser itself (help options aside)."""
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction")
+    options = {name: {s for a in p._actions for s in a.option_strings} - {"-h", "--help"}
+               for name, p in sub.choices.items()}
+    options["glrender"] = {s for a in parser._actions for s in a.option_strings} - {"-h", "--help"}
+    return options
+
+
+@pytest.fixture(scope="module")
+def help_texts():
+    texts = {}
+    for command in ("render", "info", "sampling"):
+        r = glrender(command, "--help")
+        assert r.returncode == 0 and r.stderr == ""
+        texts[command] = r.stdout
+    r = glrender("--help")
+    assert r.returncode == 0
+    texts["glrender"] = r.stdout
+    return texts
+
+
+def test01_render_help_has_every_option_of_the_issue(help_texts):
+    found = set(OPTION.findall(help_texts["render"]))
+    assert not set(REQUIRED) - found
+
+
+def test02_help_lists_every_option_the_readme_names(help_texts):
+    readme = readme_options()
+    assert len(readme) > 25
+    in_help = set().union(*(OPTION.findall(t) for t in help_texts.values()))
+    assert not readme - in_help, readme - in_help
+
+
+def test03_readme_names_every_option(help_texts):
+    readme = readme_options()
+    for command, options in parser_options().items():
+        assert not options - readme, (command, options - readme)
+        assert set(OPTION.findall(help_texts[command])) >= options, command
+
+
+def test04_top_level_help_names_the_commands(help_texts):
+    for command in ("render", "info", "sampling"):
+        assert command in help_texts["glrender"]
+
+
+def test05_console_script_and_version():
+    script = Path(sys.executable).parent / "glrender"
+    assert script.exists(), "glrender is installed with pip install -e ."
+    r = subprocess.run([str(script), "--version"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and r.stdout.startswith("glrender ")
+    assert glrender("--version").stdout == r.stdout
