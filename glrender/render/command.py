@@ -175,9 +175,11 @@ def run_render(args, signals) -> int:
     scene_path = Path(args.scene)
     _check_scene_file(scene_path)
     ckpt_path = Path(args.checkpoint) if args.checkpoint else Path(str(output) + ".ckpt")
-    check_folder(ckpt_path, "checkpoint")
-    if args.stats:
-        check_folder(args.stats, "statistics")
+    for path, what in ((ckpt_path, "checkpoint"), (args.stats, "statistics")):
+        if path is not None:
+            check_folder(path, what)
+            if Path(path).is_dir():
+                raise UsageError(f"{path}: is a folder, expected a file name for the {what}")
     keep_checkpoint = bool(args.checkpoint or args.checkpoint_every or args.resume)
     ckpt = load_checkpoint(ckpt_path) if args.resume else None
     options = {k: getattr(args, k) for k in RESUMABLE if getattr(args, k) is not None}
@@ -287,7 +289,8 @@ def run_render(args, signals) -> int:
         "width": width, "height": height, "integrator": settings.integrator.kind,
         "strategy": settings.integrator.strategy, "max_depth": settings.integrator.max_depth,
         "sampler": settings.sampler.kind, "seed": settings.sampler.seed,
-        "spp": film.spp, "spp_target": record["spp_target"], "spp_this_run": result.spp_done - result.spp_start,
+        "spp": film.spp, "spp_target": record["spp_target"],
+        "spp_this_run": result.spp_done - result.spp_start,
         "resumed_from_spp": spp_resumed, "time_budget": args.time,
         "samples_per_pass": renderer.samples_per_pass, "passes": result.passes,
         "pass_seconds_max": result.pass_seconds_max, "checkpoints_written": result.checkpoints,

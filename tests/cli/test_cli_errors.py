@@ -39,6 +39,8 @@ def case(tmp, name):
         "output folder is a file": (["render", CORNELL, "-o", afile / "out.png"], ["is a file, not a folder"]),
         "output folder read-only": (["render", CORNELL, "-o", "/proc/out.png"], ["cannot write", "/proc"]),
         "output is a folder": (["render", CORNELL, "-o", tmp / "dir.png"], ["is a folder"]),
+        "stats is a folder": (["render", CORNELL, "-o", out, "--stats", tmp / "dir.png"],
+                              ["is a folder", "statistics"]),
         "no such device": (["render", CORNELL, "-o", out, "--device", "99", *SMALL], ["no EGL device #99"]),
         "bad device": (["render", CORNELL, "-o", out, "--device", "fast", *SMALL],
                        ["expected auto, cpu, gpu or a device index"]),
@@ -54,7 +56,7 @@ CASES = ["missing scene", "scene is a folder", "unreadable scene", "unknown scen
          "unknown output format", "unknown integrator", "unknown tone curve", "unknown aov",
          "bad spp", "bad time", "bad max depth", "not a number", "bad define",
          "output folder missing", "output folder is a file", "output folder read-only",
-         "output is a folder", "no such device", "bad device", "out of memory",
+         "output is a folder", "stats is a folder", "no such device", "bad device", "out of memory",
          "resume without checkpoint", "no command"]
 
 
