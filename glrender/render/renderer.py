@@ -274,6 +274,9 @@ class Renderer:
             h.update(np.ascontiguousarray(self.packed.env_image).tobytes())
         h.update(self.packed.textures.fingerprint())
         prm = self._param_block(0, 0)
+        if self.settings.sampler.kind != "stratified":
+            prm["samples"][2:] = 0   # the total spp decides the strata only: other samplers
+                                     # may continue past it (render more samples later)
         h.update(prm.tobytes())
         return h.hexdigest()
 

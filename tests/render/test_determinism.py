@@ -91,3 +91,21 @@ def test04_state_and_restore_continue_bitwise(gl_ctx, small_cornell):
     other = Renderer(small_cornell, settings_from_scene(small_cornell, spp=12, seed=6, sampler="sobol"))
     with pytest.raises(glrender.UsageError, match="different scene or different render settings"):
         other.restore(state)
+
+
+def test05_a_state_continues_to_more_samples(gl_ctx, small_cornell):
+    """Independent and Sobol' samples do not depend on the total spp: a render of 6 spp
+    continued to 10 equals a render of 10 (the stratified sampler's strata do depend on it)."""
+    whole = film_of(small_cornell, passes=4, time_target=0.1, seed=5, spp=10)
+    first = Renderer(small_cornell, settings_from_scene(small_cornell, spp=6, seed=5, sampler="sobol",
+                                                        samples_per_pass=4))
+    first.step(6)
+    state = first.state()
+    second = Renderer(small_cornell, settings_from_scene(small_cornell, spp=10, seed=5, sampler="sobol",
+                                                         samples_per_pass=4))
+    second.restore(state)
+    second.step(4)
+    np.testing.assert_array_equal(second.film().mean, whole.mean)
+    strat = Renderer(small_cornell, settings_from_scene(small_cornell, spp=6, seed=5, sampler="stratified"))
+    other = Renderer(small_cornell, settings_from_scene(small_cornell, spp=10, seed=5, sampler="stratified"))
+    assert strat.fingerprint() != other.fingerprint()
