@@ -146,6 +146,8 @@ _UV_SCENE = """<scene version="3.0.0">
 @pytest.mark.parametrize("shape, flip", [
     ("rectangle", False),
     ("disk", False),
+    ("obj", False),
+    ("ply", False),
     pytest.param("cube", False, marks=pytest.mark.xfail(strict=True, reason=(
         "gpu/pack.py gives each cube face the (a, b) of its own edges as uv, not the uv "
         "layout of Mitsuba's cube mesh"))),
@@ -158,8 +160,17 @@ _UV_SCENE = """<scene version="3.0.0">
 def test04_uv_conventions_match_mitsuba(write, shape, flip):
     mi = pytest.importorskip("mitsuba")
     mi.set_variant("scalar_rgb")
-    path = write("uv.xml", _UV_SCENE.replace("SHAPE", shape).replace(
-        "FLIP", '<boolean name="flip_normals" value="true"/>' if flip else ""))
+    # a quad with uv = (x + 1, y + 1) / 2 in each mesh format (OBJ's v counts up: flipped on load)
+    write("quad.obj", "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                      "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n")
+    write("quad.ply", "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                      "property float z\nproperty float u\nproperty float v\nelement face 2\n"
+                      "property list uchar int vertex_indices\nend_header\n-1 -1 0 0 0\n1 -1 0 1 0\n"
+                      "1 1 0 1 1\n-1 1 0 0 1\n3 0 1 2\n3 0 2 3\n")
+    extra = '<boolean name="flip_normals" value="true"/>' if flip else ""
+    if shape in ("obj", "ply"):
+        extra = f'<string name="filename" value="quad.{shape}"/>'
+    path = write("uv.xml", _UV_SCENE.replace("SHAPE", shape).replace("FLIP", extra))
     theirs = np.asarray(mi.render(mi.load_file(str(path))))[..., :3]
     ours = glrender.render(glrender.load(path), seed=1).mean
     # the checks are red or blue, the sky white: compare which of red and blue each pixel
