@@ -160,3 +160,17 @@ def test10_spectra_as_mitsubas_rgb_variants():
     np.testing.assert_allclose(flat, [0.776367, 0.77981, 0.776029], rtol=0.01)
     light = spectrum_to_rgb([400, 500, 600, 700], [0, 8, 15.6, 18.4], reflectance=False)
     np.testing.assert_allclose(light, [20.7108, 10.8546, 2.77115], rtol=0.01)
+
+
+def test11_focal_length_sets_the_diagonal_field_of_view(write):
+    import math
+
+    from glrender.render.renderer import camera_tangents
+
+    path = write("f.xml", _scene('<sensor type="perspective"><string name="focal_length" value="35mm"/>'
+                                 '<film type="hdrfilm"><integer name="width" value="300"/>'
+                                 '<integer name="height" value="200"/></film></sensor>' + SHAPE))
+    scene = glrender.load(path)
+    tx, _ = camera_tangents(scene.camera, 300, 200)
+    # Mitsuba 3.9.1 (scalar_rgb) reports x_fov = 54.43222427368164 for this sensor
+    assert math.degrees(2 * math.atan(tx)) == pytest.approx(54.43222427368164, rel=1e-6)

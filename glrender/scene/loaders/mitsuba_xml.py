@@ -646,11 +646,17 @@ class _Builder:
         cam = m.Camera()
         M = self.prop(node, "to_world", "transform", np.eye(4))
         cam.world_from_camera = M
-        if "focal_length" in node.props and "fov" not in node.props:
-            self.r.notes.add("focal_length (fov 39.6 used)", node.line)
         try:
             cam.fov = self.prop(node, "fov", "float", 39.3077)
             cam.fov_axis = self.prop(node, "fov_axis", "string", "x")
+            if "focal_length" in node.props and "fov" not in node.props:
+                # Mitsuba: a focal length on 35 mm film sets the diagonal field of view
+                text = self.prop(node, "focal_length", "string").strip().lower().removesuffix("mm")
+                focal = _number(text, f"{node.file}:{node.props['focal_length'][2]}", "focal_length")
+                if not focal > 0:
+                    node.fail(f"focal_length must be positive, got {focal}")
+                cam.fov = math.degrees(2 * math.atan(math.hypot(36.0, 24.0) / (2 * focal)))
+                cam.fov_axis = "diagonal"
             cam.near_clip = self.prop(node, "near_clip", "float", 1e-2)
             cam.far_clip = self.prop(node, "far_clip", "float", 1e4)
             if node.type == "thinlens":
