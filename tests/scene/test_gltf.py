@@ -140,3 +140,15 @@ def test07_glb_header_lies_about_its_length(write):
     struct.pack_into("<I", data, 8, 10 ** 9)
     with pytest.raises(SceneError, match="declares 1000000000 bytes"):
         glrender.load(write("lie.glb", bytes(data)))
+
+
+def test08_huge_image_header_is_refused(write):
+    from test_textures import _png_header_claiming
+
+    doc = _triangle_doc()
+    png = base64.b64encode(_png_header_claiming(12000, 12000)).decode()
+    doc["images"] = [{"uri": "data:image/png;base64," + png}]
+    doc["textures"] = [{"source": 0}]
+    doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {"index": 0}
+    with pytest.raises(SceneError, match=r"images\[0\]: the image declares 12000 x 12000 pixels"):
+        glrender.load(write("big.gltf", json.dumps(doc)))

@@ -181,3 +181,37 @@ def test04_uv_conventions_match_mitsuba(write, shape, flip):
     # edge pixels (a check spans ~6 pixels here) stay well below 15%; a uv half a turn or
     # transposed swaps about half of the checks
     assert mismatch[covered].mean() < 0.15
+
+
+def _png_header_claiming(width: int, height: int) -> bytes:
+    """A PNG signature and IHDR chunk claiming width x height RGB pixels, and no data."""
+    import struct
+    import zlib
+
+    ihdr = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    chunk = b"IHDR" + ihdr
+    return (b"\x89PNG\r\n\x1a\n" + struct.pack(">I", len(ihdr)) + chunk +
+            struct.pack(">I", zlib.crc32(chunk)) + b"\0\0\0\0IEND\xaeB`\x82")
+
+
+@pytest.mark.parametrize("fmt", ["toml", "obj", "xml"])
+@pytest.mark.parametrize("size, message", [
+    (12000, "declares 12000 x 12000 pixels"),            # above glrender's 8192^2 limit
+    (100000, "decompression bomb"),                      # above Pillow's own limit
+])
+def test05_huge_texture_headers_are_refused_before_decoding(write, fmt, size, message):
+    from glrender.errors import SceneError
+
+    write("huge.png", _png_header_claiming(size, size))
+    if fmt == "toml":
+        path = write("s.toml", '[textures.t]\nfile = "huge.png"\n[materials.a]\nreflectance = "t"\n'
+                               '[[shapes]]\ntype = "sphere"\nmaterial = "a"\n')
+    elif fmt == "obj":
+        write("m.mtl", "newmtl a\nmap_Kd huge.png\n")
+        path = write("s.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n")
+    else:
+        path = write("s.xml", '<scene version="3.0.0"><shape type="sphere"><bsdf type="diffuse">'
+                              '<texture type="bitmap" name="reflectance"><string name="filename" '
+                              'value="huge.png"/></texture></bsdf></shape></scene>')
+    with pytest.raises(SceneError, match=message):
+        glrender.load(path)

@@ -13,6 +13,8 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
+import numpy as np
+
 from ...errors import SceneError
 
 
@@ -101,3 +103,34 @@ def read_bytes(path, limit: int | None = None) -> bytes:
         raise SceneError(f"{path}: no such file") from None
     except OSError as exc:
         raise SceneError(f"{path}: cannot read ({exc.strerror or exc})") from None
+
+
+MAX_IMAGE_PIXELS = 1 << 26        # 8192 x 8192: larger textures are refused before decoding
+
+
+def check_image_size(width: int, height: int, where: str) -> None:
+    if width * height > MAX_IMAGE_PIXELS:
+        raise SceneError(f"{where}: the image declares {width} x {height} pixels, more than the "
+                         f"{MAX_IMAGE_PIXELS} a texture may have")
+
+
+def read_image_checked(path) -> np.ndarray:
+    """An image file as linear RGB (glrender.film.io.read_image), its declared size checked
+    first for formats PIL reads lazily (a PNG header may claim 10^10 pixels)."""
+    from PIL import Image
+
+    from ...film.io import read_image
+
+    path = Path(path)
+    if path.suffix.lower() not in (".exr", ".hdr", ".pfm", ".npy"):
+        try:
+            with Image.open(path) as im:
+                check_image_size(im.size[0], im.size[1], str(path))
+        except SceneError:
+            raise
+        except Exception as exc:       # PIL's errors for truncated, unknown or bomb files
+            raise SceneError(f"{path}: cannot read the image ({exc})") from None
+    try:
+        return read_image(path)
+    except Exception as exc:
+        raise SceneError(f"{path}: cannot read the image ({exc})") from None

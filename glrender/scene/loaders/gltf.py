@@ -32,7 +32,7 @@ import numpy as np
 
 from ...errors import SceneError
 from .. import model as m
-from .diagnostics import Notes, SceneFiles, read_bytes
+from .diagnostics import Notes, SceneFiles, check_image_size, read_bytes
 from .meshes import MeshData, finish_mesh
 
 SUPPORTED_EXTENSIONS = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
@@ -271,7 +271,10 @@ class _Gltf:
 
         try:
             with Image.open(io.BytesIO(data)) as im:
+                check_image_size(im.size[0], im.size[1], f"{self.path}: images[{index}]")
                 pixels = np.asarray(im.convert("RGB"), np.float64) / 255.0
+        except SceneError:
+            raise
         except Exception as exc:
             self.fail(f"images[{index}]", f"cannot decode the image ({exc})")
         return (srgb_to_linear(pixels) if srgb else pixels).astype(np.float32)

@@ -22,7 +22,7 @@ import numpy as np
 
 from ...errors import SceneError
 from .. import model as m
-from .diagnostics import Notes, SceneFiles, read_bytes, warn
+from .diagnostics import Notes, SceneFiles, read_bytes, read_image_checked, warn
 
 MAX_INCLUDE_DEPTH = 16
 MAX_FILE_BYTES = 64 << 20
@@ -456,12 +456,10 @@ class _Builder:
 
     def image(self, node: Node, what: str) -> tuple[Path, np.ndarray]:
         """The image file a plugin's ``filename`` names, read (linear RGB)."""
-        from ...film.io import read_image
-
         path = self.r.files.resolve(self.prop(node, "filename", "string", ""), node.file, node.line,
                                     what, tuple(self.r.search))
         try:
-            return path, read_image(path)
+            return path, read_image_checked(path)
         except Exception as exc:
             raise SceneError(f"{node.where}: cannot read {what} {path.name!r} ({exc})") from None
 

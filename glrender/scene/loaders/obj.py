@@ -26,7 +26,7 @@ import numpy as np
 
 from ...errors import SceneError
 from .. import model as m
-from .diagnostics import Notes, SceneFiles, read_bytes, warn
+from .diagnostics import Notes, SceneFiles, read_bytes, read_image_checked, warn
 from .meshes import MeshData, finish_mesh
 
 MAX_FILE_BYTES = 1 << 31
@@ -353,8 +353,6 @@ _MAP_OPTION_ARGS = {"-blendu": 1, "-blendv": 1, "-bm": 1, "-boost": 1, "-cc": 1,
 def _texture_map(parts, path: Path, lineno: int, files: SceneFiles) -> m.Texture:
     """A ``map_Kd`` statement: options (``-s``, ``-o``, ``-clamp``; others ignored) and a
     file name (which may contain spaces)."""
-    from ...film.io import read_image
-
     scale, offset, clamp = [1.0, 1.0], [0.0, 0.0], False
     i = 1
     while i < len(parts) and parts[i].startswith("-") and len(parts) - i > 1:
@@ -381,7 +379,7 @@ def _texture_map(parts, path: Path, lineno: int, files: SceneFiles) -> m.Texture
     name = " ".join(parts[i:])
     image_path = files.resolve(name, path, lineno, "texture")
     try:
-        image = read_image(image_path)
+        image = read_image_checked(image_path)
     except Exception as exc:
         raise SceneError(f"{path}:{lineno}: cannot read texture {name!r} ({exc})") from None
     # options act on OBJ's uv (v up); in the flipped convention v' = 1 - v they become

@@ -263,12 +263,12 @@ def _texture(ctx, key: str, t) -> m.Texture:
         ou, ov = ctx.vector(t.get("uv_offset", [0.0, 0.0]), f"{key}.uv_offset", 2)
         tex.uv_transform = np.array([[su, 0, ou], [0, sv, ov], [0, 0, 1]], np.float64)
     if kind == "bitmap":
-        from ...film.io import read_image
+        from .diagnostics import read_image_checked
 
         path = ctx.file(t.get("file"), f"{key}.file")
         raw = ctx.boolean(t.get("raw", False), f"{key}.raw")
         try:
-            image = read_image(path)
+            image = read_image_checked(path)
         except Exception as exc:
             ctx.fail(f"{key}.file", f"cannot read image {path.name!r} ({exc})")
         if raw and path.suffix.lower() in (".png", ".jpg", ".jpeg"):
