@@ -11,6 +11,10 @@ Headless contexts come from EGL with an explicit device choice:
 The choice comes from the argument, else the environment variable
 ``GLRENDER_DEVICE``, else ``auto``. Never ``fork()`` a process that holds a live
 llvmpipe context (the child hangs): worker processes must use ``spawn``.
+
+Window contexts (the preview) come from :func:`create_window_context`: a glfw
+window whose OpenGL >= 4.3 core context runs the same compute kernels; its
+driver is the display's, so ``Context.device`` is None there.
 """
 from __future__ import annotations
 
@@ -89,12 +93,14 @@ def candidate_devices(spec: str | int | None) -> list[egl.EglDevice]:
 
 @dataclass
 class Context:
-    """A live OpenGL context and the EGL device it runs on."""
+    """A live OpenGL context and the EGL device it runs on (None for a window's
+    context, whose driver is the display's; ``window`` is then its glfw window)."""
 
     gl: moderngl.Context
-    device: egl.EglDevice
+    device: egl.EglDevice | None
     choice: str | int
     _lock: threading.RLock = field(default_factory=threading.RLock, repr=False)
+    window: object = field(default=None, repr=False)
 
     @property
     def renderer(self) -> str:
@@ -113,9 +119,13 @@ class Context:
         limits = {name: info.get(name) for name in LIMIT_NAMES}
         limits["GL_MAX_COMPUTE_SHARED_MEMORY_SIZE"] = egl.gl.get_integer(
             egl.GL.MAX_COMPUTE_SHARED_MEMORY_SIZE)
+        if self.device is None:
+            device = {"index": None, "kind": "window", "drm_file": None, "choice": str(self.choice)}
+        else:
+            device = {"index": self.device.index, "kind": self.device.kind,
+                      "drm_file": self.device.drm_file, "choice": str(self.choice)}
         return {
-            "device": {"index": self.device.index, "kind": self.device.kind,
-                       "drm_file": self.device.drm_file, "choice": str(self.choice)},
+            "device": device,
             "GL_RENDERER": info["GL_RENDERER"],
             "GL_VENDOR": info["GL_VENDOR"],
             "GL_VERSION": info["GL_VERSION"],
@@ -190,3 +200,116 @@ def default_context(device: str | int | None = None) -> Context:
         if ctx is None:
             ctx = _default[key] = create_context(device)
         return ctx
+
+
+# -- window contexts (glfw) -------------------------------------------------------------------
+NO_DISPLAY_HINT = ("render to a file with `glrender render SCENE -o image.png`, or run under a "
+                   "virtual display: `xvfb-run -a glrender preview SCENE`")
+
+
+def _glfw():
+    try:
+        import glfw
+    except ImportError:
+        raise DeviceError("a window needs the glfw package: pip install 'glrender[preview]'") from None
+    return glfw
+
+
+def _window_hints(glfw, api: int, visible: bool) -> None:
+    glfw.default_window_hints()
+    glfw.window_hint(glfw.CONTEXT_VERSION_MAJOR, REQUIRED_GL // 100)
+    glfw.window_hint(glfw.CONTEXT_VERSION_MINOR, REQUIRED_GL % 100 // 10)
+    glfw.window_hint(glfw.OPENGL_PROFILE, glfw.OPENGL_CORE_PROFILE)
+    glfw.window_hint(glfw.OPENGL_FORWARD_COMPAT, True)
+    glfw.window_hint(glfw.CONTEXT_CREATION_API, api)
+    glfw.window_hint(glfw.VISIBLE, visible)
+    glfw.window_hint(glfw.DOUBLEBUFFER, True)
+
+
+def create_window_context(width: int, height: int, title: str = "glrender", *,
+                          device: str | int | None = None, threads: int | None = None,
+                          visible: bool = True) -> Context:
+    """Open a glfw window with an OpenGL >= 4.3 core context, current on this thread.
+
+    The context is made through EGL first (so the bundled Mesa of ``glrender.gl.mesa``
+    serves the window as it serves headless contexts), else through the platform's
+    native API (GLX). ``device``: ``auto`` takes the display's driver, ``cpu`` forces
+    Mesa's software rasteriser, ``gpu`` refuses llvmpipe; an EGL device index cannot
+    choose a window's driver. Without a display this raises a one-line DeviceError
+    that names the alternatives. The caller owns the window: destroy it and call
+    ``glfw.terminate()`` when done (``Context.window``).
+    """
+    glfw = _glfw()
+    choice = parse_device(device)
+    if isinstance(choice, int):
+        raise DeviceError(f"device {choice}: an EGL device index picks a headless device; a "
+                          f"window runs on the display's driver (use auto, cpu or gpu)")
+    if threads is not None:
+        if threads < 1:
+            raise DeviceError(f"threads: expected a positive integer, got {threads}")
+        os.environ["LP_NUM_THREADS"] = str(threads)
+    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        raise DeviceError(f"no display for a window (DISPLAY is not set): {NO_DISPLAY_HINT}")
+    errors: list[str] = []
+    glfw.set_error_callback(lambda code, text: errors.append(
+        text.decode(errors="replace") if isinstance(text, bytes) else str(text)))
+    if not glfw.init():
+        where = os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+        raise DeviceError(f"cannot open the display {where} ({'; '.join(errors) or 'glfw.init failed'}):"
+                          f" {NO_DISPLAY_HINT}")
+    saved_env = {}
+    if choice == "cpu":  # Mesa's software rasteriser, whatever the display's driver is
+        saved_env = {k: os.environ.get(k) for k in ("LIBGL_ALWAYS_SOFTWARE", "__GLX_VENDOR_LIBRARY_NAME")}
+        os.environ.update(LIBGL_ALWAYS_SOFTWARE="1", __GLX_VENDOR_LIBRARY_NAME="mesa")
+    try:
+        window, gl = _open_window(glfw, width, height, title, visible, errors)
+    finally:
+        for key, value in saved_env.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+    renderer = gl.info["GL_RENDERER"]
+    software = "llvmpipe" in renderer
+    if (choice == "gpu" and software) or (choice == "cpu" and not software):
+        glfw.destroy_window(window)
+        glfw.terminate()
+        raise DeviceError(f"device {choice}: the display's OpenGL driver is {renderer}; "
+                          f"use device auto")
+    return Context(gl, None, choice, window=window)
+
+
+def _open_window(glfw, width: int, height: int, title: str, visible: bool, errors: list[str]):
+    """(window, moderngl context): EGL first, then the native API."""
+    try:
+        egl.library_paths()  # activates the bundled Mesa (if any) before EGL loads
+    except DeviceError:
+        pass
+    attempts = [("EGL", glfw.EGL_CONTEXT_API), ("native", glfw.NATIVE_CONTEXT_API)]
+    failures = []
+    for name, api in attempts:
+        restore = None
+        root = mesa.active_root()
+        drivers = os.environ.get("LIBGL_DRIVERS_PATH", "")
+        if api == glfw.NATIVE_CONTEXT_API and root and drivers.startswith(root):
+            # GLX loads the system's libGLX_mesa: it needs the system's DRI drivers
+            restore = os.environ.pop("LIBGL_DRIVERS_PATH")
+        del errors[:]
+        _window_hints(glfw, api, visible)
+        window = glfw.create_window(int(width), int(height), title, None, None)
+        if restore is not None:
+            os.environ["LIBGL_DRIVERS_PATH"] = restore
+        if not window:
+            failures.append(f"{name}: {'; '.join(errors) or 'no window'}")
+            continue
+        glfw.make_context_current(window)
+        try:
+            gl = moderngl.create_context(require=REQUIRED_GL)
+        except Exception as exc:  # moderngl raises plain Exception for context failures
+            failures.append(f"{name}: {str(exc).strip().splitlines()[0]}")
+            glfw.destroy_window(window)
+            continue
+        return window, gl
+    glfw.terminate()
+    raise DeviceError(f"cannot create an OpenGL {REQUIRED_GL // 100}.{REQUIRED_GL % 100 // 10} core "
+                      f"context for a window ({'; '.join(failures)})")
