@@ -35,6 +35,7 @@ system_packages() {
     python3 -c 'import ensurepip, venv' >/dev/null 2>&1 || missing+=(python3-venv)
     if [ "${1:-}" = test ]; then
         command -v Xvfb >/dev/null 2>&1 || missing+=(xvfb)
+        command -v xdotool >/dev/null 2>&1 || missing+=(xdotool)
     fi
     if [ ${#missing[@]} -gt 0 ]; then apt_install "${missing[@]}"; fi
 }

@@ -261,6 +261,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--samples", type=int, default=1_000_000, metavar="N",
                    help="chi-square samples per warp (default 10^6)")
     p.set_defaults(func=cmd_sampling)
+
+    from .preview.command import add_preview_parser   # glrender preview (glrender/preview/)
+    add_preview_parser(sub)
     return parser
 
 
