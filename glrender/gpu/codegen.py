@@ -144,6 +144,8 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
         "    uint material = 0u;",
         "    uint light = 0u;",
         "    vec4 sphere = vec4(0.0);  // centre and signed radius of the nearest sphere hit",
+        "    float plane = 0.0;        // dot(ng, corner) of the nearest planar hit",
+        "    vec3 p = vec3(0.0);",
         "    vec2 ab;",
         "    float tq;",
         "    vec3 inv_d = 1.0 / d;",
@@ -156,6 +158,7 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
         body += [
             f"    tq = {_planar_call(q, 't')};",
             f"    if (tq < t) {{ t = tq; prim = {k}u; ng = {_v3(q.normal)}; uv = {uv}; "
+            f"plane = {_f(np.dot(q.normal, q.corner))}; "
             f"material = {q.material}u; light = {q.light}u; sphere.w = 0.0; }}",
         ]
     for j, s in enumerate(packed.spheres):
@@ -175,21 +178,27 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
             f"    if ({'bvh_intersect_closest_t(o, d, t, time, bh)' if moving else 'bvh_intersect_closest(o, d, t, bh)'}) {{",
             "        t = bh.t;",
             "        prim = kCompiledPrimitives + bh.prim;",
-            f"        {'mesh_surface_t(bh.prim, bh.bary, time, ng, ns, uv, material, light)' if moving else 'mesh_surface(bh.prim, bh.bary, ng, ns, uv, material, light)'};",
+            f"        {'mesh_surface_t(bh.prim, bh.bary, time, p, ng, ns, uv, material, light)' if moving else 'mesh_surface(bh.prim, bh.bary, p, ng, ns, uv, material, light)'};",
             "        sphere.w = 0.0;",
             "    }",
         ]
     body += [
         "    if (prim == kNoPrimitive) return false;",
-        "    if (sphere.w != 0.0) {",
-        "        vec3 p = o + t * d;",
-        "        vec3 local = (p - sphere.xyz) / abs(sphere.w);",
-        "        ng = local * sign(sphere.w);",
-        "        ng = normalize(ng);",
-        "        uv = vec2(atan(local.y, local.x) * kInvTwoPi + 0.5, acos(clamp(local.z, -1.0, 1.0)) * kInvPi);",
+        "    if (prim < kCompiledPrimitives) {",
+        "        p = o + t * d;",
+        "        if (sphere.w != 0.0) {",
+        "            // back onto the sphere; Mitsuba's uv: u = atan2(y, x) / 2 pi in [0, 1), v = theta / pi",
+        "            vec3 local = normalize(p - sphere.xyz);",
+        "            p = sphere.xyz + abs(sphere.w) * local;",
+        "            ng = local * sign(sphere.w);",
+        "            float u = atan(local.y, local.x) * kInvTwoPi;",
+        "            uv = vec2(u < 0.0 ? u + 1.0 : u, atan(length(local.xy), local.z) * kInvPi);",
+        "        } else {",
+        "            p -= (dot(ng, p) - plane) * ng;   // back onto the plane",
+        "        }",
+        "        ns = ng;",
         "    }",
-        "    if (prim < kCompiledPrimitives) ns = ng;",
-        "    hit = SurfaceHit(t, ng, ns, uv, material, light, prim);",
+        "    hit = SurfaceHit(t, p, ng, ns, uv, material, light, prim);",
         "    return true;",
         "}",
         "",

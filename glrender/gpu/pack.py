@@ -29,11 +29,13 @@ NO_PRIMITIVE = 0xFFFFFFFF        # geometry/surface.glsl kNoPrimitive
 MAX_COMPILED_TRIANGLES_PER_MESH = 32
 MAX_COMPILED_PRIMITIVES = 96
 
-# The six faces of the cube [-1, 1]^3 as (corner, e1, e2) with e1 x e2 pointing outward.
+# The six faces of Mitsuba's cube [-1, 1]^3 as (corner, e1, e2): corner + u e1 + v e2 has the
+# texture coordinates (u, v) of Mitsuba's cube mesh; on every face e1 x e2 points inward
+# (the outward normal is -(e1 x e2)).
 _CUBE_FACES = (
-    ((1, -1, -1), (0, 2, 0), (0, 0, 2)), ((-1, -1, -1), (0, 0, 2), (0, 2, 0)),
-    ((-1, 1, -1), (0, 0, 2), (2, 0, 0)), ((-1, -1, -1), (2, 0, 0), (0, 0, 2)),
-    ((-1, -1, 1), (2, 0, 0), (0, 2, 0)), ((-1, -1, -1), (0, 2, 0), (2, 0, 0)),
+    ((-1, -1, -1), (0, 0, 2), (2, 0, 0)), ((1, 1, 1), (-2, 0, 0), (0, 0, -2)),
+    ((1, -1, 1), (0, 2, 0), (0, 0, -2)), ((-1, -1, 1), (0, 2, 0), (2, 0, 0)),
+    ((-1, -1, -1), (0, 2, 0), (0, 0, 2)), ((-1, 1, -1), (0, -2, 0), (2, 0, 0)),
 )
 
 
@@ -46,11 +48,12 @@ class Parallelogram:
     light: int = 0          # area light index + 1
     triangle: bool = False  # a triangle corner + a e1 + b e2, a + b <= 1
     uv: np.ndarray | None = None  # 3x2: uv at corner, and its change along e1 and e2
+    flip: bool = False      # the front faces -(e1 x e2) (flip_normals, or a mirroring transform)
 
     @property
     def normal(self) -> np.ndarray:
         n = np.cross(self.e1, self.e2)
-        return n / np.linalg.norm(n)
+        return (-n if self.flip else n) / np.linalg.norm(n)
 
     @property
     def area(self) -> float:
@@ -331,15 +334,15 @@ def pack_scene(scene: m.Scene) -> PackedScene:
                 raise SceneError(f"{where}: motion is supported for spheres and meshes; "
                                  f"make the {shape.kind} a mesh to move it")
             faces = _CUBE_FACES if shape.kind == "cube" else (((-1, -1, 0), (2, 0, 0), (0, 2, 0)),)
+            inward = shape.kind == "cube"   # see _CUBE_FACES
             for corner, e1, e2 in faces:
                 c = m.transform_points(M, np.array(corner, np.float64))
                 a = M[:3, :3] @ np.array(e1, np.float64)
                 b = M[:3, :3] @ np.array(e2, np.float64)
-                if flip:
-                    a, b = b, a
                 if np.linalg.norm(np.cross(a, b)) == 0:
                     raise SceneError(f"{where}: the transform collapses the {shape.kind} to zero area")
-                add_quad(Parallelogram(c, a, b, shape.material), shape.emission)
+                # flipping turns the normal, not the parametrization: uv stay as Mitsuba's
+                add_quad(Parallelogram(c, a, b, shape.material, flip=flip != inward), shape.emission)
                 compiled_budget -= 1
         elif shape.kind == "sphere":
             center = m.transform_points(M, np.array(shape.center, np.float64))

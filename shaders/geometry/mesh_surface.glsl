@@ -6,13 +6,15 @@
 #include "geometry/bvh.glsl"
 #include "scene/layout.glsl"
 
-void mesh_surface(uint tri, vec2 bary, out vec3 ng, out vec3 ns, out vec2 uv, out uint material,
-                  out uint light) {
+// p: the hit point from the barycentrics (rounding error relative to the vertices).
+void mesh_surface(uint tri, vec2 bary, out vec3 p, out vec3 ng, out vec3 ns, out vec2 uv,
+                  out uint material, out uint light) {
     vec3 p0 = bvh_triangle_vertex(tri, 0u);
     vec3 p1 = bvh_triangle_vertex(tri, 1u);
     vec3 p2 = bvh_triangle_vertex(tri, 2u);
     ng = normalize(cross(p1 - p0, p2 - p0));
     float b0 = 1.0 - bary.x - bary.y;
+    p = b0 * p0 + bary.x * p1 + bary.y * p2;
     int base = 3 * int(tri);
     vec3 n = b0 * texelFetch(u_tri_normals, base).xyz + bary.x * texelFetch(u_tri_normals, base + 1).xyz +
              bary.y * texelFetch(u_tri_normals, base + 2).xyz;

@@ -7,14 +7,15 @@
 #include "geometry/mesh_surface.glsl"
 #include "geometry/motion.glsl"
 
-void mesh_surface_t(uint tri, vec2 bary, float time, out vec3 ng, out vec3 ns, out vec2 uv,
-                    out uint material, out uint light) {
-    mesh_surface(tri, bary, ng, ns, uv, material, light);
+void mesh_surface_t(uint tri, vec2 bary, float time, out vec3 p, out vec3 ng, out vec3 ns,
+                    out vec2 uv, out uint material, out uint light) {
+    mesh_surface(tri, bary, p, ng, ns, uv, material, light);
     int i = motion_instance_of(tri);
     if (i < 0) return;
     vec3 translation;
     mat3 rotation, scale;
     motion_transform(i, time, translation, rotation, scale);
+    p = translation + rotation * (scale * p);
     mat3 normal_matrix = rotation * inverse(scale);
     ng = normalize(normal_matrix * ng);
     ns = normalize(normal_matrix * ns);

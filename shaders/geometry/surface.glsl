@@ -6,6 +6,8 @@ const uint kNoPrimitive = 0xffffffffu;
 // toward the ray); the shading normal ns may differ from the geometric one.
 struct SurfaceHit {
     float t;        // ray parameter of the hit
+    vec3 p;         // the hit point, from the primitive (not o + t d: its rounding error grows
+                    // with |o| and t, and would put points behind surfaces near the origin)
     vec3 ng;        // geometric normal
     vec3 ns;        // shading normal
     vec2 uv;        // texture coordinates

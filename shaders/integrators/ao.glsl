@@ -16,7 +16,7 @@ vec3 integrator_li(vec3 o, vec3 d, float t_max, float time, inout SamplerState s
     Frame frame = frame_from_z(n);
     vec3 wi = frame_from_local(frame, sample_cosine_hemisphere(sampler_2d(s)));
     if (dot(wi, hit.ng) * dot(n, hit.ng) <= 0.0) return vec3(0.0);
-    vec3 p = o + hit.t * d;
+    vec3 p = hit.p;
     vec3 o2 = offset_ray_origin(p, hit.ng, wi);
     return scene_occluded(o2, wi, u_params.misc.x, time, kNoPrimitive) ? vec3(0.0) : vec3(1.0);
 }

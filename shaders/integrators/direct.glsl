@@ -18,7 +18,7 @@ vec3 integrator_li(vec3 o, vec3 d, float t_max, float time, inout SamplerState s
     if (hit.light != 0u) L += emitter_hit_contribution(hit, d, 0, o, 0.0, true);
     if (kMaxDepth == 1) return L;
 
-    vec3 p = o + hit.t * d;
+    vec3 p = hit.p;
     Bsdf b = bsdf_from_material(hit.material, hit.uv);
     Frame frame = frame_from_z(hit.ns);
     vec3 wo = frame_to_local(frame, -d);

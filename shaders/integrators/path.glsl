@@ -48,7 +48,7 @@ bool path_segment(inout PathState st, inout SamplerState s) {
         st.L += st.beta * environment_contribution(st.d, depth, st.prev_p, st.prev_pdf, st.prev_delta);
         return false;
     }
-    vec3 p = st.o + hit.t * st.d;
+    vec3 p = hit.p;
     if (depth == 0) record_aov(st.aov, hit);
 
     // Emission of an area light found by the camera ray or by BSDF sampling

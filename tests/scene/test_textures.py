@@ -148,14 +148,9 @@ _UV_SCENE = """<scene version="3.0.0">
     ("disk", False),
     ("obj", False),
     ("ply", False),
-    pytest.param("cube", False, marks=pytest.mark.xfail(strict=True, reason=(
-        "gpu/pack.py gives each cube face the (a, b) of its own edges as uv, not the uv "
-        "layout of Mitsuba's cube mesh"))),
-    pytest.param("sphere", False, marks=pytest.mark.xfail(strict=True, reason=(
-        "gpu/codegen.py gives spheres u = atan2(y, x) / 2pi + 0.5; Mitsuba wraps phi to [0, 2pi) "
-        "(u = phi / 2pi), half a turn apart"))),
-    pytest.param("rectangle", True, marks=pytest.mark.xfail(strict=True, reason=(
-        "gpu/pack.py swaps a flipped rectangle's edges, and with them u and v"))),
+    ("cube", False),
+    ("sphere", False),
+    ("rectangle", True),
 ])
 def test04_uv_conventions_match_mitsuba(write, shape, flip):
     mi = pytest.importorskip("mitsuba")
