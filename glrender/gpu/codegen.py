@@ -112,6 +112,28 @@ def generate_materials(materials) -> list[str]:
                             MAX_CONSTANT_MATERIALS, fallback)
 
 
+def _mesh_box(packed: PackedScene):
+    """World box of every BVH triangle (over the shutter for moving meshes), grown by a
+    relative margin for float32 rounding; None when there is nothing to bound."""
+    points = []
+    if packed.mesh is not None:
+        points.append(packed.mesh[0].reshape(-1, 3))
+    for mm in packed.moving_meshes:
+        from ..accel.instances import MotionInstance, motion_bounds
+
+        obj = mm.positions.reshape(-1, 3)
+        inst = MotionInstance(obj, np.arange(len(obj)).reshape(-1, 3), mm.world_from_object_open,
+                              mm.world_from_object_close)
+        lo, hi = motion_bounds(inst, obj.min(axis=0), obj.max(axis=0))
+        points.append(np.stack([lo, hi]))
+    if not points:
+        return None
+    p = np.concatenate(points)
+    lo, hi = p.min(axis=0), p.max(axis=0)
+    pad = 1e-5 * (np.abs(lo) + np.abs(hi) + (hi - lo)) + 1e-30
+    return lo - pad, hi + pad
+
+
 def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
     lines = [
         f"// Scene geometry: {len(packed.quads)} planar primitives, {len(packed.spheres)} spheres, "
@@ -119,6 +141,7 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
         '#include "geometry/surface.glsl"',
         '#include "geometry/parallelogram.glsl"',
         '#include "geometry/sphere.glsl"',
+        '#include "geometry/box.glsl"',
         '#include "common/constants.glsl"',
         '#include "scene/layout.glsl"',
     ]
@@ -172,10 +195,14 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
             f"      if (tq < t) {{ t = tq; prim = {k}u; sphere = vec4(c, {_f(signed_r)}); "
             f"material = {s.material}u; light = {s.light}u; }} }}",
         ]
+    box = _mesh_box(packed) if has_bvh else None
+    box_test = (f"ray_meets_box(o, inv_d, {_v3(box[0])}, {_v3(box[1])}, {{}})" if box is not None
+                else "true")
     if has_bvh:
         body += [
             "    BvhHit bh;",
-            f"    if ({'bvh_intersect_closest_t(o, d, t, time, bh)' if moving else 'bvh_intersect_closest(o, d, t, bh)'}) {{",
+            f"    if ({box_test.format('t')} && "
+            f"{'bvh_intersect_closest_t(o, d, t, time, bh)' if moving else 'bvh_intersect_closest(o, d, t, bh)'}) {{",
             "        t = bh.t;",
             "        prim = kCompiledPrimitives + bh.prim;",
             f"        {'mesh_surface_t(bh.prim, bh.bary, time, p, ng, ns, uv, material, light)' if moving else 'mesh_surface(bh.prim, bh.bary, p, ng, ns, uv, material, light)'};",
@@ -224,7 +251,8 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
         occ.append(f"    t = min(t, {test if not s.light else f'ignore == {k}u ? t_max : {test}'});")
     occ.append("    if (t < t_max) return true;")
     if has_bvh:
-        occ.append(f"    return {'bvh_intersect_any_t(o, d, t_max, time)' if moving else 'bvh_intersect_any(o, d, t_max)'};")
+        occ.append(f"    return {box_test.format('t_max')} && "
+                   f"{'bvh_intersect_any_t(o, d, t_max, time)' if moving else 'bvh_intersect_any(o, d, t_max)'};")
     else:
         occ.append("    return false;")
     occ += ["}", ""]
