@@ -13,8 +13,8 @@ from cli_run import CORNELL, Running, glrender
 from glrender.film.io import read_exr_layers
 from glrender.render.checkpoint import load_checkpoint
 
-# ~2 s of rendering on 2 llvmpipe threads: long enough to interrupt in the middle
-ARGS = ["--width", 96, "--height", 72, "--spp", 1024, "--seed", 11]
+# 12.6 M paths: 1.6-3 s on 2 llvmpipe threads, long enough to interrupt in the middle
+ARGS = ["--width", 64, "--height", 48, "--spp", 4096, "--seed", 11]
 
 
 @pytest.fixture(scope="module")
@@ -25,12 +25,17 @@ def uninterrupted(tmp_path_factory):
     return read_exr_layers(out)
 
 
-def interrupt(tmp_path, signum, *extra, after=0.8):
-    """Start a render, signal it ``after`` seconds into the render, return (process, seconds
-    from the signal to the exit, stats)."""
+def interrupt(tmp_path, signum, *extra, after=0.4, args=ARGS):
+    """Start a render, signal it ``after`` seconds into the render (after its first
+    checkpoint where it writes them periodically), return (process, seconds from the
+    signal to the exit, stats)."""
     out, stats = tmp_path / "i.exr", tmp_path / "i.json"
-    run = Running("render", CORNELL, "-o", out, *ARGS, "--stats", stats, *extra)
+    run = Running("render", CORNELL, "-o", out, *args, "--stats", stats, *extra)
     run.wait_for("glrender: rendering")
+    if "--checkpoint-every" in extra:
+        ckpt, end = tmp_path / "i.exr.ckpt", time.monotonic() + 60
+        while not ckpt.exists() and run.proc.poll() is None and time.monotonic() < end:
+            time.sleep(0.005)
     time.sleep(after)
     t0 = time.monotonic()
     run.proc.send_signal(signum)
@@ -48,7 +53,7 @@ def test01_sigint_then_resume_equals_uninterrupted(tmp_path, uninterrupted):
     assert f"stopped by SIGINT at {stats['spp']} spp" in run.stderr
     assert str(out) in run.stderr and str(ckpt) in run.stderr and "--resume" in run.stderr
     assert stats["stopped"] == "interrupted" and stats["signal"] == "SIGINT"
-    assert 0 < stats["spp"] < 1024 and stats["spp"] % stats["samples_per_pass"] == 0
+    assert 0 < stats["spp"] < 4096 and stats["spp"] % stats["samples_per_pass"] == 0
     assert load_checkpoint(ckpt).spp_done == stats["spp"]
     partial = read_exr_layers(out)["RGB"]
     assert partial.max() > 0.1 and not np.array_equal(partial, uninterrupted["RGB"])
@@ -57,19 +62,21 @@ def test01_sigint_then_resume_equals_uninterrupted(tmp_path, uninterrupted):
     assert resumed.returncode == 0, resumed.stderr
     assert f"resuming {ckpt} at {stats['spp']} spp" in resumed.stderr
     rstats = json.loads((tmp_path / "r.json").read_text())
-    assert rstats["resumed_from_spp"] == stats["spp"] and rstats["spp"] == 1024
+    assert rstats["resumed_from_spp"] == stats["spp"] and rstats["spp"] == 4096
     final = read_exr_layers(out)
     np.testing.assert_array_equal(final["RGB"], uninterrupted["RGB"])
     np.testing.assert_array_equal(final["variance"], uninterrupted["variance"])
 
 
 def test02_sigterm_with_periodic_checkpoints(tmp_path):
+    # 4x the samples of ARGS: no reference image is needed, and the render cannot end first
+    args = ARGS[:-3] + [ARGS[-3] * 4, "--seed", 11]
     run, rc, seconds, stats, out = interrupt(tmp_path, signal.SIGTERM, "--checkpoint-every", "0.2",
-                                             after=1.0)
+                                             after=0.5, args=args)
     assert rc == 143, run.stderr
     assert seconds < 1.0
     assert "stopped by SIGTERM" in run.stderr and stats["signal"] == "SIGTERM"
-    assert stats["checkpoints_written"] >= 2          # every 0.2 s over ~1 s of rendering
+    assert stats["checkpoints_written"] >= 2          # every 0.2 s, signalled 0.5 s after the first
     assert load_checkpoint(tmp_path / "i.exr.ckpt").spp_done == stats["spp"] > 0
     assert out.exists()
 
