@@ -99,6 +99,7 @@ class Renderer:
         self.tiles_x = -(-self.width // TILE)
         self.tiles_y = -(-self.height // TILE)
         self.spp_done = 0
+        self.rows = (0, self.tiles_y)   # the tile rows accumulated: (first, count)
         self._tile_rate = None    # measured seconds per tile-sample
         self._buffers = []
         self._bvh = None
@@ -274,6 +275,7 @@ class Renderer:
             h.update(np.ascontiguousarray(self.packed.env_image).tobytes())
         h.update(self.packed.textures.fingerprint())
         prm = self._param_block(0, 0)
+        prm["image"][3], prm["counts"][3] = self.tiles_y, 0   # a band renders the same samples
         if self.settings.sampler.kind != "stratified":
             prm["samples"][2:] = 0   # the total spp decides the strata only: other samplers
                                      # may continue past it (render more samples later)
@@ -288,13 +290,17 @@ class Renderer:
                 "mean": np.frombuffer(self._mean.read(), np.float32).copy(),
                 "m2": np.frombuffer(self._m2.read(), np.float32).copy(),
                 "aov": np.frombuffer(self._aov.read(), np.float32).copy(),
-                "width": self.width, "height": self.height}
+                "width": self.width, "height": self.height, "rows": self.rows}
 
     def restore(self, state: dict) -> None:
         """Continue from ``state()`` of an equal renderer (same fingerprint)."""
         if state.get("fingerprint") != self.fingerprint():
             raise UsageError("the saved accumulation belongs to a different scene or different "
                              "render settings (fingerprints differ)")
+        rows = tuple(state.get("rows", (0, self.tiles_y)))
+        if rows != self.rows:
+            raise UsageError(f"the saved accumulation holds tile rows {rows}, this renderer "
+                             f"{self.rows} (reset(rows=...) first)")
         for name, buf in (("mean", self._mean), ("m2", self._m2), ("aov", self._aov)):
             data = np.ascontiguousarray(state[name], np.float32)
             if data.nbytes != buf.size:
@@ -312,9 +318,28 @@ class Renderer:
         self.program.run(group_x=1)
         self.gl.finish()
 
-    def reset(self):
-        """Forget every sample (after the camera moves, say)."""
-        n = self.width * self.height
+    @property
+    def band_height(self) -> int:
+        """Pixel rows in the accumulation (the image's height unless ``rows`` is a band)."""
+        first, count = self.rows
+        return min(self.height, TILE * (first + count)) - TILE * first
+
+    def reset(self, start: int = 0, rows: tuple[int, int] | None = None):
+        """Forget every sample (after the camera moves, say).
+
+        ``start``: the sample index the next pass renders, for a range of samples
+        rendered here and merged with other ranges elsewhere (glrender.distributed).
+        ``rows``: ``(first, count)`` tile rows (of 8 pixel rows) to accumulate; the
+        rest of the image is not rendered and not stored (None: the whole image).
+        The samples of a pixel do not depend on either."""
+        first, count = rows if rows is not None else (0, self.tiles_y)
+        if not (0 <= first < self.tiles_y and 1 <= count <= self.tiles_y - first):
+            raise UsageError(f"rows {rows}: expected (first, count) tile rows within the image's "
+                             f"{self.tiles_y}")
+        if not 0 <= start < 1 << 31:
+            raise UsageError(f"start: expected a sample index in [0, 2^31), got {start}")
+        self.rows = (int(first), int(count))
+        n = self.width * self.band_height
         for name in ("_mean", "_m2", "_aov", "_debug"):
             old = getattr(self, name, None)
             if old is not None:
@@ -326,7 +351,7 @@ class Renderer:
         self._debug = self.gl.buffer(reserve=4 * n if self.settings.count_loops else 16)
         for buf in (self._mean, self._m2, self._aov, self._debug):
             buf.clear()
-        self.spp_done = 0
+        self.spp_done = int(start)
 
     # -- rendering ---------------------------------------------------------------------------
     def _param_block(self, first_sample: int, samples: int) -> np.ndarray:
@@ -343,12 +368,13 @@ class Renderer:
         sh = scene.shutter
         prm["shutter"][:3] = (sh.open, sh.close, 1.0 if sh.function == "tent" else 0.0)
         prm["filter_params"] = (film.radius, film.gaussian_stddev, film.mitchell_b, film.mitchell_c)
-        prm["image"] = (self.width, self.height, self.tiles_x, self.tiles_y)
+        prm["image"] = (self.width, self.height, self.tiles_x, self.rows[1])
         spp_total = s.sampler.spp
         prm["samples"] = (first_sample, samples, spp_total, strata_columns(spp_total))
         seed = int(s.sampler.seed) & 0xFFFFFFFF
         prm["dispatch"] = (0, 0, seed, (seed * 2654435761 + 12345) & 0xFFFFFFFF)
-        prm["counts"] = (self.n_lights, len(self.packed.materials), self.packed.environment, 0)
+        prm["counts"] = (self.n_lights, len(self.packed.materials), self.packed.environment,
+                         self.rows[0])
         center, radius = self.packed.sphere_bounds
         prm["scene_sphere"] = (*center, radius)
         prm["misc"][0] = min(s.integrator.ao_distance, 3.0e38)
@@ -379,7 +405,7 @@ class Renderer:
         so far are undone (from a copy taken before the pass) and the pass returns False,
         so the accumulation always holds whole passes."""
         prm = self._param_block(first_sample, samples)
-        tiles = self.tiles_x * self.tiles_y
+        tiles = self.tiles_x * self.rows[1]
         self._bind()
         start = 0
         while start < tiles:
@@ -455,18 +481,18 @@ class Renderer:
         return self.film()
 
     def film(self) -> Film:
-        """Read the accumulation back as a :class:`Film`."""
-        n = self.width * self.height
-        mean = np.frombuffer(self._mean.read(), np.float32).reshape(self.height, self.width, 4)
-        m2 = np.frombuffer(self._m2.read(), np.float32).reshape(self.height, self.width, 4)
+        """Read the accumulation back as a :class:`Film` (the band of ``rows`` only)."""
+        h = self.band_height
+        mean = np.frombuffer(self._mean.read(), np.float32).reshape(h, self.width, 4)
+        m2 = np.frombuffer(self._m2.read(), np.float32).reshape(h, self.width, 4)
         aovs = {}
         if self.settings.aovs:
-            a = np.frombuffer(self._aov.read(), np.float32).reshape(self.height, self.width, 2, 4)
+            a = np.frombuffer(self._aov.read(), np.float32).reshape(h, self.width, 2, 4)
             aovs = {"albedo": a[:, :, 0, :3].copy(), "normal": a[:, :, 1, :3].copy(),
                     "depth": a[:, :, 1, 3].copy()}
         debug = None
         if self.settings.count_loops:
-            debug = np.frombuffer(self._debug.read(), np.uint32).reshape(self.height, self.width).copy()
+            debug = np.frombuffer(self._debug.read(), np.uint32).reshape(h, self.width).copy()
         return Film(mean=mean[..., :3].copy(), m2=m2[..., :3].copy(), count=mean[..., 3].copy(),
                     nonfinite=m2[..., 3].copy(), spp=self.spp_done, aovs=aovs, loop_counts=debug,
                     sampler=self.settings.sampler.kind)

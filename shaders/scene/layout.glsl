@@ -14,10 +14,10 @@ layout(std140, binding = 0) uniform RenderParams {
     vec4 camera_clip;      // x: near clip, y: far clip
     vec4 shutter;          // x: open, y: close, z: shutter function (0 box, 1 tent)
     vec4 filter_params;    // x: radius in pixels, y: gaussian stddev, z: Mitchell B, w: Mitchell C
-    uvec4 image;           // x: width, y: height, z: tiles along x, w: tiles along y
+    uvec4 image;           // x: width, y: height, z: tiles along x, w: tile rows in the accumulation
     uvec4 samples;         // x: first sample index, y: samples per pixel this pass, z: spp of one randomization, w: strata columns
     uvec4 dispatch;        // x: first tile (permuted order), y: tiles in this dispatch, z: seed, w: tile permutation seed
-    uvec4 counts;          // x: lights, y: materials, z: environment light index + 1 (0: none), w: unused
+    uvec4 counts;          // x: lights, y: materials, z: environment light index + 1 (0: none), w: first tile row in the accumulation
     vec4 scene_sphere;     // bounding sphere of the scene: centre xyz, radius w
     vec4 misc;             // x: AO distance, y: sum of light selection weights, zw: unused
 } u_params;

@@ -1,0 +1,133 @@
+"""Work units and the merge tree of a distributed render: pure functions of the image
+size, the sample count and the unit size, never of timing or of the worker count.
+
+A unit renders one *band* (whole rows of 8x8 tiles, full image width) of one frame
+over one range of sample indices. The unit size is a budget in pixel-samples
+(pixels x samples per pixel):
+
+- when a tile row at the full sample count fits it, a band takes as many tile rows as
+  fit and one range holds every sample: each pixel's accumulation is then exactly the
+  one a single process makes (the same samples in the same order), and the merged
+  image is bitwise the single-process image whatever the unit size;
+- otherwise each band is one tile row and its samples are split into ranges (whole
+  passes of ``samples_per_pass``), merged pairwise along a fixed balanced tree
+  (Chan et al.'s formula in float64, glrender.distributed.merge): bitwise the same
+  for every cluster and worker count, and equal to the single-process image to
+  float32 rounding.
+
+A unit's transfer is its band's accumulation: 32 bytes per pixel (64 with AOVs),
+``width x 8 x rows`` pixels, e.g. 1 MB for one tile row of a 3840-pixel-wide image.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+TILE = 8
+SAMPLES_PER_PASS = 8
+MIN_UNIT_SIZE = 1 << 12
+
+
+@dataclass(frozen=True)
+class Unit:
+    """One task: samples [start, stop) of tile rows [first, first + count) of a frame
+    (None: the scene as loaded, no animation)."""
+
+    frame: int | None
+    band: int
+    rows: tuple[int, int]
+    samples: tuple[int, int]
+
+    @property
+    def name(self) -> str:
+        f = "still" if self.frame is None else f"f{self.frame}"
+        return f"{f}-b{self.band}-s{self.samples[0]}-{self.samples[1]}"
+
+
+@dataclass(frozen=True)
+class Plan:
+    width: int
+    height: int
+    spp: int
+    unit_size: int
+    frames: tuple = (None,)
+    samples_per_pass: int = SAMPLES_PER_PASS
+
+    def __post_init__(self):
+        if self.unit_size < MIN_UNIT_SIZE:
+            raise ValueError(f"unit size {self.unit_size}: expected at least {MIN_UNIT_SIZE} "
+                             f"pixel-samples")
+        if self.spp < 1 or self.width < 1 or self.height < 1:
+            raise ValueError("plan: width, height and spp must be positive")
+
+    @property
+    def tile_rows(self) -> int:
+        return -(-self.height // TILE)
+
+    @cached_property
+    def bands(self) -> tuple[tuple[int, int], ...]:
+        """(first tile row, tile rows) of each band, top to bottom."""
+        row_cost = self.width * TILE * self.spp
+        per_band = max(1, min(self.tile_rows, self.unit_size // row_cost))
+        return tuple((r, min(per_band, self.tile_rows - r)) for r in range(0, self.tile_rows, per_band))
+
+    @cached_property
+    def ranges(self) -> tuple[tuple[int, int], ...]:
+        """The sample ranges [start, stop) every band is split into."""
+        if self.width * TILE * self.spp <= self.unit_size:
+            return ((0, self.spp),)
+        k = self.samples_per_pass
+        per = max(k, self.unit_size // (self.width * TILE) // k * k)
+        return tuple((s, min(s + per, self.spp)) for s in range(0, self.spp, per))
+
+    def band_height(self, band: int) -> int:
+        first, count = self.bands[band]
+        return min(self.height, TILE * (first + count)) - TILE * first
+
+    def units(self) -> list[Unit]:
+        """Every unit, in the order a single process renders them."""
+        return [Unit(f, b, rows, r) for f in self.frames for b, rows in enumerate(self.bands)
+                for r in self.ranges]
+
+    def band_units(self, frame, band: int) -> list[Unit]:
+        return [Unit(frame, band, self.bands[band], r) for r in self.ranges]
+
+    def unit_pixel_samples(self, unit: Unit) -> int:
+        return self.width * self.band_height(unit.band) * (unit.samples[1] - unit.samples[0])
+
+    @property
+    def pixel_samples(self) -> int:
+        return self.width * self.height * self.spp * len(self.frames)
+
+    def merge_tree(self):
+        """The order in which a band's ranges are merged: nested pairs of range indices,
+        e.g. ((0, 1), (2, (3, 4))) for 5 ranges (halves, the larger half second)."""
+        def build(lo: int, hi: int):
+            if hi - lo == 1:
+                return lo
+            mid = lo + (hi - lo) // 2
+            return (build(lo, mid), build(mid, hi))
+        return build(0, len(self.ranges))
+
+    def record(self) -> dict:
+        """What a checkpoint or statistics file keeps to reproduce the plan."""
+        return {"width": self.width, "height": self.height, "spp": self.spp,
+                "unit_size": self.unit_size, "samples_per_pass": self.samples_per_pass,
+                "frames": list(self.frames), "bands": len(self.bands), "ranges": len(self.ranges),
+                "units": len(self.bands) * len(self.ranges) * len(self.frames)}
+
+
+def tree_ranges(tree) -> tuple[int, int]:
+    """The first and last range index (inclusive) under a merge-tree node."""
+    if isinstance(tree, int):
+        return tree, tree
+    return tree_ranges(tree[0])[0], tree_ranges(tree[1])[1]
+
+
+def calibrated_unit_size(pixel_samples_per_second: float, seconds: float) -> int:
+    """A unit size from a measured rate: about ``seconds`` of work per unit, rounded to
+    a power of two (so nearby measurements give the same plan)."""
+    import math
+
+    target = max(pixel_samples_per_second * seconds, MIN_UNIT_SIZE)
+    return 1 << max(12, min(40, round(math.log2(target))))
