@@ -16,6 +16,8 @@
 #include "sampling/spherical_rectangle.glsl"
 #include "sampling/spherical_triangle.glsl"
 #include "sampling/distribution2d.glsl"
+#include "sampling/disk.glsl"
+#include "sampling/hemisphere.glsl"
 
 // Light kinds: the values of glrender.gpu.layout.LIGHT_KINDS.
 const uint kLightParallelogram = 0u;
@@ -119,6 +121,14 @@ bool use_spherical_sampling_triangle(LightData l, vec3 p, out float solid_angle)
     return solid_angle > kMinSphericalSampleArea && solid_angle < kMaxSphericalSampleArea;
 }
 
+// Mitsuba's spot falloff for the cosine between the spot axis and the emission direction:
+// 1 inside the beam width, a smooth step to 0 at the cutoff.
+float spot_falloff(LightData l, float cos_theta) {
+    float cos_cutoff = l.params.x, cos_beam = l.params.y;
+    float t = clamp((cos_theta - cos_cutoff) / max(cos_beam - cos_cutoff, 1e-8), 0.0, 1.0);
+    return cos_theta >= cos_beam ? 1.0 : (cos_theta <= cos_cutoff ? 0.0 : t * t * (3.0 - 2.0 * t));
+}
+
 // Samples light l as seen from point p; u in [0,1)^2.
 LightSample sample_light(LightData l, vec3 p, vec2 u) {
     LightSample s = LightSample(vec3(0.0, 0.0, 1.0), 0.0, vec3(0.0), 0.0, false);
@@ -196,11 +206,7 @@ LightSample sample_light(LightData l, vec3 p, vec2 u) {
         vec3 intensity = l.radiance.rgb;
         if (kind == kLightSpot) {
             // Mitsuba's spot falloff: 1 inside the beam width, a smooth step to 0 at the cutoff.
-            float cos_theta = dot(-s.wi, l.n.xyz);
-            float cos_cutoff = l.params.x, cos_beam = l.params.y;
-            float t = clamp((cos_theta - cos_cutoff) / max(cos_beam - cos_cutoff, 1e-8), 0.0, 1.0);
-            float falloff = cos_theta >= cos_beam ? 1.0 : (cos_theta <= cos_cutoff ? 0.0 : t * t * (3.0 - 2.0 * t));
-            intensity *= falloff;
+            intensity *= spot_falloff(l, dot(-s.wi, l.n.xyz));
         }
         s.Le = intensity / dist2;
     } else if (light_kind_present(kLightDirectional) && kind == kLightDirectional) {
@@ -264,4 +270,146 @@ vec3 environment_radiance(LightData l, vec3 w, out float pdf) {
         return envmap_lookup(l, uv);
     }
     return vec3(0.0);
+}
+
+// ---- Emission sampling: where light paths start ----------------------------------------
+//
+// Light tracing and bidirectional path tracing start a path on a light: a point and a
+// direction with their densities, the point's per unit area, the direction's per unit
+// solid angle (Veach 1997, sec. 10.2; pbrt-v4's Light::SampleLe). Area lights: a
+// point uniform by area, a cosine-weighted direction on the emitting side (each side
+// with probability 1/2 if two-sided). Point lights: uniform directions; spot lights:
+// uniform in the cutoff cone. Directional and environment lights: the direction first,
+// then a point uniform on the disk of the scene's bounding sphere's radius
+// perpendicular to it, outside the scene (pbrt's "infinite" lights). The path's first
+// throughput is Le |dot(n, d)| / (pdf_pos pdf_dir) in every case (n = d unless the
+// point lies on a surface); delta positions and directions carry a density of 1.
+
+struct LightEmission {
+    vec3 p;          // start of the light path (world)
+    vec3 n;          // surface normal at p on the emitting side (area lights), else d
+    vec3 d;          // unit emission direction
+    vec3 Le;         // radiance (area, environment), intensity (point, spot), irradiance (directional) along d
+    float pdf_pos;   // density of p per unit area (1: a delta position)
+    float pdf_dir;   // density of d per unit solid angle (1: a delta direction)
+    bool delta_pos;  // point and spot lights
+    bool delta_dir;  // directional lights
+};
+
+// Whether light l emits from a surface (parallelogram, triangle, sphere).
+bool light_is_area(LightData l) {
+    return l.info.x == kLightParallelogram || l.info.x == kLightTriangle || l.info.x == kLightSphere;
+}
+
+// Whether light l lies at infinity (directional, constant, environment map).
+bool light_is_infinite(LightData l) {
+    return l.info.x == kLightDirectional || l.info.x == kLightConstant || l.info.x == kLightEnvmap;
+}
+
+// Samples where and in which direction light l emits. u_pos, u_dir in [0,1)^2;
+// scene_sphere: the scene's bounding sphere (centre xyz, radius w) for lights at
+// infinity. Densities as in LightEmission; pdf_pos 0 when nothing was sampled.
+LightEmission sample_light_emission(LightData l, vec2 u_pos, vec2 u_dir, vec4 scene_sphere) {
+    LightEmission e = LightEmission(vec3(0.0), vec3(0.0, 0.0, 1.0), vec3(0.0, 0.0, 1.0), vec3(0.0),
+                                    0.0, 0.0, false, false);
+    uint kind = l.info.x;
+    if ((light_kind_present(kLightParallelogram) && kind == kLightParallelogram) ||
+        (light_kind_present(kLightTriangle) && kind == kLightTriangle) ||
+        (light_kind_present(kLightSphere) && kind == kLightSphere)) {
+        vec3 n = l.n.xyz;
+        if (kind == kLightSphere) {
+            n = sample_uniform_sphere(u_pos);
+            e.p = l.p.xyz + l.e1.w * n;
+        } else {
+            vec2 ab = kind == kLightTriangle ? sample_uniform_triangle(u_pos).yz : u_pos;
+            e.p = l.p.xyz + ab.x * l.e1.xyz + ab.y * l.e2.xyz;
+        }
+        float side_pdf = 1.0;
+        if ((l.info.y & kLightFlagTwoSided) != 0u) {
+            // reuse u_dir.x for the side: each side with probability 1/2
+            bool back = u_dir.x >= 0.5;
+            u_dir.x = min(back ? 2.0 * u_dir.x - 1.0 : 2.0 * u_dir.x, kOneMinusEpsilon);
+            n = back ? -n : n;
+            side_pdf = 0.5;
+        }
+        vec3 local = sample_cosine_hemisphere(u_dir);
+        e.n = n;
+        e.d = frame_from_local(frame_from_z(n), local);
+        e.pdf_pos = 1.0 / l.n.w;
+        e.pdf_dir = side_pdf * cosine_hemisphere_pdf(local.z);
+        e.Le = l.radiance.rgb;
+    } else if ((light_kind_present(kLightPoint) && kind == kLightPoint) ||
+               (light_kind_present(kLightSpot) && kind == kLightSpot)) {
+        e.p = l.p.xyz;
+        e.pdf_pos = 1.0;
+        e.delta_pos = true;
+        e.Le = l.radiance.rgb;
+        if (kind == kLightSpot) {
+            float cos_cutoff = l.params.x;
+            vec3 local = sample_uniform_cone(u_dir, cos_cutoff);
+            e.d = frame_from_local(frame_from_z(l.n.xyz), local);
+            e.pdf_dir = uniform_cone_pdf(cos_cutoff);
+            e.Le *= spot_falloff(l, local.z);
+        } else {
+            e.d = sample_uniform_sphere(u_dir);
+            e.pdf_dir = uniform_sphere_pdf();
+        }
+        e.n = e.d;
+    } else if ((light_kind_present(kLightDirectional) && kind == kLightDirectional) ||
+               (light_kind_present(kLightConstant) && kind == kLightConstant) ||
+               (light_kind_present(kLightEnvmap) && kind == kLightEnvmap)) {
+        if (kind == kLightDirectional) {
+            e.d = l.n.xyz;
+            e.pdf_dir = 1.0;
+            e.delta_dir = true;
+            e.Le = l.radiance.rgb;
+        } else {
+            // the direction toward the environment that sample_light would pick, reversed
+            LightSample s = sample_light(l, scene_sphere.xyz, u_dir);
+            e.d = -s.wi;
+            e.pdf_dir = s.pdf;
+            e.Le = s.Le;
+        }
+        float r = scene_sphere.w;
+        Frame f = frame_from_z(e.d);
+        vec2 disk = sample_uniform_disk_concentric(u_pos);
+        e.p = scene_sphere.xyz + r * (frame_from_local(f, vec3(disk, -1.0)));
+        e.n = e.d;
+        e.pdf_pos = 1.0 / (kPi * r * r);
+    }
+    return e;
+}
+
+// Densities with which sample_light_emission(l, ., ., scene_sphere) returns the point p
+// (area lights: n its normal on the emitting side) and the direction d: pdf_pos per
+// unit area, pdf_dir per unit solid angle. For delta positions and directions the
+// matching density is 1 (and the other one is that of the sampled component).
+void light_emission_pdf(LightData l, vec3 p, vec3 n, vec3 d, vec4 scene_sphere,
+                        out float pdf_pos, out float pdf_dir) {
+    pdf_pos = 0.0;
+    pdf_dir = 0.0;
+    uint kind = l.info.x;
+    if ((light_kind_present(kLightParallelogram) && kind == kLightParallelogram) ||
+        (light_kind_present(kLightTriangle) && kind == kLightTriangle) ||
+        (light_kind_present(kLightSphere) && kind == kLightSphere)) {
+        float cos_theta = dot(n, d);
+        bool two_sided = (l.info.y & kLightFlagTwoSided) != 0u;
+        pdf_pos = 1.0 / l.n.w;
+        pdf_dir = cos_theta > 0.0 ? (two_sided ? 0.5 : 1.0) * cosine_hemisphere_pdf(cos_theta) : 0.0;
+    } else if ((light_kind_present(kLightPoint) && kind == kLightPoint) ||
+               (light_kind_present(kLightSpot) && kind == kLightSpot)) {
+        pdf_pos = 1.0;
+        if (kind == kLightSpot) {
+            float cos_cutoff = l.params.x;
+            pdf_dir = dot(d, l.n.xyz) > cos_cutoff ? uniform_cone_pdf(cos_cutoff) : 0.0;
+        } else {
+            pdf_dir = uniform_sphere_pdf();
+        }
+    } else if ((light_kind_present(kLightDirectional) && kind == kLightDirectional) ||
+               (light_kind_present(kLightConstant) && kind == kLightConstant) ||
+               (light_kind_present(kLightEnvmap) && kind == kLightEnvmap)) {
+        pdf_pos = 1.0 / (kPi * scene_sphere.w * scene_sphere.w);
+        if (kind == kLightDirectional) pdf_dir = 1.0;
+        else environment_radiance(l, -d, pdf_dir);
+    }
 }
