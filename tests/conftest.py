@@ -42,3 +42,13 @@ def pytest_runtest_makereport(item, call):
         reason = report.longrepr[2] if isinstance(report.longrepr, tuple) else report.longrepr
         report.outcome = "failed"
         report.longrepr = f"skipped under CI=true (every dependency must be installed): {reason}"
+
+
+def pytest_terminal_summary(terminalreporter):
+    """Keep shader compile time visible: programs compiled by this run and the driver's time."""
+    from glrender.gl.shaders import COMPILE_STATS
+
+    terminalreporter.write_line(
+        f"glrender: {COMPILE_STATS['programs']} shader programs compiled in "
+        f"{COMPILE_STATS['seconds']:.1f} s, their first dispatches (code generation or the "
+        f"disk cache) took {COMPILE_STATS['first_dispatch_seconds']:.1f} s")

@@ -224,5 +224,33 @@ def read_image(path) -> np.ndarray:
         return read_hdr(path)
     from PIL import Image
 
+    if ext == ".png" and _png_depth_and_colour(path) in ((16, 2), (16, 6)):
+        return _read_png_rgb16(path)
     with Image.open(path) as im:
+        if im.mode in ("I;16", "I;16L", "I;16B", "I"):     # 16-bit grey (PNG, TIFF)
+            grey = np.asarray(im, np.float64) / 65535.0
+            return np.repeat(srgb_to_linear(np.clip(grey, 0.0, 1.0))[..., None], 3, axis=-1) \
+                .astype(np.float32)
+        if im.mode == "F":                                   # 32-bit float grey (TIFF): linear
+            return np.repeat(np.asarray(im, np.float32)[..., None], 3, axis=-1)
         return srgb_to_linear(np.asarray(im.convert("RGB"), np.float64) / 255.0).astype(np.float32)
+
+
+def _png_depth_and_colour(path: Path) -> tuple[int, int] | None:
+    """(bit depth, colour type) from a PNG's IHDR chunk, None if the file is not a PNG."""
+    with open(path, "rb") as f:
+        head = f.read(26)
+    if len(head) < 26 or head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
+        return None
+    return head[24], head[25]
+
+
+def _read_png_rgb16(path: Path) -> np.ndarray:
+    """A 16-bit RGB or RGBA PNG at full precision (Pillow reduces these to 8 bits)."""
+    import png
+
+    width, height, rows, info = png.Reader(filename=str(path)).asDirect()
+    planes = info["planes"]
+    data = np.vstack([np.asarray(row, np.uint16) for row in rows]).reshape(height, width, planes)
+    rgb = data[..., :3].astype(np.float64) / 65535.0
+    return srgb_to_linear(rgb).astype(np.float32)

@@ -22,6 +22,7 @@ from __future__ import annotations
 import hashlib
 import importlib.resources
 import re
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable, Mapping
@@ -236,6 +237,48 @@ def _raise_mapped(pre: Preprocessed, exc: Exception, stage: str):
     raise ShaderError(f"{stage} failed: {mapped.strip() or log.strip()}", log=mapped) from None
 
 
+#: Programs compiled by this process, the seconds the driver took to compile and link them,
+#: and the seconds of the compute kernels' first dispatches (llvmpipe generates machine code
+#: then, or loads it from its disk cache). The test suite prints these in its summary.
+COMPILE_STATS = {"programs": 0, "seconds": 0.0, "first_dispatch_seconds": 0.0}
+
+
+class ComputeKernel:
+    """A compiled compute shader (moderngl's, every attribute passed through) whose first
+    ``run`` waits for the device and adds its time to ``COMPILE_STATS``."""
+
+    def __init__(self, program: moderngl.ComputeShader):
+        self._program = program
+        self._first = True
+
+    def run(self, *args, **kwargs):
+        if not self._first:
+            return self._program.run(*args, **kwargs)
+        self._first = False
+        t0 = time.perf_counter()
+        self._program.run(*args, **kwargs)
+        self._program.ctx.finish()
+        COMPILE_STATS["first_dispatch_seconds"] += time.perf_counter() - t0
+
+    def __getattr__(self, name):
+        return getattr(self._program, name)
+
+    def __getitem__(self, name):
+        return self._program[name]
+
+    def __setitem__(self, name, value):
+        self._program[name] = value
+
+
+def _timed_build(build):
+    t0 = time.perf_counter()
+    try:
+        return build()
+    finally:
+        COMPILE_STATS["programs"] += 1
+        COMPILE_STATS["seconds"] += time.perf_counter() - t0
+
+
 def _cache_of(ctx) -> dict:
     cache = getattr(ctx, "_glrender_programs", None)
     if cache is None:
@@ -247,7 +290,7 @@ def _cache_of(ctx) -> dict:
 def compile_compute(ctx, entry: str | None = None, *, source: str | None = None,
                     name: str = "<source>", defines: Mapping[str, object] | None = None,
                     slots: Mapping[str, str] | None = None,
-                    library: ShaderLibrary | None = None) -> moderngl.ComputeShader:
+                    library: ShaderLibrary | None = None) -> ComputeKernel:
     """Preprocess and compile a compute entry point; cached per context by final source."""
     gl = getattr(ctx, "gl", ctx)
     pre = preprocess(entry, source=source, name=name, defines=defines, slots=slots,
@@ -256,7 +299,7 @@ def compile_compute(ctx, entry: str | None = None, *, source: str | None = None,
     program = cache.get(pre.key)
     if program is None:
         try:
-            program = gl.compute_shader(pre.source)
+            program = ComputeKernel(_timed_build(lambda: gl.compute_shader(pre.source)))
         except moderngl.Error as exc:
             _raise_mapped(pre, exc, "compute shader compile")
         cache[pre.key] = program
@@ -275,7 +318,8 @@ def compile_program(ctx, vertex: str, fragment: str, *,
     program = cache.get(key)
     if program is None:
         try:
-            program = gl.program(vertex_shader=vs.source, fragment_shader=fs.source)
+            program = _timed_build(lambda: gl.program(vertex_shader=vs.source,
+                                                      fragment_shader=fs.source))
         except moderngl.Error as exc:
             text = str(exc)
             _raise_mapped(fs if "fragment_shader" in text else vs, exc, "program link")
