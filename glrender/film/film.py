@@ -1,14 +1,16 @@
 """A rendered image and its per-pixel statistics."""
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from ..errors import UsageError
 
 
-@dataclass
+@dataclass(repr=False)
 class Film:
     """The accumulation of a render, as numpy arrays (rows top to bottom).
 
@@ -18,6 +20,10 @@ class Film:
     - ``variance``: per-*sample* variance m2 / (count - 1). Under stratified or
       Sobol' sampling samples are not independent and this overstates the error of
       the mean (it is an upper bound); tests take error bars from independent seeds.
+    - ``spp``: samples per pixel accumulated; ``sampler``: the sampler's kind.
+    - ``aovs``: first-hit outputs by name (see :meth:`aov`).
+    - ``stats``: what :func:`glrender.render` measured (timings in seconds, samples/s,
+      passes, why it stopped); empty for a film read from a :class:`Renderer`.
     """
 
     mean: np.ndarray
@@ -25,17 +31,20 @@ class Film:
     count: np.ndarray
     nonfinite: np.ndarray
     spp: int
-    aovs: dict = field(default_factory=dict)
+    aovs: dict[str, np.ndarray] = field(default_factory=dict)
     loop_counts: np.ndarray | None = None
     sampler: str = "independent"
-    stats: dict = field(default_factory=dict)
+    stats: dict[str, Any] = field(default_factory=dict)
 
     @property
     def shape(self) -> tuple[int, int]:
-        return self.mean.shape[:2]
+        """(height, width) in pixels."""
+        return (int(self.mean.shape[0]), int(self.mean.shape[1]))
 
     @property
     def variance(self) -> np.ndarray:
+        """(H, W, 3) float32: per-sample variance of each pixel's radiance (units of
+        radiance squared), m2 / (count - 1); 0 where a pixel has fewer than 2 samples."""
         n = self.count[..., None]
         return np.where(n > 1, self.m2 / np.maximum(n - 1, 1), 0.0).astype(np.float32)
 
@@ -48,9 +57,14 @@ class Film:
 
     @property
     def nonfinite_total(self) -> int:
+        """Samples dropped in the whole image because they were NaN or infinite."""
         return int(self.nonfinite.sum())
 
     def aov(self, name: str) -> np.ndarray:
+        """An arbitrary output by name: ``"variance"`` (always), and with ``aovs=True``
+        ``"albedo"`` (H, W, 3, first-hit reflectance), ``"normal"`` (H, W, 3, world-space
+        unit shading normal) and ``"depth"`` (H, W, distance along the camera ray in scene
+        units). Raises :class:`UsageError` naming the available ones otherwise."""
         if name == "variance":
             return self.variance
         if name not in self.aovs:
@@ -59,7 +73,36 @@ class Film:
                              f"render with aovs=True for albedo, normal, depth)")
         return self.aovs[name]
 
-    def save(self, path, **options) -> None:
+    def save(self, path: str | os.PathLike[str], *, exposure: float = 0.0, curve: str = "clamp",
+             srgb: bool = True, half: bool = False) -> None:
+        """Write the image; the format comes from the extension: ``.exr`` (float32 or
+        ``half``, with the variance and AOVs as layers), ``.pfm``, ``.hdr``, ``.npy``
+        (float32 linear RGB), ``.png``/``.jpg`` (8-bit: scaled by 2^``exposure`` stops, the
+        tone ``curve`` clamp/filmic/aces, then sRGB-encoded unless ``srgb=False``). Written
+        atomically (a temporary file, then a rename)."""
         from .io import write_image
 
-        write_image(path, self.mean, aovs={**self.aovs, "variance": self.variance}, **options)
+        write_image(path, self.mean, aovs={**self.aovs, "variance": self.variance},
+                    exposure=exposure, half=half, curve=curve, srgb=srgb)
+
+    def to_srgb8(self, exposure: float = 0.0, curve: str = "clamp") -> np.ndarray:
+        """(H, W, 3) uint8: the image as a PNG would store it (exposure in stops, tone
+        curve, sRGB encoding)."""
+        from .tonemap import tonemap
+
+        return tonemap(self.mean, exposure, curve, True)
+
+    def _repr_png_(self) -> bytes:
+        """PNG bytes of :meth:`to_srgb8`: notebooks (IPython, Jupyter) show a Film as its image."""
+        import io
+
+        from PIL import Image
+
+        buf = io.BytesIO()
+        Image.fromarray(self.to_srgb8()).save(buf, format="PNG")
+        return buf.getvalue()
+
+    def __repr__(self) -> str:
+        h, w = self.shape
+        return (f"Film({w}x{h}, spp={self.spp}, sampler={self.sampler!r}, "
+                f"aovs={sorted(self.aovs)})")

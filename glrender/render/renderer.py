@@ -89,9 +89,12 @@ class Renderer:
     """
 
     def __init__(self, scene: m.Scene, settings: RenderSettings | None = None, *, ctx=None,
-                 device=None):
+                 device=None, **overrides):
+        if settings is not None and overrides:
+            raise UsageError(f"Renderer: give either settings or overrides "
+                             f"({', '.join(sorted(overrides))}), not both")
         self.scene = scene
-        self.settings = settings or settings_from_scene(scene)
+        self.settings = settings or settings_from_scene(scene, **overrides)
         self.ctx = ctx or default_context(device)
         self.gl = self.ctx.gl
         self.packed: PackedScene = pack_scene(scene)
@@ -352,6 +355,23 @@ class Renderer:
         for buf in (self._mean, self._m2, self._aov, self._debug):
             buf.clear()
         self.spp_done = int(start)
+
+    def set_camera(self, camera: m.Camera) -> None:
+        """Move the camera (or change its lens) and forget the samples so far.
+
+        The scene's geometry, BVH, materials and kernel stay on the device: only the
+        per-pass parameter block changes, so this costs no rebuild. The image size is the
+        scene's film and cannot change here."""
+        if not isinstance(camera, m.Camera):
+            raise UsageError(f"set_camera: expected a glrender Camera, got {type(camera).__name__}")
+        self.scene.camera = camera
+        self.reset()
+
+    def __enter__(self) -> "Renderer":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
 
     # -- rendering ---------------------------------------------------------------------------
     def _param_block(self, first_sample: int, samples: int) -> np.ndarray:

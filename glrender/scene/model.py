@@ -29,12 +29,14 @@ RGB = tuple[float, float, float]
 
 # -- transforms ---------------------------------------------------------------------------
 def translate(v) -> np.ndarray:
+    """4x4 world_from_object matrix moving points by the vector ``v`` (scene units)."""
     m = np.eye(4)
     m[:3, 3] = v
     return m
 
 
 def scale(v) -> np.ndarray:
+    """4x4 matrix scaling by ``v`` (one factor, or one per axis x, y, z)."""
     v = np.broadcast_to(np.asarray(v, np.float64), (3,))
     return np.diag([v[0], v[1], v[2], 1.0])
 
@@ -223,7 +225,13 @@ class Light:
 # -- camera, film, settings ------------------------------------------------------------------------
 @dataclass
 class Camera:
-    """Perspective camera; a thin lens when ``aperture_radius`` > 0."""
+    """Perspective camera; a thin lens when ``aperture_radius`` > 0.
+
+    ``world_from_camera``: 4x4, camera space looks along +z with +y up and +x to the image's
+    left (build it with :func:`look_at`); ``fov`` in degrees along ``fov_axis``;
+    ``aperture_radius``, ``focus_distance``, ``near_clip``, ``far_clip`` in scene units.
+    ``world_from_camera_close``: the transform at the shutter's close (motion blur).
+    """
 
     world_from_camera: np.ndarray = field(default_factory=lambda: look_at((0, 0, 5), (0, 0, 0), (0, 1, 0)))
     world_from_camera_close: Optional[np.ndarray] = None
@@ -247,6 +255,9 @@ FILTERS = ("box", "tent", "gaussian", "mitchell")
 
 @dataclass
 class Film:
+    """The image's size in pixels and its reconstruction filter (``box``, ``tent``,
+    ``gaussian``, ``mitchell``; ``filter_radius`` in pixels, default per filter)."""
+
     width: int = 256
     height: int = 256
     filter: str = "gaussian"
@@ -276,6 +287,11 @@ STRATEGIES = ("light", "bsdf", "mis-balance", "mis-power")
 
 @dataclass
 class Integrator:
+    """How radiance is estimated: ``kind`` path | direct | ao; ``max_depth`` in path
+    segments (1 = emitters seen directly, 2 = direct lighting, -1 = unbounded); Russian
+    roulette from ``rr_depth`` segments; ``strategy`` weights light and BSDF samples;
+    ``ao_distance`` in scene units (ambient occlusion)."""
+
     kind: str = "path"
     max_depth: int = -1
     rr_depth: int = 5
@@ -310,6 +326,9 @@ SAMPLER_KINDS = ("independent", "stratified", "sobol")
 
 @dataclass
 class Sampler:
+    """Random numbers: ``kind`` independent | stratified | sobol (Owen-scrambled),
+    ``spp`` samples per pixel, ``seed`` (the same seed gives the same image)."""
+
     kind: str = "sobol"
     spp: int = 64
     seed: int = 0
@@ -321,6 +340,9 @@ class Sampler:
 
 @dataclass
 class Shutter:
+    """Exposure interval in seconds (motion blur when ``close`` > ``open``), with a
+    ``box`` or ``tent`` weighting over time."""
+
     open: float = 0.0
     close: float = 0.0
     function: str = "box"              # box | tent
@@ -332,6 +354,12 @@ class Shutter:
 
 @dataclass
 class Scene:
+    """Everything to render: camera, film, settings, materials, shapes and lights.
+
+    Build one in code or get one from :func:`glrender.load`; edit the fields freely
+    between renders. ``Shape.material`` indexes ``materials`` (:meth:`add_material`
+    returns the index)."""
+
     camera: Camera = field(default_factory=Camera)
     film: Film = field(default_factory=Film)
     integrator: Integrator = field(default_factory=Integrator)
@@ -343,6 +371,7 @@ class Scene:
     source: str = "<scene>"            # file it came from, for messages
 
     def add_material(self, material: Material) -> int:
+        """Append ``material``; returns its index for ``Shape.material``."""
         self.materials.append(material)
         return len(self.materials) - 1
 
