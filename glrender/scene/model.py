@@ -369,6 +369,7 @@ class Scene:
     shapes: list[Shape] = field(default_factory=list)
     lights: list[Light] = field(default_factory=list)
     source: str = "<scene>"            # file it came from, for messages
+    animation: Optional[object] = None  # keyed motion over frames: glrender.scene.animation.Animation
 
     def add_material(self, material: Material) -> int:
         """Append ``material``; returns its index for ``Shape.material``."""

@@ -10,7 +10,10 @@
 """
 from __future__ import annotations
 
+import os
+import threading
 import warnings
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -52,6 +55,26 @@ class Notes:
         self.items = {}
 
 
+_recording = threading.local()
+
+
+@contextmanager
+def record_files():
+    """Collect the files that scenes loaded on this thread refer to: yields a list that
+    fills with the absolute path of each file found, as the scene names it (symbolic
+    links not followed), so a copy of those files in the same layout loads the same
+    scene (glrender.distributed ships scenes to workers this way)."""
+    outer = getattr(_recording, "files", None)
+    files: list[Path] = []
+    _recording.files = files
+    try:
+        yield files
+    finally:
+        _recording.files = outer
+        if outer is not None:
+            outer.extend(files)
+
+
 class SceneFiles:
     """Resolves the files a scene refers to, relative to the folder of the scene file
     that refers to them, and remembers the scene's root folder to report paths that
@@ -78,6 +101,8 @@ class SceneFiles:
                 continue
             if found:
                 self._check_inside(path, name, where)
+                if getattr(_recording, "files", None) is not None:
+                    _recording.files.append(Path(os.path.abspath(candidate)))
                 return path
         raise SceneError(f"{where}: {what} {name!r} not found (looked in {base.resolve()})")
 

@@ -1,0 +1,130 @@
+"""Renders on a 2-worker LocalCluster (spawned processes) against one process."""
+import os
+import signal
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import glrender
+from glrender.distributed import local_cluster, render
+from glrender.distributed.merge import from_state, merge_tree
+from glrender.render.renderer import Renderer, settings_from_scene
+
+ROOT = Path(__file__).resolve().parents[2]
+CORNELL = ROOT / "scenes" / "cornell-box" / "scene.toml"
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    cluster, client = local_cluster(2, dashboard=False)
+    yield cluster, client
+    client.close()
+    cluster.close()
+
+
+@pytest.fixture(scope="module")
+def scene():
+    s = glrender.load(CORNELL)
+    s.film.width, s.film.height = 72, 52     # 9 x 7 tiles, the last row 4 pixels high
+    return s
+
+
+def single_process(scene, settings):
+    r = Renderer(scene, settings)
+    r.step(settings.sampler.spp)
+    f = r.film()
+    r.release()
+    return f
+
+
+def assert_same(a, b):
+    for name in ("mean", "m2", "count", "nonfinite"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), name)
+    assert a.aovs.keys() == b.aovs.keys()
+    for name in a.aovs:
+        np.testing.assert_array_equal(a.aovs[name], b.aovs[name], name)
+
+
+def test01_workers_are_spawned_with_one_thread(cluster):
+    _, client = cluster
+    info = client.run(lambda: __import__("glrender.distributed.worker").distributed.worker.worker_info())
+    assert len(info) == 2
+    assert len({i["pid"] for i in info.values()}) == 2 and os.getpid() not in {i["pid"] for i in info.values()}
+    assert all(n == 1 for n in client.nthreads().values())
+    cores = len(os.sched_getaffinity(0))
+    assert all(i["lp_num_threads"] == str(max(1, cores // 2)) for i in info.values())
+    assert all(w.contact_address is None or "127.0.0.1" in w.contact_address
+               for w in cluster[0].workers.values()) and "127.0.0.1" in cluster[0].scheduler_address
+
+
+def test02_bitwise_the_single_process_image(gl_ctx, cluster, scene):
+    """Bands at the full sample count: every pixel accumulates exactly as in one process."""
+    _, client = cluster
+    settings = settings_from_scene(scene, spp=16, seed=11, aovs=True)
+    ref = single_process(scene, settings)
+    res = render(CORNELL, client=client, settings=settings, unit_size=72 * 8 * 16 * 2,
+                 width=72, height=52)       # the scene file, sent by value
+    assert res.plan.bands == ((0, 2), (2, 2), (4, 2), (6, 1)) and len(res.plan.ranges) == 1
+    assert_same(res.films[None], ref)
+    assert res.bytes_to_client == 72 * 52 * 64
+
+
+def test03_sample_ranges_merge_in_a_fixed_order(gl_ctx, cluster, scene):
+    """Ranges of samples merged along the plan's tree on the workers: the same bits as
+    the same units rendered and merged in this process, and the single-process image to
+    float32 rounding."""
+    _, client = cluster
+    settings = settings_from_scene(scene, spp=24, seed=2)
+    res = render(scene, client=client, settings=settings, unit_size=72 * 8 * 8)
+    plan = res.plan
+    assert plan.ranges == ((0, 8), (8, 16), (16, 24)) and len(plan.bands) == 7
+    r = Renderer(scene, settings)
+    film = res.films[None]
+    for band, (first, count) in enumerate(plan.bands):
+        leaves = []
+        for unit in plan.band_units(None, band):
+            r.reset(start=unit.samples[0], rows=unit.rows)
+            r.step(unit.samples[1] - unit.samples[0])
+            leaves.append(from_state(r.state(), r.width * r.band_height, False, unit.samples))
+        local = merge_tree(plan.merge_tree(), leaves)
+        y0 = 8 * first
+        h = r.band_height
+        np.testing.assert_array_equal(film.mean[y0:y0 + h].reshape(-1, 3),
+                                      local.mean[:, :3].astype(np.float32))
+        np.testing.assert_array_equal(film.m2[y0:y0 + h].reshape(-1, 3),
+                                      local.m2[:, :3].astype(np.float32))
+    r.release()
+    ref = single_process(scene, settings)
+    np.testing.assert_array_equal(film.count, ref.count)
+    eps = np.finfo(np.float32).eps
+    # float32 Welford over 24 samples vs float64 merges: within 24 * 3 eps of the largest
+    # value a pixel's mean takes (its mean plus three standard deviations bounds it loosely:
+    # use sqrt(M2) + mean, which bounds every sample of the pixel)
+    bound = 24 * 3 * eps * (ref.mean + np.sqrt(ref.m2) + 1e-30)
+    assert (np.abs(film.mean - ref.mean) <= bound).all()
+
+
+def test04_a_killed_worker_changes_nothing(gl_ctx, cluster, scene):
+    """A worker process killed by its PID while units run: Dask reruns its units on the
+    other worker (and the nanny restarts it); the image is bitwise the same."""
+    _, client = cluster
+    settings = settings_from_scene(scene, spp=32, seed=4)
+    ref = single_process(scene, settings)
+    killed = []
+
+    def progress(done, total, pixel_samples, seconds):
+        if killed or done == total:
+            return
+        busy = [w for w, tasks in client.processing().items() if tasks]
+        if busy and done >= 1:
+            pid = client.run(os.getpid, workers=[busy[0]])[busy[0]]
+            os.kill(pid, signal.SIGKILL)
+            killed.append(pid)
+
+    res = render(scene, client=client, settings=settings, unit_size=72 * 8 * 32, progress=progress,
+                 poll=0.05)
+    assert killed, "the render ended before a worker could be killed"
+    assert len(res.plan.units()) == 7
+    assert_same(res.films[None], ref)
+    client.wait_for_workers(2, timeout=60)
