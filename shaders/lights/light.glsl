@@ -121,12 +121,14 @@ bool use_spherical_sampling_triangle(LightData l, vec3 p, out float solid_angle)
     return solid_angle > kMinSphericalSampleArea && solid_angle < kMaxSphericalSampleArea;
 }
 
-// Mitsuba's spot falloff for the cosine between the spot axis and the emission direction:
-// 1 inside the beam width, a smooth step to 0 at the cutoff.
+// Mitsuba 3's spot falloff for the cosine between the spot axis and the emission direction:
+// 1 inside the beam width, 0 beyond the cutoff, and between them linear in the angle theta:
+// (cutoff - theta) / (cutoff - beam_width) (src/emitters/spot.cpp, falloff_curve).
 float spot_falloff(LightData l, float cos_theta) {
     float cos_cutoff = l.params.x, cos_beam = l.params.y;
-    float t = clamp((cos_theta - cos_cutoff) / max(cos_beam - cos_cutoff, 1e-8), 0.0, 1.0);
-    return cos_theta >= cos_beam ? 1.0 : (cos_theta <= cos_cutoff ? 0.0 : t * t * (3.0 - 2.0 * t));
+    float cutoff = acos(cos_cutoff);
+    float t = (cutoff - acos(clamp(cos_theta, -1.0, 1.0))) / max(cutoff - acos(cos_beam), 1e-8);
+    return cos_theta >= cos_beam ? 1.0 : (cos_theta <= cos_cutoff ? 0.0 : clamp(t, 0.0, 1.0));
 }
 
 // Samples light l as seen from point p; u in [0,1)^2.
@@ -205,7 +207,7 @@ LightSample sample_light(LightData l, vec3 p, vec2 u) {
         s.delta = true;
         vec3 intensity = l.radiance.rgb;
         if (kind == kLightSpot) {
-            // Mitsuba's spot falloff: 1 inside the beam width, a smooth step to 0 at the cutoff.
+            // Mitsuba's spot falloff: 1 inside the beam width, linear in the angle to 0 at the cutoff.
             intensity *= spot_falloff(l, dot(-s.wi, l.n.xyz));
         }
         s.Le = intensity / dist2;

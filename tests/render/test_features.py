@@ -101,18 +101,26 @@ def test03_pixel_filters(gl_ctx, filter_kind):
 
 def test04_spot_light_falloff(gl_ctx):
     """A spot light straight above the plane: full intensity inside the beam width,
-    nothing outside the cutoff (Mitsuba's smooth step between)."""
+    nothing outside the cutoff, and between them Mitsuba 3's ramp, linear in the angle:
+    (cutoff - theta) / (cutoff - beam_width)."""
     spot = m.Light("spot", intensity=(20.0,) * 3, cutoff_angle=10.0, beam_width=6.0,
                    world_from_light=m.look_at((0, 0, 5), (0, 0, 0), (0, 1, 0)))
     scene = plane_under_light(spot, kind="direct", strategy="light", max_depth=2, width=32, height=32)
-    scene.camera.fov = 16
-    film = glrender.render(scene, spp=16, seed=1, sampler="independent").mean[..., 0]
-    p = plane_points(scene, supersample=1)[..., 0, :]
+    scene.camera.fov = 6       # 2.1 wide at the plane; the cone meets it at radius 0.88
+    film = glrender.render(scene, spp=256, seed=1, sampler="independent").mean[..., 0]
+    p = plane_points(scene, supersample=4)
     r = np.hypot(p[..., 0], p[..., 1])
     angle = np.degrees(np.arctan2(r, 5.0))
-    inside, outside = angle < 5.5, angle > 10.5
-    expected = 0.5 / np.pi * 20.0 * 5.0 / (r ** 2 + 25.0) ** 1.5
+    falloff = np.clip((10.0 - angle) / (10.0 - 6.0), 0.0, 1.0)
+    expected = (0.5 / np.pi * 20.0 * 5.0 / (r ** 2 + 25.0) ** 1.5 * falloff).mean(-1)
+    # pixels wholly inside the beam, on the ramp, and wholly outside the cone. The only noise
+    # is where in its pixel each sample lands: on the ramp the image changes by up to 18% of
+    # its peak across a pixel, so 256 samples give sigma ~0.35% of the peak (2% is > 5 sigma);
+    # a smooth step in the cosine is 7-9% of the peak off at the ramp's quarter points
+    inside, ramp, outside = angle.max(-1) < 6.0, (angle.min(-1) > 6.0) & (angle.max(-1) < 10.0), angle.min(-1) > 10.3
+    assert ramp.sum() > 100
     np.testing.assert_allclose(film[inside], expected[inside], rtol=0.02)
+    np.testing.assert_allclose(film[ramp], expected[ramp], rtol=0, atol=0.02 * expected.max())
     assert film[outside].max() == 0.0
 
 
