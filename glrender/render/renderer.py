@@ -19,7 +19,7 @@ import numpy as np
 from ..errors import UsageError
 from ..gl import shaders
 from ..gl.context import default_context
-from ..gpu import codegen, layout
+from ..gpu import codegen, envmap, layout
 from ..gpu.pack import PackedScene, pack_scene
 from ..sampling.sequences import strata_columns
 from ..scene import model as m
@@ -158,20 +158,13 @@ class Renderer:
 
     def _upload_envmap(self, lights, packer):
         """The environment image as a float texture (bilinear, wrapping in u) and its
-        importance distribution: luminance x sin(theta) per texel, dilated to the 3x3
-        neighbourhood maximum so every direction the bilinear lookup lights has pdf > 0."""
+        importance distribution (glrender/gpu/envmap.py: per texel, or per block of
+        texels for a map larger than the table's limit)."""
         image = self.packed.env_image
         h, w = image.shape[:2]
-        lum = image @ np.array([0.212671, 0.715160, 0.072169], np.float32)
-        padded = np.pad(lum, ((1, 1), (1, 1)), mode="edge")
-        padded[:, 0], padded[:, -1] = padded[:, -2], padded[:, 1]   # u wraps around
-        dil = np.max([padded[dy:dy + h, dx:dx + w] for dy in range(3) for dx in range(3)], axis=0)
-        rows = np.sin((np.arange(h) + 0.5) / h * np.pi)
-        weights = dil * rows[:, None]
-        if not weights.sum() > 0:
-            weights = np.ones_like(weights) * rows[:, None]
+        envmap.check_texture_size(image, self.gl.info["GL_MAX_TEXTURE_SIZE"], self.scene.source)
         env = self.packed.environment - 1
-        lights[env]["info"][3] = packer.add_distribution_2d(weights)
+        lights[env]["info"][3] = packer.add_distribution_2d(envmap.importance_weights(image))
         tex = self.gl.texture((w, h), 3, np.ascontiguousarray(image, np.float32).tobytes(), dtype="f4")
         tex.filter = (self.gl.LINEAR, self.gl.LINEAR)
         tex.repeat_x, tex.repeat_y = True, False

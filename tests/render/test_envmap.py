@@ -130,3 +130,46 @@ def test05_strategies_agree_under_an_environment(gl_ctx, strategy):
     ref_se = mis.std(axis=0, ddof=1) / 2.0
     c = compare_images(single, ref, ref_se, block=4, extra_tests=1)
     assert c.passed, c.summary() + " " + "; ".join(c.messages)
+
+
+def test06_coarse_importance_table_stays_unbiased(gl_ctx, monkeypatch):
+    """A map with more texels than the importance table's limit gets a table of blocks
+    (each the maximum of its texels): light sampling through it still converges to what
+    BSDF sampling gives (σ from independent seeds for both sides)."""
+    from glrender.gpu import envmap
+
+    image = read_hdr(HDR)[::4, ::4]            # 256 x 128 texels
+    monkeypatch.setattr(envmap, "MAX_CELLS", 700)   # blocks of 7 x 7 texels: 37 x 19 cells
+    assert envmap.importance_weights(image).shape == (19, 37)
+    sphere = m.Shape("sphere", center=(0.3, 0.2, -3))
+    mat = m.Material("diffuse", reflectance=(0.7, 0.6, 0.5))
+
+    def renders(strategy, seeds):
+        scene = env_scene(image, shapes=[(sphere, mat)], width=24, height=24, fov=30,
+                          max_depth=2, strategy=strategy, hide_emitters=True)
+        return np.stack([glrender.render(scene, spp=32, seed=s, sampler="independent").mean
+                         for s in seeds])
+
+    light = renders("light", range(4))
+    bsdf = renders("bsdf", range(10, 14))
+    c = compare_images(light, bsdf.mean(axis=0), bsdf.std(axis=0, ddof=1) / 2.0, block=4,
+                       extra_tests=1)
+    assert c.passed, c.summary() + " " + "; ".join(c.messages)
+
+
+def test07_envmap_table_weights_cover_every_bright_texel():
+    """Every texel with light lies in a table cell of positive weight, at full and at block
+    resolution (a zero cell under a bright texel would bias light sampling)."""
+    from glrender.gpu import envmap
+
+    rng = np.random.default_rng(3)
+    image = np.zeros((50, 70, 3), np.float32)
+    bright = rng.random((50, 70)) < 0.01
+    bright[:, :20] = True                      # and a bright band that fills whole blocks
+    image[bright] = 5.0
+    for cells, f in ((1 << 22, 1), (300, 4)):
+        w = envmap.importance_weights(image, max_cells=cells)
+        ys, xs = np.nonzero(bright)
+        assert (w[ys // f, xs // f] > 0).all()
+    with pytest.raises(glrender.SceneError, match=r"x.toml: the environment image is 70 x 50"):
+        envmap.check_texture_size(image, 64, "x.toml")
