@@ -7,6 +7,9 @@
 // light samples and `bsdf` only BSDF hits). Depth counts segments as in Mitsuba.
 // Russian roulette from depth kRrDepth on: survive with q = min(max(beta) eta^2, 0.95)
 // (Mitsuba's rule; eta^2 keeps paths alive inside refractive media) and divide by q.
+// The albedo and normal AOVs are those of the first non-delta hit: through mirrors,
+// glass and null surfaces the path is followed to the surface seen in them
+// (record_aov_through in shading.glsl); depth is the first hit's.
 //
 // Path regeneration: llvmpipe runs 8 pixels in lock step, so a loop over whole paths
 // waits for the longest of the 8 each time (measured: 72% of lane work useful on the
@@ -31,11 +34,13 @@ struct PathState {
     vec3 prev_p;
     int depth;           // segments traced so far
     Aov aov;
+    bool aov_open;       // the AOVs so far are a delta surface's: follow the path further
+    vec3 aov_weight;     // product of the delta surfaces' sampled weights so far
 };
 
 PathState path_start(vec3 o, vec3 d, float t_max, float time) {
     return PathState(o, d, t_max, time, vec3(0.0), vec3(1.0), 1.0, 0.0, true, o, 0,
-                     Aov(vec3(0.0), vec3(0.0), 0.0));
+                     Aov(vec3(0.0), vec3(0.0), 0.0), true, vec3(1.0));
 }
 
 // Traces one segment of the path and shades its end; false when the path has ended.
@@ -46,10 +51,13 @@ bool path_segment(inout PathState st, inout SamplerState s) {
     SurfaceHit hit;
     if (!scene_intersect(st.o, st.d, st.t_max, st.time, hit)) {
         st.L += st.beta * environment_contribution(st.d, depth, st.prev_p, st.prev_pdf, st.prev_delta);
+        // seen through a delta surface, the environment is what a camera ray that misses
+        // records: no albedo, no normal
+        if (kAovs && st.aov_open) st.aov = Aov(vec3(0.0), vec3(0.0), st.aov.depth);
         return false;
     }
     vec3 p = hit.p;
-    if (depth == 0) record_aov(st.aov, hit);
+    if (kAovs && st.aov_open) st.aov_open = record_aov_through(st.aov, hit, depth, st.aov_weight);
 
     // Emission of an area light found by the camera ray or by BSDF sampling
     if (hit.light != 0u)
@@ -79,6 +87,7 @@ bool path_segment(inout PathState st, inout SamplerState s) {
     // a direction on the wrong side of the geometric surface leaks light: end the path
     if (dot(wi, hit.ng) * bs.wi.z <= 0.0) return false;
     st.beta *= bs.weight;
+    if (kAovs && st.aov_open) st.aov_weight *= bs.weight;
     st.eta_product *= bs.eta;
     st.prev_pdf = bs.pdf;
     st.prev_delta = bs.delta;

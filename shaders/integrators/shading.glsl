@@ -20,6 +20,22 @@ void record_aov(inout Aov aov, SurfaceHit hit) {
     aov.depth = hit.t;
 }
 
+// The AOVs of the path tracer, for a denoiser's auxiliary images: at the first hit
+// (depth 0) as record_aov; where that surface is a mirror, glass or a null surface
+// (a delta BSDF), the albedo and normal of the next hits replace them until the
+// first non-delta one, its albedo scaled by `weight`, the product of the delta
+// surfaces' sampled weights in front of it (the radiance scale 1/eta^2 of entering
+// glass cancels on leaving it; the product is clamped to [0, 1]): OIDN's advice for
+// its albedo and normal images. Depth stays the first hit's. Returns whether the
+// hit is a delta surface (follow the path further).
+bool record_aov_through(inout Aov aov, SurfaceHit hit, int depth, vec3 weight) {
+    Bsdf b = bsdf_from_material(hit.material, hit.uv);
+    if (depth == 0) aov.depth = hit.t;
+    aov.albedo = clamp(weight * bsdf_albedo(b), 0.0, 1.0);
+    aov.normal = hit.ns;
+    return bsdf_is_delta(b);
+}
+
 // Emission of the area light at `hit`, seen along d, by a segment of `depth`
 // previous segments whose BSDF sample had solid-angle pdf prev_pdf (n_bsdf samples
 // against n_light light samples for the direct integrator's counts).
