@@ -99,7 +99,7 @@ case "$cmd" in
         ;;
     test)
         system_packages test
-        python_env test,exr,preview,distributed
+        python_env test,exr,preview,lab,distributed,denoise,docs
         # pytest exits 5 when it collects no tests: that is a failure here too.
         exec .venv/bin/python -m pytest "$@"
         ;;

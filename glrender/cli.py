@@ -153,6 +153,7 @@ examples:
   glrender render scene.toml -o out.exr --spp 4096 --checkpoint-every 300
   glrender render scene.toml -o out.exr --resume        # after Ctrl-C
   glrender render scene.xml -D roughness=0.2 -o rough.exr
+  glrender render scene.toml -o out.exr --spp 16 --denoise   # out.exr + out.denoised.exr
 
 exit codes: 0 done, 2 error (one line on stderr; --debug adds the traceback),
 130 stopped by SIGINT, 143 stopped by SIGTERM."""
@@ -212,6 +213,10 @@ def _add_render(sub) -> None:
     g.add_argument("--srgb", action=argparse.BooleanOptionalAction, default=True,
                    help="PNG/JPEG: sRGB encoding (default), or linear 8-bit with --no-srgb")
     g.add_argument("--half", action="store_true", help="EXR: half floats instead of float32")
+    g.add_argument("--denoise", action="store_true",
+                   help="also write OUT.denoised.EXT denoised by Open Image Denoise (and a "
+                        "denoised layer in an EXR); the image itself stays unbiased "
+                        "(extra: glrender[denoise])")
     g.add_argument("--stats", default=None, metavar="FILE.json",
                    help="write statistics: device, scene hash, seed, spp, times, samples/s, "
                         "non-finite samples, mean relative standard error")

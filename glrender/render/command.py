@@ -117,21 +117,53 @@ def _aov_sidecar(output: Path, name: str) -> Path:
     return output.with_name(f"{output.stem}.{name}{ext}")
 
 
-def _write_outputs(film, output: Path, aov_names: list[str], args) -> list[str]:
+def denoised_path(output: Path) -> Path:
+    """Where --denoise writes the denoised image: OUT.denoised.EXT beside OUT.EXT."""
+    return output.with_name(f"{output.stem}.denoised{output.suffix}")
+
+
+def _write_outputs(film, output: Path, aov_names: list[str], args,
+                   denoised: np.ndarray | None = None) -> list[str]:
     from ..film.io import write_image
 
     written = [str(output)]
     if output.suffix.lower() == ".exr":
         layers = {name: film.aov(name) for name in aov_names if name != "variance"}
         layers["variance"] = film.variance
+        if denoised is not None:
+            layers["denoised"] = denoised
         write_image(output, film.mean, aovs=layers, half=args.half)
+        if denoised is not None:
+            write_image(denoised_path(output), denoised, half=args.half)
+            written.append(str(denoised_path(output)))
         return written
     write_image(output, film.mean, exposure=args.exposure, curve=args.tonemap, srgb=args.srgb)
+    if denoised is not None:
+        write_image(denoised_path(output), denoised, exposure=args.exposure, curve=args.tonemap,
+                    srgb=args.srgb)
+        written.append(str(denoised_path(output)))
     for name in aov_names:
         side = _aov_sidecar(output, name)
         write_image(side, film.aov(name))
         written.append(str(side))
     return written
+
+
+def _denoise(film, scene, say) -> tuple[np.ndarray, dict]:
+    """The film's mean denoised (--denoise), and what the statistics record about it."""
+    from ..denoise import Denoiser, aovs_are_clean
+
+    clean = aovs_are_clean(scene)
+    t0 = time.perf_counter()
+    with Denoiser() as denoiser:
+        image = denoiser.denoise_film(film, clean_aux=clean)
+        info = {"library": "Open Image Denoise", "device": denoiser.device_name,
+                "threads": denoiser.threads, "quality": denoiser.quality, "clean_aux": clean,
+                "aux": [n for n in ("albedo", "normal") if n in film.aovs]}
+    info["seconds"] = time.perf_counter() - t0
+    say(f"glrender: denoised in {info['seconds']:.2f} s (Open Image Denoise, "
+        f"{denoiser.device_name}, albedo and normal{', cleanAux' if clean else ''})")
+    return image, info
 
 
 def _mean_relative_stderr(film) -> float | None:
@@ -169,6 +201,10 @@ def run_render(args, signals) -> int:
 
     # -- options, files, checkpoint: everything checked before any work --------------------
     _check_options(args)
+    if getattr(args, "denoise", False):
+        from ..denoise import load_oidn
+
+        load_oidn()        # without the extra: one line naming it, before any work
     params = parse_defines(args.define)
     aov_names = parse_aovs(args.aov)
     output = check_output(args.output)
@@ -197,7 +233,8 @@ def run_render(args, signals) -> int:
     if "width" in options or "height" in options:
         scene.film = replace(scene.film, width=options.get("width", scene.film.width),
                              height=options.get("height", scene.film.height))
-    first_hit = any(n in FIRST_HIT_AOVS for n in aov_names)
+    # --denoise guides the denoiser with the albedo and normal AOVs
+    first_hit = any(n in FIRST_HIT_AOVS for n in aov_names) or getattr(args, "denoise", False)
     settings = settings_from_scene(scene, integrator=options.get("integrator"),
                                    spp=options.get("spp"), seed=options.get("seed"),
                                    sampler=options.get("sampler"),
@@ -270,10 +307,13 @@ def run_render(args, signals) -> int:
     # -- outputs -----------------------------------------------------------------------------
     film = renderer.film()
     interrupted = result.stopped == "interrupted"
-    written, ckpt_written = [], None
+    written, ckpt_written, denoised, denoise_info = [], None, None, None
     if film.spp > 0:
+        if getattr(args, "denoise", False):
+            with timer("denoise"):
+                denoised, denoise_info = _denoise(film, scene, say)
         with timer("write"):
-            written = _write_outputs(film, output, aov_names, args)
+            written = _write_outputs(film, output, aov_names, args, denoised)
         if interrupted or keep_checkpoint:
             write_checkpoint()
             ckpt_written = str(ckpt_path)
@@ -297,7 +337,9 @@ def run_render(args, signals) -> int:
         "stopped": result.stopped,
         "signal": signal.Signals(signals.received).name if interrupted else None,
         "seconds": {k: timer.get(k, 0.0) for k in ("load", "context", "build", "compile", "render",
-                                                    "checkpoint", "write", "total")},
+                                                    "checkpoint", "denoise", "write",
+                                                    "total")},
+        "denoise": denoise_info,
         "samples_per_second": rate,
         "nonfinite_samples": film.nonfinite_total,
         "mean_relative_stderr": _mean_relative_stderr(film),
