@@ -46,14 +46,16 @@ class Film:
         """(H, W, 3) float32: per-sample variance of each pixel's radiance (units of
         radiance squared), m2 / (count - 1); 0 where a pixel has fewer than 2 samples."""
         n = self.count[..., None]
-        return np.where(n > 1, self.m2 / np.maximum(n - 1, 1), 0.0).astype(np.float32)
+        variance: np.ndarray = np.where(n > 1, self.m2 / np.maximum(n - 1, 1), 0.0).astype(np.float32)
+        return variance
 
     @property
     def stderr(self) -> np.ndarray:
         """Standard error of each pixel's mean from the per-sample variance (exact for the
         independent sampler; an upper bound for stratified and Sobol')."""
         n = self.count[..., None]
-        return np.sqrt(self.variance / np.maximum(n, 1)).astype(np.float32)
+        stderr: np.ndarray = np.sqrt(self.variance / np.maximum(n, 1)).astype(np.float32)
+        return stderr
 
     @property
     def nonfinite_total(self) -> int:

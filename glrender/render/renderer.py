@@ -13,12 +13,13 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field, replace
+from typing import Any, Callable
 
 import numpy as np
 
 from ..errors import UsageError
 from ..gl import shaders
-from ..gl.context import default_context
+from ..gl.context import Context, default_context
 from ..gpu import codegen, envmap, layout
 from ..gpu.pack import PackedScene, pack_scene
 from ..sampling.sequences import strata_columns
@@ -53,13 +54,14 @@ def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: i
                         samples_per_pass: int | None = None, time_target: float = 0.1) -> RenderSettings:
     """The scene's settings with the given overrides (None keeps the scene's value)."""
     integ = scene.integrator
-    overrides = {k: v for k, v in dict(kind=integrator, max_depth=max_depth, rr_depth=rr_depth,
+    overrides: dict[str, Any] = {k: v for k, v in dict(kind=integrator, max_depth=max_depth, rr_depth=rr_depth,
                                        strategy=strategy, light_selection=light_selection,
                                        area_sampling=area_sampling,
                                        hide_emitters=hide_emitters).items() if v is not None}
     integ = replace(integ, **overrides)  # re-validates in __post_init__
-    samp = replace(scene.sampler, **{k: v for k, v in dict(kind=sampler, spp=spp, seed=seed).items()
-                                     if v is not None})
+    samp_overrides: dict[str, Any] = {k: v for k, v in dict(kind=sampler, spp=spp, seed=seed).items()
+                                      if v is not None}
+    samp = replace(scene.sampler, **samp_overrides)
     if samp.spp < 1:
         raise UsageError(f"spp: expected a positive integer, got {samp.spp}")
     return RenderSettings(integ, samp, aovs=aovs, count_loops=count_loops,
@@ -88,8 +90,9 @@ class Renderer:
     ``step(spp)`` adds samples to every pixel; ``film()`` reads the image back.
     """
 
-    def __init__(self, scene: m.Scene, settings: RenderSettings | None = None, *, ctx=None,
-                 device=None, **overrides):
+    def __init__(self, scene: m.Scene, settings: RenderSettings | None = None, *,
+                 ctx: Context | None = None, device: str | int | None = None,
+                 **overrides: Any) -> None:
         if settings is not None and overrides:
             raise UsageError(f"Renderer: give either settings or overrides "
                              f"({', '.join(sorted(overrides))}), not both")
@@ -103,10 +106,10 @@ class Renderer:
         self.tiles_y = -(-self.height // TILE)
         self.spp_done = 0
         self.rows = (0, self.tiles_y)   # the tile rows accumulated: (first, count)
-        self._tile_rate = None    # measured seconds per tile-sample
-        self._buffers = []
-        self._bvh = None
-        self._snapshot = None     # accumulation copies that undo a stopped pass
+        self._tile_rate: float | None = None    # measured seconds per tile-sample
+        self._buffers: list[Any] = []
+        self._bvh: Any = None
+        self._snapshot: list[Any] | None = None     # accumulation copies that undo a stopped pass
         t0 = time.perf_counter()
         self._upload()
         t1 = time.perf_counter()
@@ -118,7 +121,7 @@ class Renderer:
         self.timings = {"build": t1 - t0, "compile": time.perf_counter() - t1}
 
     # -- setup -------------------------------------------------------------------------------
-    def _upload(self):
+    def _upload(self) -> None:
         gl = self.gl
         p = self.packed
         integ = self.settings.integrator
@@ -156,11 +159,12 @@ class Renderer:
             self._upload_mesh()
         self._upload_textures()
 
-    def _upload_envmap(self, lights, packer):
+    def _upload_envmap(self, lights: np.ndarray, packer: Any) -> None:
         """The environment image as a float texture (bilinear, wrapping in u) and its
         importance distribution (glrender/gpu/envmap.py: per texel, or per block of
         texels for a map larger than the table's limit)."""
         image = self.packed.env_image
+        assert image is not None
         h, w = image.shape[:2]
         envmap.check_texture_size(image, self.gl.info["GL_MAX_TEXTURE_SIZE"], self.scene.source)
         env = self.packed.environment - 1
@@ -171,7 +175,7 @@ class Renderer:
         self._env_texture = tex
         self._buffers.append(tex)
 
-    def _upload_textures(self):
+    def _upload_textures(self) -> None:
         """The materials' textures: image layers (unit 8) and records (unit 9), bound with
         the other scene data in _bind; scenes without textures bind nothing."""
         from ..gpu import textures
@@ -183,7 +187,7 @@ class Renderer:
             self._surface_textures = [(layout.TEX_TEXTURES, array.use),
                                       (layout.TEX_TEXTURE_RECORDS, records.bind)]
 
-    def _upload_mesh(self):
+    def _upload_mesh(self) -> None:
         """BVH over the static mesh triangles (world space) plus one tree per moving mesh
         (object space), and per-triangle shading data in the BVH's triangle order."""
         from ..accel import MotionInstance, build_bvh
@@ -221,12 +225,12 @@ class Renderer:
             (layout.TEX_TRI_INFO, BufferTexture(self.ctx, info, "rgba32ui", "triangle info")),
         ]
 
-    def _buffer(self, data: bytes):
+    def _buffer(self, data: bytes) -> Any:
         buf = self.gl.buffer(data if len(data) else b"\0" * 16)
         self._buffers.append(buf)
         return buf
 
-    def _compile(self):
+    def _compile(self) -> None:
         s = self.settings
         integ = s.integrator
         p = self.packed
@@ -240,7 +244,7 @@ class Renderer:
             area_sampling=integ.area_sampling, filter=self.scene.film.filter, aovs=s.aovs,
             count_loops=s.count_loops, debug_nonfinite=s.debug_nonfinite)
         self._source_fingerprint = (geometry, sorted(self.defines.items()), INTEGRATOR_FILES[integ.kind])
-        self.program = shaders.compile_compute(
+        self.program: Any = shaders.compile_compute(
             self.ctx, "kernels/render.comp.glsl", defines=self.defines,
             slots={"integrator": INTEGRATOR_FILES[integ.kind],
                    "scene": codegen.GENERATED_PATH},
@@ -278,7 +282,7 @@ class Renderer:
         h.update(prm.tobytes())
         return h.hexdigest()
 
-    def state(self) -> dict:
+    def state(self) -> dict[str, Any]:
         """The accumulation so far (numpy arrays and the sample count): what a checkpoint
         saves. ``restore(state)`` on a renderer with the same fingerprint continues it, and
         the final image is bitwise the same as an uninterrupted render."""
@@ -288,7 +292,7 @@ class Renderer:
                 "aov": np.frombuffer(self._aov.read(), np.float32).copy(),
                 "width": self.width, "height": self.height, "rows": self.rows}
 
-    def restore(self, state: dict) -> None:
+    def restore(self, state: dict[str, Any]) -> None:
         """Continue from ``state()`` of an equal renderer (same fingerprint)."""
         if state.get("fingerprint") != self.fingerprint():
             raise UsageError("the saved accumulation belongs to a different scene or different "
@@ -305,7 +309,7 @@ class Renderer:
             buf.write(data.tobytes())
         self.spp_done = int(state["spp_done"])
 
-    def _warm_up(self):
+    def _warm_up(self) -> None:
         """llvmpipe compiles a kernel at its first dispatch (seconds for a cold cache):
         run one empty work group now, so setup time is not charged to the render."""
         prm = self._param_block(0, 0)
@@ -320,7 +324,7 @@ class Renderer:
         first, count = self.rows
         return min(self.height, TILE * (first + count)) - TILE * first
 
-    def reset(self, start: int = 0, rows: tuple[int, int] | None = None):
+    def reset(self, start: int = 0, rows: tuple[int, int] | None = None) -> None:
         """Forget every sample (after the camera moves, say).
 
         ``start``: the sample index the next pass renders, for a range of samples
@@ -363,11 +367,11 @@ class Renderer:
     def __enter__(self) -> "Renderer":
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.release()
 
     # -- rendering ---------------------------------------------------------------------------
-    def _param_block(self, first_sample: int, samples: int) -> np.ndarray:
+    def _param_block(self, first_sample: int, samples: int) -> Any:
         scene, s = self.scene, self.settings
         cam, film = scene.camera, scene.film
         prm = np.zeros(1, layout.RENDER_PARAMS)[0]
@@ -393,7 +397,7 @@ class Renderer:
         prm["misc"][0] = min(s.integrator.ao_distance, 3.0e38)
         return prm
 
-    def _bind(self):
+    def _bind(self) -> None:
         self._mean.bind_to_storage_buffer(layout.SSBO_ACCUM_MEAN)
         self._m2.bind_to_storage_buffer(layout.SSBO_ACCUM_M2)
         self._materials.bind_to_storage_buffer(layout.SSBO_MATERIALS)
@@ -411,7 +415,8 @@ class Renderer:
             for unit, tex in self._mesh_textures:
                 tex.bind(unit)
 
-    def _run_pass(self, first_sample: int, samples: int, should_stop=None) -> bool:
+    def _run_pass(self, first_sample: int, samples: int,
+                  should_stop: Callable[[], bool] | None = None) -> bool:
         """Render samples [first_sample, first_sample + samples) in every pixel.
 
         ``should_stop()`` is asked between dispatches; when it answers True the tiles done
@@ -446,28 +451,30 @@ class Renderer:
             start += count
         return True
 
-    def _accumulators(self):
+    def _accumulators(self) -> tuple[Any, ...]:
         return (self._mean, self._m2, self._aov, self._debug)
 
-    def _take_snapshot(self):
+    def _take_snapshot(self) -> None:
         if self._snapshot is None:
             self._snapshot = [self.gl.buffer(reserve=buf.size) for buf in self._accumulators()]
         self.gl.memory_barrier()  # the kernel's SSBO writes, visible to the copies
         for copy, buf in zip(self._snapshot, self._accumulators()):
             self.gl.copy_buffer(copy, buf)
 
-    def _restore_snapshot(self):
+    def _restore_snapshot(self) -> None:
+        assert self._snapshot is not None
         self.gl.memory_barrier()
         for copy, buf in zip(self._snapshot, self._accumulators()):
             self.gl.copy_buffer(buf, copy)
         self.gl.finish()
 
-    def _release_snapshot(self):
+    def _release_snapshot(self) -> None:
         for copy in self._snapshot or ():
             copy.release()
         self._snapshot = None
 
-    def step(self, spp: int, callback=None, should_stop=None) -> int:
+    def step(self, spp: int, callback: Callable[[int, int], None] | None = None,
+             should_stop: Callable[[], bool] | None = None) -> int:
         """Add ``spp`` samples per pixel; ``callback(done, total)`` after every pass.
 
         ``should_stop()``, if given, is asked before every pass and between the dispatches
@@ -510,7 +517,8 @@ class Renderer:
                     nonfinite=m2[..., 3].copy(), spp=self.spp_done, aovs=aovs, loop_counts=debug,
                     sampler=self.settings.sampler.kind)
 
-    def release(self):
+    def release(self) -> None:
+        """Free the device buffers (the renderer cannot render afterwards)."""
         for buf in self._buffers + [self._mean, self._m2, self._aov, self._debug, self._params]:
             buf.release()
         self._release_snapshot()

@@ -148,7 +148,7 @@ class DistributionPacker:
     table starts; ``packer.array()`` gives the packed array for ``distribution_fetch``.
     """
 
-    def __init__(self):
+    def __init__(self) -> None:
         self._blocks: list[np.ndarray] = []
         self.size = 0
 

@@ -1,10 +1,12 @@
 """Scenes: the in-memory model and the loaders that fill it."""
 from __future__ import annotations
 
+import os
 from pathlib import Path
+from typing import Any
 
 from ..errors import SceneError
-from .loaders.diagnostics import GlrenderWarning
+from .loaders.diagnostics import GlrenderWarning, file_hashes, record_files
 from .model import (Camera, Emission, Film, Integrator, Light, Material, Sampler, Scene, Shape,
                     Shutter, Texture)
 
@@ -22,7 +24,7 @@ FORMATS = {
 }
 
 
-def load(path, **params) -> Scene:
+def load(path: str | os.PathLike[str], **params: Any) -> Scene:
     """Load a scene file; the format comes from the extension: .toml (native), .xml
     (Mitsuba 3), .gltf/.glb, .obj (with its MTL files) or .ply (a mesh, with a default
     camera and material). ``params`` fill ``$name`` references (TOML [params], Mitsuba
@@ -38,4 +40,7 @@ def load(path, **params) -> Scene:
         raise SceneError(f"{path}: no such file")
     module, function = FORMATS[ext]
     loader = getattr(importlib.import_module(f".loaders.{module}", __name__), function)
-    return loader(path, **params)
+    with record_files() as files:
+        scene: Scene = loader(path, **params)
+    scene.files = file_hashes([path, *files])
+    return scene

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from typing import Optional, Union
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import SceneError
 
@@ -28,20 +29,20 @@ RGB = tuple[float, float, float]
 
 
 # -- transforms ---------------------------------------------------------------------------
-def translate(v) -> np.ndarray:
+def translate(v: ArrayLike) -> np.ndarray:
     """4x4 world_from_object matrix moving points by the vector ``v`` (scene units)."""
     m = np.eye(4)
     m[:3, 3] = v
     return m
 
 
-def scale(v) -> np.ndarray:
+def scale(v: ArrayLike) -> np.ndarray:
     """4x4 matrix scaling by ``v`` (one factor, or one per axis x, y, z)."""
     v = np.broadcast_to(np.asarray(v, np.float64), (3,))
     return np.diag([v[0], v[1], v[2], 1.0])
 
 
-def rotate(axis, angle_degrees: float) -> np.ndarray:
+def rotate(axis: ArrayLike, angle_degrees: float) -> np.ndarray:
     """Rotation about ``axis`` by ``angle_degrees`` (right-handed)."""
     a = np.asarray(axis, np.float64)
     n = np.linalg.norm(a)
@@ -57,7 +58,7 @@ def rotate(axis, angle_degrees: float) -> np.ndarray:
     return m
 
 
-def look_at(origin, target, up) -> np.ndarray:
+def look_at(origin: ArrayLike, target: ArrayLike, up: ArrayLike) -> np.ndarray:
     """Mitsuba's look_at: columns (left, up, dir, origin) of world_from_camera."""
     o, t, u = (np.asarray(v, np.float64) for v in (origin, target, up))
     d = t - o
@@ -76,7 +77,8 @@ def look_at(origin, target, up) -> np.ndarray:
 
 def transform_points(m: np.ndarray, p: np.ndarray) -> np.ndarray:
     p = np.asarray(p, np.float64)
-    return p @ m[:3, :3].T + m[:3, 3]
+    out: np.ndarray = p @ m[:3, :3].T + m[:3, 3]
+    return out
 
 
 def transform_normals(m: np.ndarray, n: np.ndarray) -> np.ndarray:
@@ -138,7 +140,7 @@ class Material:
     two_sided: bool = False
     name: str = ""
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.kind not in MATERIAL_KINDS:
             raise SceneError(f"material {self.name or '?'}: unknown kind {self.kind!r} "
                              f"(expected one of {', '.join(MATERIAL_KINDS)})")
@@ -216,7 +218,7 @@ class Light:
 
     KINDS = ("point", "spot", "directional", "constant", "envmap")
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.kind not in self.KINDS:
             raise SceneError(f"light {self.name or '?'}: unknown kind {self.kind!r} "
                              f"(expected one of {', '.join(self.KINDS)})")
@@ -242,7 +244,7 @@ class Camera:
     near_clip: float = 1e-2
     far_clip: float = 1e4
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.fov_axis not in ("x", "y", "smaller", "larger", "diagonal"):
             raise SceneError(f"camera.fov_axis: expected x, y, smaller, larger or diagonal, "
                              f"got {self.fov_axis!r}")
@@ -266,7 +268,7 @@ class Film:
     mitchell_b: float = 1.0 / 3.0
     mitchell_c: float = 1.0 / 3.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.filter not in FILTERS:
             raise SceneError(f"film.filter: expected one of {', '.join(FILTERS)}, got {self.filter!r}")
         for name in ("width", "height"):
@@ -304,7 +306,7 @@ class Integrator:
     hide_emitters: bool = False
     ao_distance: float = float("inf")
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.kind not in INTEGRATORS:
             raise SceneError(f"integrator: expected one of {', '.join(INTEGRATORS)}, got {self.kind!r}")
         if self.strategy not in STRATEGIES:
@@ -333,7 +335,7 @@ class Sampler:
     spp: int = 64
     seed: int = 0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.kind not in SAMPLER_KINDS:
             raise SceneError(f"sampler: expected one of {', '.join(SAMPLER_KINDS)}, got {self.kind!r}")
 
