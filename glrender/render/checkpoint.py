@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import zipfile
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -62,7 +63,8 @@ def save_checkpoint(path, renderer, **info) -> None:
     atomically. ``info`` adds JSON fields to the record (target spp, scene, ...)."""
     state = renderer.state()
     meta = {"format": FORMAT, "version": VERSION, "fingerprint": state["fingerprint"],
-            "spp_done": int(state["spp_done"]), "settings": settings_record(renderer), **info}
+            "spp_done": int(state["spp_done"]), "settings": settings_record(renderer),
+            "files": dict(getattr(renderer.scene, "files", {}) or {}), **info}
 
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as f:
@@ -100,7 +102,9 @@ def load_checkpoint(path) -> Checkpoint:
 
 
 def check_resumable(checkpoint: Checkpoint, renderer) -> None:
-    """Refuse, with the settings that differ, a checkpoint of another scene or settings."""
+    """Refuse, with the settings that differ, a checkpoint of another scene or settings,
+    and one whose input files (scene, includes, meshes, images) changed since, by name."""
+    _check_files(checkpoint, dict(getattr(renderer.scene, "files", {}) or {}))
     if checkpoint.fingerprint == renderer.fingerprint():
         return
     then, now = _flatten(checkpoint.settings), _flatten(settings_record(renderer))
@@ -112,6 +116,31 @@ def check_resumable(checkpoint: Checkpoint, renderer) -> None:
                          f"settings ({'; '.join(differ)}): {fix}")
     raise UsageError(f"{checkpoint.path}: the checkpoint belongs to a different scene (same "
                      f"settings, but the scene or a file it uses changed since): {fix}")
+
+
+def _check_files(checkpoint: Checkpoint, now: dict) -> None:
+    """Every file the checkpointed render read must be there with the same content. Files
+    are matched by their path relative to the scene file's folder (the first one
+    recorded), so a project folder moved as a whole resumes."""
+    then = checkpoint.meta.get("files") or {}
+    if not then or not now:
+        return                  # a scene built in code, or a checkpoint without the record
+
+    def relative(files: dict) -> tuple[str, dict]:
+        base = os.path.dirname(next(iter(files)))
+        return base, {os.path.relpath(p, base): digest for p, digest in files.items()}
+
+    _, then_rel = relative(then)
+    base_now, now_rel = relative(now)
+    changed = sorted(r for r, digest in then_rel.items() if r in now_rel and now_rel[r] != digest)
+    missing = sorted(r for r in then_rel if r not in now_rel)
+    fix = "render without --resume to start afresh"
+    for names, what in ((changed, "changed since the checkpoint was written"),
+                        (missing, "was read by the checkpointed render but not by this one")):
+        if names:
+            more = f" (and {len(names) - 1} more)" if len(names) > 1 else ""
+            path = os.path.normpath(os.path.join(base_now, names[0]))
+            raise UsageError(f"{checkpoint.path}: {path}{more} {what}: {fix}")
 
 
 def _flatten(record: dict, prefix: str = "") -> dict:

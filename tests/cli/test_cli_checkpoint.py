@@ -59,7 +59,7 @@ def test04_another_scene_is_refused(tmp_path):
     assert glrender("render", scene, "-o", out, *SMALL, "--checkpoint", ckpt).returncode == 0
     scene.write_text(scene.read_text().replace("0.570068, 0.0430135", "0.570068, 0.0430136"))
     line = one_error_line(glrender("render", scene, "-o", out, "--checkpoint", ckpt, "--resume"))
-    assert "different scene" in line and "without --resume" in line
+    assert f"{scene} changed since the checkpoint was written" in line and "without --resume" in line
 
 
 def test05_broken_checkpoint_is_refused(tmp_path):
@@ -73,3 +73,28 @@ def test05_broken_checkpoint_is_refused(tmp_path):
     line = one_error_line(glrender("render", CORNELL, "-o", tmp_path / "a.npy", "--checkpoint",
                                    ckpt, "--resume"))
     assert "not a glrender checkpoint" in line
+
+
+def test06_a_changed_input_file_is_refused_by_name(tmp_path):
+    """The checkpoint records every file the render read: a mesh edited since (even in a way
+    that leaves the rendered data equal) is named; the same files in a moved folder resume."""
+    folder = tmp_path / "a"
+    folder.mkdir()
+    scene = folder / "scene.toml"
+    scene.write_text(CORNELL.read_text() + '\n[[shapes]]\ntype = "mesh"\nfile = "tri.obj"\n'
+                     'material = "white"\n')
+    mesh = folder / "tri.obj"
+    mesh.write_text("v -0.5 0.5 0\nv 0.5 0.5 0\nv 0 1 0\nf 1 2 3\n")
+    out, ckpt = tmp_path / "a.npy", tmp_path / "a.ckpt"
+    r = glrender("render", scene, "-o", out, *SMALL, "--checkpoint", ckpt)
+    assert r.returncode == 0, r.stderr
+    assert sorted(load_checkpoint(ckpt).meta["files"]) == [str(scene), str(mesh)]
+
+    moved = shutil.copytree(folder, tmp_path / "b")
+    r = glrender("render", moved / "scene.toml", "-o", out, "--checkpoint", ckpt, "--resume",
+                 "--spp", 16)
+    assert r.returncode == 0, r.stderr
+
+    mesh.write_text(mesh.read_text() + "# edited\n")
+    line = one_error_line(glrender("render", scene, "-o", out, "--checkpoint", ckpt, "--resume"))
+    assert f"{mesh} changed since the checkpoint was written" in line

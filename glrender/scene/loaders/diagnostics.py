@@ -75,6 +75,27 @@ def record_files():
             outer.extend(files)
 
 
+def file_hashes(paths) -> dict[str, str]:
+    """SHA-256 of each file (absolute path -> hex digest): what a checkpoint records, so that
+    resuming after an input changed is refused by the file's name."""
+    import hashlib
+
+    hashes: dict[str, str] = {}
+    for p in paths:
+        key = os.path.abspath(p)
+        if key in hashes:
+            continue
+        h = hashlib.sha256()
+        try:
+            with open(key, "rb") as f:
+                for block in iter(lambda: f.read(1 << 20), b""):
+                    h.update(block)
+        except OSError:
+            continue            # gone since the loader read it: nothing to compare
+        hashes[key] = h.hexdigest()
+    return hashes
+
+
 class SceneFiles:
     """Resolves the files a scene refers to, relative to the folder of the scene file
     that refers to them, and remembers the scene's root folder to report paths that
