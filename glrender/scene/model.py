@@ -372,8 +372,8 @@ class Scene:
     lights: list[Light] = field(default_factory=list)
     source: str = "<scene>"            # file it came from, for messages
     animation: Optional[object] = None  # keyed motion over frames: glrender.scene.animation.Animation
-    files: dict = field(default_factory=dict)   # absolute path -> SHA-256 of every file the
-                                               # loader read (scene, includes, meshes, images)
+    files: dict[str, str] = field(default_factory=dict)   # absolute path -> SHA-256 of every file the
+                                                         # loader read (scene, includes, meshes, images)
 
     def add_material(self, material: Material) -> int:
         """Append ``material``; returns its index for ``Shape.material``."""
