@@ -123,6 +123,19 @@ def cmd_sampling(args) -> int:
     return 0
 
 
+# -- glrender lab / compare (glrender/lab/) ---------------------------------------------------
+def cmd_lab(args) -> int:
+    from .lab.command import run_lab_command
+
+    return run_lab_command(args)
+
+
+def cmd_compare(args) -> int:
+    from .lab.compare import run_compare_command
+
+    return run_compare_command(args)
+
+
 # -- glrender render ------------------------------------------------------------------------
 def cmd_render(args) -> int:
     from .render.command import run_render
@@ -266,6 +279,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--samples", type=int, default=1_000_000, metavar="N",
                    help="chi-square samples per warp (default 10^6)")
     p.set_defaults(func=cmd_sampling)
+
+    from .lab.command import add_lab_parsers   # glrender lab, glrender compare (glrender/lab/)
+    add_lab_parsers(sub, cmd_lab, cmd_compare)
 
     from .preview.command import add_preview_parser   # glrender preview (glrender/preview/)
     add_preview_parser(sub)
