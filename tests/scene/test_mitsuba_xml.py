@@ -174,3 +174,13 @@ def test11_focal_length_sets_the_diagonal_field_of_view(write):
     tx, _ = camera_tangents(scene.camera, 300, 200)
     # Mitsuba 3.9.1 (scalar_rgb) reports x_fov = 54.43222427368164 for this sensor
     assert math.degrees(2 * math.atan(tx)) == pytest.approx(54.43222427368164, rel=1e-6)
+
+
+def test12_default_bsdf_is_black_on_emitters(write):
+    """Mitsuba 3 gives a shape without a BSDF a diffuse 0.5, but an emitting one a black
+    diffuse (shape.cpp): a light does not reflect unless its BSDF says so."""
+    path = write("d.xml", _scene(SHAPE + '<shape type="rectangle"/>'))
+    scene = glrender.load(path)
+    light, plain = (scene.materials[shape.material] for shape in scene.shapes)
+    assert light.kind == "diffuse" and light.reflectance == (0.0, 0.0, 0.0)
+    assert plain.kind == "diffuse" and plain.reflectance == (0.5, 0.5, 0.5)

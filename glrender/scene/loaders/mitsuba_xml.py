@@ -554,7 +554,8 @@ class _Builder:
         if bsdfs:
             material = self.material(bsdfs[0])
         else:
-            material = self.default_material()
+            # Mitsuba's default BSDF: diffuse 0.5, but black on an emitter (shape.cpp)
+            material = self.default_material(black=any(self.objects(node, "emitter")))
         emission = None
         for _, em in self.objects(node, "emitter"):
             if em.type != "area":
@@ -588,11 +589,12 @@ class _Builder:
             shape = disk_shape(shape)
         self.scene.shapes.append(shape)
 
-    def default_material(self) -> int:
-        if -1 not in self.materials:
-            self.materials[-1] = self.scene.add_material(m.Material("diffuse", reflectance=(0.5,) * 3,
-                                                                    name="default"))
-        return self.materials[-1]
+    def default_material(self, black: bool = False) -> int:
+        key = -2 if black else -1
+        if key not in self.materials:
+            self.materials[key] = self.scene.add_material(m.Material(
+                "diffuse", reflectance=(0.0 if black else 0.5,) * 3, name="default-emitter" if black else "default"))
+        return self.materials[key]
 
     def emitter(self, node: Node) -> None:
         t = node.type
