@@ -69,7 +69,8 @@ def save_checkpoint(path, renderer, **info) -> None:
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as f:
             np.savez(f, meta=np.array(json.dumps(meta)),
-                     **{name: np.ascontiguousarray(state[name], np.float32) for name in ARRAYS})
+                     **{name: np.ascontiguousarray(state[name], np.float32) for name in ARRAYS},
+                     splat=np.ascontiguousarray(state["splat"], np.uint32))
 
     atomic_write(path, write)
 
@@ -94,6 +95,8 @@ def load_checkpoint(path) -> Checkpoint:
                      "width": int(meta["settings"]["width"]),
                      "height": int(meta["settings"]["height"]),
                      **{name: np.array(data[name], np.float32) for name in ARRAYS}}
+            if "splat" in data:   # light tracing's and BDPT's fixed-point splat sums
+                state["splat"] = np.array(data["splat"], np.uint32)
     except unreadable as exc:
         if isinstance(exc, UsageError):
             raise

@@ -29,7 +29,10 @@ from .params import shader_defines
 
 TILE = 8
 INTEGRATOR_FILES = {"path": "integrators/path.glsl", "direct": "integrators/direct.glsl",
-                    "ao": "integrators/ao.glsl"}
+                    "ao": "integrators/ao.glsl", "lighttrace": "integrators/lighttrace.glsl"}
+# integrators that splat light-path contributions onto the whole film (integrators/splat.glsl)
+SPLATTING = ("lighttrace",)
+SPLAT_SCALE = 65536.0   # kSplatScale: fixed-point units per unit of splatted value
 
 
 @dataclass
@@ -290,6 +293,7 @@ class Renderer:
                 "mean": np.frombuffer(self._mean.read(), np.float32).copy(),
                 "m2": np.frombuffer(self._m2.read(), np.float32).copy(),
                 "aov": np.frombuffer(self._aov.read(), np.float32).copy(),
+                "splat": np.frombuffer(self._splat.read(), np.uint32).copy(),
                 "width": self.width, "height": self.height, "rows": self.rows}
 
     def restore(self, state: dict[str, Any]) -> None:
@@ -307,6 +311,11 @@ class Renderer:
                 raise UsageError(f"the saved accumulation's {name} has {data.nbytes} bytes, "
                                  f"expected {buf.size}")
             buf.write(data.tobytes())
+        splat = np.ascontiguousarray(state.get("splat", np.zeros(self._splat.size // 4)), np.uint32)
+        if splat.nbytes != self._splat.size:
+            raise UsageError(f"the saved accumulation's splat image has {splat.nbytes} bytes, "
+                             f"expected {self._splat.size}")
+        self._splat.write(splat.tobytes())
         self.spp_done = int(state["spp_done"])
 
     def _warm_up(self) -> None:
@@ -349,7 +358,12 @@ class Renderer:
         self._m2 = self.gl.buffer(reserve=16 * n)
         self._aov = self.gl.buffer(reserve=32 * n if self.settings.aovs else 16)
         self._debug = self.gl.buffer(reserve=4 * n if self.settings.count_loops else 16)
-        for buf in (self._mean, self._m2, self._aov, self._debug):
+        # splats land anywhere on the film: the whole image, two words per pixel and channel
+        if getattr(self, "_splat", None) is not None:
+            self._splat.release()
+        splats = self.settings.integrator.kind in SPLATTING
+        self._splat = self.gl.buffer(reserve=24 * self.width * self.height if splats else 16)
+        for buf in (self._mean, self._m2, self._aov, self._debug, self._splat):
             buf.clear()
         self.spp_done = int(start)
 
@@ -405,6 +419,7 @@ class Renderer:
         self._dist.bind_to_storage_buffer(layout.SSBO_DISTRIBUTIONS)
         self._aov.bind_to_storage_buffer(layout.SSBO_AOV)
         self._debug.bind_to_storage_buffer(layout.SSBO_DEBUG)
+        self._splat.bind_to_storage_buffer(layout.SSBO_SPLAT)
         self._params.bind_to_uniform_block(layout.UBO_PARAMS)
         if getattr(self, "_env_texture", None) is not None:
             self._env_texture.use(layout.TEX_ENVMAP)
@@ -452,7 +467,7 @@ class Renderer:
         return True
 
     def _accumulators(self) -> tuple[Any, ...]:
-        return (self._mean, self._m2, self._aov, self._debug)
+        return (self._mean, self._m2, self._aov, self._debug, self._splat)
 
     def _take_snapshot(self) -> None:
         if self._snapshot is None:
@@ -510,6 +525,10 @@ class Renderer:
             a = np.frombuffer(self._aov.read(), np.float32).reshape(h, self.width, 2, 4)
             aovs = {"albedo": a[:, :, 0, :3].copy(), "normal": a[:, :, 1, :3].copy(),
                     "depth": a[:, :, 1, 3].copy()}
+        if self.settings.integrator.kind in SPLATTING:
+            first = TILE * self.rows[0]
+            mean = mean.copy()
+            mean[..., :3] += self.splat_image()[first:first + h]
         debug = None
         if self.settings.count_loops:
             debug = np.frombuffer(self._debug.read(), np.uint32).reshape(h, self.width).copy()
@@ -517,9 +536,24 @@ class Renderer:
                     nonfinite=m2[..., 3].copy(), spp=self.spp_done, aovs=aovs, loop_counts=debug,
                     sampler=self.settings.sampler.kind)
 
+    def splat_image(self) -> np.ndarray:
+        """The splatted part of the image (light tracing, BDPT's t = 1 strategies), (H, W, 3)
+        float32: the fixed-point sums over the number of light paths, one per camera sample
+        of every pixel of the whole image. ``film()`` adds it to the camera-side mean; its
+        variance is not in the film's M2 (error bars of splatted images come from
+        independent renders)."""
+        if self.settings.integrator.kind not in SPLATTING:
+            return np.zeros((self.height, self.width, 3), np.float32)
+        words = np.frombuffer(self._splat.read(), np.uint32).reshape(-1, 2).astype(np.uint64)
+        sums = ((words[:, 1] << np.uint64(32)) | words[:, 0]).view(np.int64)
+        paths = max(self.spp_done, 1) * self.width * self.height
+        image = sums.astype(np.float64) / (SPLAT_SCALE * paths)
+        return image.reshape(self.height, self.width, 3).astype(np.float32)
+
     def release(self) -> None:
         """Free the device buffers (the renderer cannot render afterwards)."""
-        for buf in self._buffers + [self._mean, self._m2, self._aov, self._debug, self._params]:
+        for buf in self._buffers + [self._mean, self._m2, self._aov, self._debug, self._splat,
+                                    self._params]:
             buf.release()
         self._release_snapshot()
         self._buffers = []

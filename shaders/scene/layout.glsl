@@ -72,6 +72,12 @@ layout(std430, binding = 5) buffer AccumAov { vec4 accum_aov[]; };
 // 6: debug counters per pixel (loop iterations of the worst sample) when enabled.
 layout(std430, binding = 6) buffer DebugCounters { uint debug_counters[]; };
 
+// 7: splatted contributions (light tracing, BDPT's t = 1 strategies) for the whole image:
+//   per pixel and channel a signed 64-bit fixed-point sum (kSplatScale units) as two
+//   words, low then high; integer atomics make the sum independent of the order of
+//   the splats (integrators/splat.glsl).
+layout(std430, binding = 7) buffer AccumSplat { uint accum_splat[]; };
+
 // ---- texture units ---------------------------------------------------------------
 // 0-3: BVH nodes and triangles (geometry/bvh_layout.glsl).
 // 4-6: per-triangle shading data of BVH meshes, in BVH order.

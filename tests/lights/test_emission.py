@@ -84,12 +84,12 @@ def test03_triangle_positions_chi2(gl_ctx, chi2_dir):
 
 
 def spot_power(rec) -> float:
-    """2 pi I ∫ falloff(cos theta) d cos theta over the cone (numerical, Simpson)."""
-    cos_cut, cos_beam = float(rec["params"][0]), float(rec["params"][1])
-    c = np.linspace(cos_cut, 1.0, 200_001)
-    t = np.clip((c - cos_cut) / (cos_beam - cos_cut), 0, 1)
-    f = np.where(c >= cos_beam, 1.0, t * t * (3 - 2 * t))
-    h = c[1] - c[0]
+    """2 pi I ∫ falloff(theta) sin theta dtheta over the cone (Simpson); Mitsuba's falloff:
+    1 inside the beam width, linear in the angle down to 0 at the cutoff."""
+    cutoff, beam = math.acos(float(rec["params"][0])), math.acos(float(rec["params"][1]))
+    theta = np.linspace(0.0, cutoff, 200_001)
+    f = np.clip((cutoff - theta) / (cutoff - beam), 0.0, 1.0) * np.sin(theta)
+    h = theta[1] - theta[0]
     integral = h / 3 * (f[0] + f[-1] + 4 * f[1:-1:2].sum() + 2 * f[2:-1:2].sum())
     return 2 * math.pi * float(rec["radiance"][0]) * integral
 
