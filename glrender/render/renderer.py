@@ -46,6 +46,8 @@ class RenderSettings:
     debug_nonfinite: int = 0              # tests: make sample index % 7 == value - 1 NaN
     samples_per_pass: int | None = None   # None: chosen from the scene
     time_target: float = 0.1              # seconds per dispatch
+    clamp: float | None = None            # a sample's largest RGB component is scaled down to
+                                          # this (biased: off by default)
 
 
 def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: int | None = None,
@@ -54,8 +56,11 @@ def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: i
                         strategy: str | None = None, light_selection: str | None = None,
                         area_sampling: str | None = None, hide_emitters: bool | None = None,
                         aovs: bool = False, count_loops: bool = False,
-                        samples_per_pass: int | None = None, time_target: float = 0.1) -> RenderSettings:
-    """The scene's settings with the given overrides (None keeps the scene's value)."""
+                        samples_per_pass: int | None = None, time_target: float = 0.1,
+                        clamp: float | None = None) -> RenderSettings:
+    """The scene's settings with the given overrides (None keeps the scene's value).
+    ``clamp``: scale each camera sample whose largest RGB component exceeds it down to
+    it (removes fireflies at the price of bias; None: off)."""
     integ = scene.integrator
     overrides: dict[str, Any] = {k: v for k, v in dict(kind=integrator, max_depth=max_depth, rr_depth=rr_depth,
                                        strategy=strategy, light_selection=light_selection,
@@ -67,8 +72,13 @@ def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: i
     samp = replace(scene.sampler, **samp_overrides)
     if samp.spp < 1:
         raise UsageError(f"spp: expected a positive integer, got {samp.spp}")
+    if clamp is not None and not (isinstance(clamp, (int, float)) and math.isfinite(clamp)
+                                  and clamp > 0):
+        raise UsageError(f"clamp: expected a positive number (the largest RGB component a "
+                         f"sample keeps), got {clamp!r}")
     return RenderSettings(integ, samp, aovs=aovs, count_loops=count_loops,
-                          samples_per_pass=samples_per_pass, time_target=time_target)
+                          samples_per_pass=samples_per_pass, time_target=time_target,
+                          clamp=None if clamp is None else float(clamp))
 
 
 def camera_tangents(camera: m.Camera, width: int, height: int) -> tuple[float, float]:
@@ -409,6 +419,7 @@ class Renderer:
         center, radius = self.packed.sphere_bounds
         prm["scene_sphere"] = (*center, radius)
         prm["misc"][0] = min(s.integrator.ao_distance, 3.0e38)
+        prm["misc"][2] = s.clamp if s.clamp is not None else 0.0
         return prm
 
     def _bind(self) -> None:

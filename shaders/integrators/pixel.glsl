@@ -45,9 +45,13 @@ CameraSample camera_sample(uvec2 pixel, inout SamplerState s) {
 }
 
 // Adds one sample's radiance L (and first-hit AOVs) to the pixel's statistics;
-// non-finite samples are dropped and counted.
+// non-finite samples are dropped and counted. With a clamp c > 0 (u_params.misc.z)
+// a sample whose largest component exceeds c is scaled down to it (hue kept; biased).
 void accumulate(inout Accumulator acc, vec3 L, Aov aov, uint index) {
     if (kDebugNonFinite != 0u && (index % 7u) == kDebugNonFinite - 1u) L = vec3(uintBitsToFloat(0x7fc00000u));
+    float clamp_to = u_params.misc.z;
+    float largest = max(L.r, max(L.g, L.b));
+    if (clamp_to > 0.0 && largest > clamp_to) L *= clamp_to / largest;
     if (is_finite(L)) {
         acc.mean.w += 1.0;
         vec3 delta = L - acc.mean.rgb;

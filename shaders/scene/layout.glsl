@@ -19,7 +19,7 @@ layout(std140, binding = 0) uniform RenderParams {
     uvec4 dispatch;        // x: first tile (permuted order), y: tiles in this dispatch, z: seed, w: tile permutation seed
     uvec4 counts;          // x: lights, y: materials, z: environment light index + 1 (0: none), w: first tile row in the accumulation
     vec4 scene_sphere;     // bounding sphere of the scene: centre xyz, radius w
-    vec4 misc;             // x: AO distance, y: sum of light selection weights, zw: unused
+    vec4 misc;             // x: AO distance, y: sum of light selection weights, z: sample clamp (0: off), w: unused
 } u_params;
 
 // ---- storage blocks (std430) ---------------------------------------------------
