@@ -27,8 +27,8 @@ FORMATS = {
 def load(path: str | os.PathLike[str], **params: Any) -> Scene:
     """Load a scene file; the format comes from the extension: .toml (native), .xml
     (Mitsuba 3), .gltf/.glb, .obj (with its MTL files) or .ply (a mesh, with a default
-    camera and material). ``params`` fill ``$name`` references (TOML [params], Mitsuba
-    <default>); loaders warn through :class:`GlrenderWarning`."""
+    camera and material). ``params`` fill ``$name`` references (TOML ``[params]``, Mitsuba
+    ``<default>``); loaders warn through :class:`GlrenderWarning`."""
     import importlib
 
     path = Path(path)

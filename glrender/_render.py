@@ -1,0 +1,130 @@
+"""The implementation of :func:`glrender.render` (a module of its own: the name ``render``
+is also the subpackage glrender/render/)."""
+from __future__ import annotations
+
+import inspect
+import os
+import sys
+import time as _time
+from typing import Callable
+
+from .errors import UsageError
+from .film import Film
+from .render.renderer import Renderer, settings_from_scene
+from .scene import load
+from .scene.model import Scene
+
+#: ``progress(spp_done, seconds)``: called after every pass of :func:`render`.
+ProgressCallback = Callable[[int, float], None]
+
+# sample indices are 32-bit on the device: the open-ended target of a time budget
+_SPP_LIMIT = 1 << 31
+# the further keyword options render() passes to settings_from_scene
+_SETTINGS_OPTIONS = set(inspect.signature(settings_from_scene).parameters) - {
+    "scene", "integrator", "spp", "seed", "sampler", "max_depth", "strategy", "aovs"}
+
+
+def render(scene: Scene | str | os.PathLike[str], spp: int | None = None, *,
+           time: float | None = None, integrator: str | None = None, seed: int | None = None,
+           sampler: str | None = None, max_depth: int | None = None,
+           strategy: str | None = None, aovs: bool = False,
+           device: str | int | None = None,
+           progress: bool | ProgressCallback = True,
+           callback: Callable[[int, int], None] | None = None,
+           **options: object) -> Film:
+    """Render a scene (or a scene file path) and return its :class:`Film`.
+
+    Args:
+        scene: a :class:`Scene`, or the path of a scene file (loaded with :func:`load`).
+        spp: samples per pixel (default: the scene's sampler). With ``time`` and no
+            ``spp``, the render runs until the time budget ends.
+        time: a budget in seconds of rendering (loading, building and compiling not
+            counted): rendering stops before the pass that would end past it (the first
+            pass always completes, so the image has samples).
+        integrator: ``"path"``, ``"direct"`` or ``"ao"`` (default: the scene's).
+        seed: the sampler's seed; the same scene, seed and spp give the same image, bitwise,
+            on the same device.
+        sampler: ``"independent"``, ``"stratified"`` or ``"sobol"``.
+        max_depth: path segments (Mitsuba's convention: 1 = emitters seen directly,
+            2 = direct lighting, -1 = unbounded).
+        strategy: direct-lighting weighting: ``"light"``, ``"bsdf"``, ``"mis-balance"``,
+            ``"mis-power"``.
+        aovs: also record first-hit albedo, normal (world space) and depth (metres along
+            the ray), read with :meth:`Film.aov`.
+        device: ``"auto"``, ``"cpu"`` (llvmpipe), ``"gpu"`` or an EGL device index.
+        progress: True: a progress bar on standard error when it is a terminal; False:
+            nothing; a callable: ``progress(spp_done, seconds)`` after every pass.
+        callback: ``callback(spp_done, spp_target)`` after every pass.
+        options: other overrides of :func:`glrender.settings_from_scene` (``rr_depth``,
+            ``light_selection``, ``area_sampling``, ``hide_emitters``, ...).
+
+    Returns:
+        The image and its per-pixel statistics; ``film.stats`` holds the timings
+        (seconds), sample rate (samples/s), passes and why the render stopped.
+
+    Raises:
+        SceneError: the scene file or scene is invalid.
+        UsageError: an argument is out of range.
+        DeviceError: no OpenGL device could be opened.
+        ShaderError: the kernel did not compile.
+    """
+    from .render.job import RenderJob
+
+    t_start = _time.perf_counter()
+    if time is not None and not (isinstance(time, (int, float)) and time > 0 and time < float("inf")):
+        raise UsageError(f"time: expected a positive number of seconds, got {time!r}")
+    if spp is not None and (not isinstance(spp, int) or isinstance(spp, bool) or spp < 1):
+        raise UsageError(f"spp: expected a positive integer, got {spp!r}")
+    if not isinstance(scene, Scene):
+        if not isinstance(scene, (str, os.PathLike)):
+            raise UsageError(f"render: expected a Scene or a scene file path, got "
+                             f"{type(scene).__name__}")
+        scene = load(scene)
+    scene.validate()
+    unknown = sorted(set(options) - _SETTINGS_OPTIONS)
+    if unknown:
+        raise UsageError(f"render: unknown option {', '.join(unknown)} (expected "
+                         f"{', '.join(sorted(_SETTINGS_OPTIONS))})")
+    settings = settings_from_scene(scene, integrator=integrator, spp=spp, seed=seed,
+                                   sampler=sampler, max_depth=max_depth, strategy=strategy,
+                                   aovs=aovs, **options)  # type: ignore[arg-type]
+    target = settings.sampler.spp if spp is not None or time is None else _SPP_LIMIT
+    t_setup = _time.perf_counter()
+    with Renderer(scene, settings, device=device) as renderer:
+        bar = None
+        if progress is True and sys.stderr is not None and sys.stderr.isatty():
+            from .render.progress import ProgressBar
+
+            bar = ProgressBar(sys.stderr, pixels=renderer.width * renderer.height, spp_start=0,
+                              spp_target=None if target == _SPP_LIMIT else target, seconds=time)
+
+        def after_pass(done: int, seconds: float) -> None:
+            if bar is not None:
+                bar.update(done, seconds)
+            elif callable(progress):
+                progress(done, seconds)
+            if callback is not None:
+                callback(done, target)
+
+        job = RenderJob(renderer, target, seconds=time, progress=after_pass)
+        try:
+            result = job.run()
+        finally:
+            if bar is not None:
+                bar.close()
+        film = renderer.film()
+        samples = film.spp * renderer.width * renderer.height
+        film.stats = {
+            "device": renderer.ctx.renderer,
+            "integrator": settings.integrator.kind, "sampler": settings.sampler.kind,
+            "seed": settings.sampler.seed, "spp": film.spp,
+            "spp_target": None if target == _SPP_LIMIT else target,
+            "time_budget": time, "stopped": result.stopped, "passes": result.passes,
+            "seconds": {"setup": t_setup - t_start, **renderer.timings,
+                        "render": result.render_seconds,
+                        "total": _time.perf_counter() - t_start},
+            "samples_per_second": samples / result.render_seconds if result.render_seconds > 0
+            else None,
+            "nonfinite_samples": film.nonfinite_total,
+        }
+        return film
