@@ -108,6 +108,10 @@ class PreviewApp:
         self._recorded = 0
         self.renderer: Renderer | None = None
         self.progressive: Progressive | None = None
+        self.denoise = False         # the N key: show the denoised color view
+        self._denoised = None        # its DenoisedView (glrender/preview/denoised.py)
+        self._generation = 0         # which accumulation: +1 at every restart or new kernel
+        self._shown = None           # (Denoised, view settings, 8-bit pixels) on screen
         self.display = Display(ctx)
         self._build()
         center, radius = self.renderer.packed.sphere_bounds
@@ -138,6 +142,7 @@ class PreviewApp:
             old.release()
         self.renderer = Renderer(self.scene, settings, ctx=self.ctx)
         self.progressive = Progressive(self.renderer, self.options.spp)
+        self._generation += 1
         seconds = time.perf_counter() - t0
         self._compile_note = f" - built in {seconds:.2f} s"
         self._compile_note_until = time.perf_counter() + 3.0
@@ -149,6 +154,7 @@ class PreviewApp:
         self.display.hold(self.renderer, self.view)
         self.scene.camera = self.controller.camera()
         self.progressive.reset()
+        self._generation += 1
         self._dirty = True
 
     # -- input -----------------------------------------------------------------------------
@@ -256,6 +262,56 @@ class PreviewApp:
     def action_exposure_reset(self, shift, index):
         self._set_view(exposure=0.0)
 
+    def action_denoise(self, shift, index):
+        if self.denoise:
+            self.denoise = False
+            return
+        if self._denoised is None:
+            from ..denoise import aovs_are_clean
+            from ..errors import UsageError
+            from .denoised import DenoisedView
+
+            try:
+                self._denoised = DenoisedView(clean_aux=aovs_are_clean(self.scene),
+                                              on_done=self.glfw.post_empty_event)
+            except UsageError as exc:   # without the denoise extra: say so, stay noisy
+                self.say(str(exc))
+                return
+            self.say(f"denoising with Open Image Denoise ({self._denoised.denoiser.device_name}, "
+                     f"{self._denoised.denoiser.threads} threads) in the background")
+        self.denoise = True
+
+    def _denoise_step(self) -> None:
+        """Hand the accumulation to the denoiser when a new denoised image is due."""
+        d = self._denoised
+        if not self.denoise or d is None or self.view.view != "color":
+            return
+        if d.wants(self._generation, self.progressive.spp, final=self.progressive.done):
+            d.submit(self.renderer.film(), self._generation)
+        result = d.current(self._generation)
+        if result is not None and (self._shown is None or self._shown[0] is not result):
+            self._dirty = True
+
+    def _denoised_pixels(self):
+        """The denoised view's 8-bit pixels when it is on and has an image of this
+        accumulation, else None (the accumulation is shown)."""
+        if not self.denoise or self._denoised is None or self.view.view != "color":
+            return None
+        result = self._denoised.current(self._generation)
+        if result is None:
+            return None
+        if self._shown is None or self._shown[0] is not result or self._shown[1] != self.view:
+            from ..film.tonemap import tonemap
+
+            v = self.view
+            self._shown = (result, v, tonemap(result.image, v.exposure, v.curve, v.srgb))
+        return self._shown[2]
+
+    def _view_image(self) -> np.ndarray:
+        """What the window shows at 1:1, 8-bit RGB, rows top to bottom."""
+        pixels = self._denoised_pixels()
+        return pixels if pixels is not None else self.display.image(self.renderer, self.view)
+
     def action_pause(self, shift, index):
         self.paused = not self.paused
 
@@ -325,6 +381,9 @@ class PreviewApp:
             state = f"{self._rate(now) / 1e6:.2f} M samples/s"
         v = self.view
         note = self._compile_note if now < self._compile_note_until else ""
+        if self.denoise and self._denoised is not None:
+            result = self._denoised.current(self._generation)
+            note += f" - denoised at {result.spp} spp" if result is not None else " - denoising"
         return (f"glrender - {self.options.scene_name} - {self.settings_label()} - {v.view}, "
                 f"{v.curve}, {v.exposure:+.1f} EV - {spp} - {state}{note}")
 
@@ -353,7 +412,7 @@ class PreviewApp:
         film = self.renderer.film()
         stem = self._unique_stem(self.options.screenshot_dir)
         png = stem.with_suffix(".png")
-        pixels = self.display.image(self.renderer, self.view)
+        pixels = self._view_image()
         atomic_write(png, lambda tmp: Image.fromarray(pixels).save(tmp, format="PNG"))
         try:
             import OpenEXR  # noqa: F401
@@ -377,6 +436,7 @@ class PreviewApp:
             "fov": cam.fov, "fov_axis": cam.fov_axis,
             "device": self.ctx.gl.info["GL_RENDERER"], "gl_version": self.ctx.gl.info["GL_VERSION"],
             "png": png.name, "hdr": hdr.name,
+            "denoised_spp": self._shown[0].spp if self._denoised_pixels() is not None else None,
         }
         meta_path = stem.with_suffix(".json")
         atomic_write(meta_path, lambda tmp: tmp.write_text(json.dumps(meta, indent=2) + "\n"))
@@ -389,7 +449,7 @@ class PreviewApp:
 
         self._recorded += 1
         path = self.options.record_dir / f"frame-{self._recorded:06d}.png"
-        Image.fromarray(self.display.image(self.renderer, self.view)).save(path, compress_level=1)
+        Image.fromarray(self._view_image()).save(path, compress_level=1)
 
     # -- frame loop ------------------------------------------------------------------------
     def _draw(self) -> None:
@@ -401,7 +461,11 @@ class PreviewApp:
             gl.viewport = (0, 0, *size)
             gl.clear(0.12, 0.12, 0.12, 1.0)
             view = fit_viewport((self.renderer.width, self.renderer.height), size)
-            self.display.draw(self.renderer, gl.screen, view, self.view)
+            pixels = self._denoised_pixels()
+            if pixels is not None:
+                self.display.draw_pixels(pixels, gl.screen, view)
+            else:
+                self.display.draw(self.renderer, gl.screen, view, self.view)
             glfw.swap_buffers(self.window)
         seconds = time.perf_counter() - t0
         self._display_seconds = seconds if self._frames == 0 else 0.8 * self._display_seconds + 0.2 * seconds
@@ -438,6 +502,7 @@ class PreviewApp:
                 rendered = self.progressive.advance(max(0.3 * budget, budget - self._display_seconds))
                 self._totals["render"] += time.perf_counter() - t0
                 self._samples_total += self.progressive.samples_added - before
+            self._denoise_step()
             if rendered or self._dirty:
                 self._draw()
                 if self.options.record_dir is not None:
@@ -451,10 +516,13 @@ class PreviewApp:
         """One line at exit: spp, frames and where their time went, samples/s."""
         t, frames = self._totals, max(self._frames, 1)
         rate = self._samples_total / t["render"] if t["render"] > 0 else 0.0
+        d = self._denoised
+        denoised = "" if d is None else (f"; {d.runs} denoised images, {d.seconds:.2f} s of "
+                                         f"Open Image Denoise in the background")
         return (f"preview closed at {self.progressive.spp} spp after {self._frames} frames "
                 f"(per frame: {1000 * t['render'] / frames:.1f} ms rendering, "
                 f"{1000 * t['display'] / frames:.1f} ms display and swap; "
-                f"{rate / 1e6:.2f} M samples/s while rendering)")
+                f"{rate / 1e6:.2f} M samples/s while rendering{denoised})")
 
     def window_id(self) -> str:
         try:
@@ -463,6 +531,9 @@ class PreviewApp:
             return "(not X11)"
 
     def release(self) -> None:
+        if self._denoised is not None:
+            self._denoised.close()
+            self._denoised = None
         if self.renderer is not None:
             self.renderer.release()
             self.renderer = None

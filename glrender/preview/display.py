@@ -79,6 +79,7 @@ class Display:
         self.vao = self.gl.vertex_array(self.program, [])
         self._frame: _Target | None = None   # the latest frame at 1:1
         self._held: _Target | None = None    # shown where the accumulation is empty
+        self._pixels = None                  # an 8-bit image from the host (the denoised view)
 
     def _set(self, name: str, value) -> None:
         if name in self.program:   # the compiler drops unused uniforms
@@ -125,6 +126,23 @@ class Display:
         target.use()
         self._pass((renderer.width, renderer.height), viewport, SOURCE_TEXTURE, self._frame.texture)
 
+    def draw_pixels(self, pixels: np.ndarray, target: moderngl.Framebuffer,
+                    viewport: tuple[int, int, int, int]) -> None:
+        """Draw an 8-bit RGB image (H, W, 3), rows top to bottom, made on the host (the
+        denoised view, tonemapped by film/tonemap.py), into ``viewport`` of ``target``,
+        which is left bound."""
+        h, w = pixels.shape[:2]
+        if self._pixels is None or self._pixels.size != (w, h):
+            if self._pixels is not None:
+                self._pixels.release()
+            self._pixels = self.gl.texture((w, h), 4, dtype="f1")
+            self._pixels.filter = (self.gl.NEAREST, self.gl.NEAREST)
+        rgba = np.full((h, w, 4), 255, np.uint8)
+        rgba[..., :3] = pixels[::-1]            # textures hold rows bottom to top
+        self._pixels.write(rgba.tobytes())
+        target.use()
+        self._pass((w, h), viewport, SOURCE_TEXTURE, self._pixels)
+
     def image(self, renderer, settings: DisplaySettings) -> np.ndarray:
         """What the window shows at 1:1, as 8-bit RGB (H, W, 3), rows top to bottom.
         Leaves the frame's framebuffer bound."""
@@ -144,4 +162,7 @@ class Display:
             if t is not None:
                 t.release()
         self._frame = self._held = None
+        if self._pixels is not None:
+            self._pixels.release()
+            self._pixels = None
         self.vao.release()

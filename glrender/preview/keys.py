@@ -18,6 +18,7 @@ KEYS = (
     (("MINUS", "KP_SUBTRACT"), "exposure_down", "exposure - 0.5 stop"),
     (("EQUAL", "KP_ADD"), "exposure_up", "exposure + 0.5 stop"),
     (("0",), "exposure_reset", "exposure 0"),
+    (("N",), "denoise", "denoised color view on / off (Open Image Denoise, in the background)"),
     (("SPACE",), "pause", "pause / resume adding samples"),
     (("P", "F12"), "screenshot", "screenshot: PNG (the view), EXR (the accumulation), JSON"),
     (("H",), "help", "print the keys"),

@@ -195,6 +195,10 @@ def run_render(args, signals) -> int:
     from .progress import ProgressBar
     from .renderer import Renderer, settings_from_scene
 
+    from ..distributed.command import run_distributed, uses_cluster
+
+    if uses_cluster(args):          # --workers, --scheduler, --frames: on a Dask cluster
+        return run_distributed(args, signals)
     say = (lambda *a: None) if args.quiet else (lambda text: print(text, file=sys.stderr))
     timer = _Timer()
     t_start = time.perf_counter()
