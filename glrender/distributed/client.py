@@ -11,6 +11,7 @@ bitwise the same.
 from __future__ import annotations
 
 import hashlib
+import logging
 import os
 import pickle
 import time
@@ -20,7 +21,7 @@ from pathlib import Path
 from ..errors import UsageError
 from .merge import FrameImage
 from .plan import Plan
-from .worker import Job, merge_partials, render_unit
+from .worker import Job, hold, merge_partials, render_unit
 
 # pixel-samples per unit: about 1-2 s on one llvmpipe thread for the Cornell box
 # (benchmarks/scale.py), recorded with every render
@@ -58,7 +59,7 @@ def local_cluster(workers: int, *, threads: int | None = None, dashboard: bool =
     cluster = distributed.LocalCluster(
         n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
         dashboard_address="127.0.0.1:0" if dashboard else None,
-        env={"LP_NUM_THREADS": str(lp)})
+        env={"LP_NUM_THREADS": str(lp)}, silence_logs=logging.CRITICAL)
     return cluster, distributed.Client(cluster)
 
 
@@ -110,7 +111,7 @@ def job_id(job: Job, plan: Plan) -> str:
 
 def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
            unit_size: int = DEFAULT_UNIT_SIZE, device=None, params: dict | None = None,
-           width: int | None = None, height: int | None = None,
+           width: int | None = None, height: int | None = None, source=None,
            scene_on_workers: str | None = None, done: dict | None = None, stop=None,
            progress=None, poll: float = 0.2) -> Result:
     """Render ``scene`` (a scene file's path, sent to the workers by value, or a Scene,
@@ -121,6 +122,7 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
     (frame numbers of an animated scene, None: a still), ``unit_size`` (pixel-samples
     per unit), ``device`` (each worker's --device), ``done`` (finished bands
     {(frame, band): Partial} of an earlier run with the same plan, e.g. a checkpoint),
+    ``source`` (the SceneSource workers load, when ``scene`` is that source's Scene),
     ``stop()`` (asked while waiting: True ends the render early, with the finished
     bands in the result), ``progress(units_done, units, pixel_samples_done, seconds)``.
     """
@@ -128,7 +130,9 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
     from ..render.renderer import settings_from_scene
     from . import source as src
 
-    if isinstance(scene, (str, Path)):
+    if source is not None:        # a SceneSource of `scene` (a Scene) made by the caller
+        scene_obj = scene
+    elif isinstance(scene, (str, Path)):
         scene_obj, source = src.from_file(scene, params or {}, scene_on_workers)
     else:
         scene_obj, source = scene, src.from_scene(scene)
@@ -145,7 +149,9 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
     done = dict(done or {})
     t0 = time.perf_counter()
 
-    [job_future] = client.scatter([job], broadcast=False, hash=True)
+    # the job (with the scene's bytes) as a task, not scattered data: the scheduler keeps
+    # its recipe, so a copy lost with a worker is made again; workers fetch it from a peer
+    job_future = client.submit(hold, job, key=f"glrender-{jid}-job", pure=False)
     finals, unit_futures = {}, []
     tree = plan.merge_tree()
     for frame in frame_list:

@@ -130,8 +130,9 @@ def _load(source: SceneSource):
             try:
                 scene, files = load_recorded(source.path, params)
             except (SceneError, OSError) as exc:
-                raise UsageError(f"a worker cannot read the scene {source.path} "
-                                 f"({str(exc).splitlines()[0]})") from None
+                raise UsageError(f"a worker cannot read the scene ({str(exc).splitlines()[0]}); "
+                                 f"--scene-on-workers names a path every worker can read") \
+                    from None
             if content_digest(files[0], files, params) != source.digest:
                 raise UsageError(f"the workers' copy of the scene at {source.path} differs from "
                                  f"{source.label} (a file changed or is missing on a worker): "

@@ -87,6 +87,11 @@ def render_unit(job: Job, unit) -> Partial:
     return from_state(state, r.width * r.band_height, job.settings.aovs, unit.samples, seconds)
 
 
+def hold(job: Job) -> Job:
+    """The task whose result is the job, on the workers that need it."""
+    return job
+
+
 def merge_partials(a: Partial, b: Partial) -> Partial:
     """A merge-tree node (runs on a worker: partial images never pass through the client)."""
     return merge(a, b)

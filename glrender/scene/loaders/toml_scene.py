@@ -422,7 +422,7 @@ def _light(ctx, i: int, t) -> m.Light:
 
 
 _TOP = {"film", "camera", "integrator", "sampler", "shutter", "materials", "shapes", "lights",
-        "textures", "include", "params"}
+        "textures", "include", "params", "animation"}
 _PARAM = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
 
 
@@ -493,6 +493,7 @@ class _State:
         self.textures: dict[str, m.Texture] = {}
         self.has_camera = False
         self.used: set[str] = set()
+        self.animation = None          # (ctx, table) of the last [animation], read at the end
 
 
 def _load_file(path: Path, params: dict, state: _State, stack: tuple) -> None:
@@ -548,6 +549,70 @@ def _load_file(path: Path, params: dict, state: _State, stack: tuple) -> None:
         ctx.fail("lights", "expected an array of tables ([[lights]])")
     for i, t in enumerate(lights):
         scene.lights.append(_light(ctx, i, t))
+    if "animation" in data:
+        state.animation = (ctx, data["animation"])
+
+
+def _animation(ctx: _Ctx, t, scene: m.Scene):
+    """[animation]: fps, the default frame range, [[animation.camera]] keys (time and
+    look_at or transform) and [[animation.shapes]] (a shape's name and its keys), read
+    once every file is loaded so that keys may name shapes of any file."""
+    from ..animation import Animation, Track
+
+    t = ctx.table(t, "animation")
+    _check_keys(ctx, t, "animation", {"fps", "frames", "camera", "shapes"})
+    fps = ctx.number(t.get("fps", 24.0), "animation.fps", 1e-6, 1e6)
+    frames = None
+    if "frames" in t:
+        first, last = ctx.vector(t["frames"], "animation.frames", 2)
+        if first != int(first) or last != int(last) or not 0 <= first <= last:
+            ctx.fail("animation.frames", f"expected [first, last] integers with 0 <= first <= "
+                     f"last, got {_show(t['frames'])}")
+        frames = (int(first), int(last))
+
+    def track(keys, key: str, camera: bool) -> Track:
+        if not isinstance(keys, list) or not keys:
+            ctx.fail(key, "expected an array of key tables ({time = ..., transform = ...})")
+        times, matrices = [], []
+        for i, k in enumerate(keys):
+            kk = f"{key}[{i}]"
+            k = ctx.table(k, kk)
+            _check_keys(ctx, k, kk, {"time", "transform", "look_at"} if camera else {"time", "transform"})
+            times.append(ctx.number(k.get("time"), f"{kk}.time"))
+            if camera and "look_at" in k:
+                if "transform" in k:
+                    ctx.fail(kk, "give look_at or transform, not both")
+                matrices.append(_look_at(ctx, k["look_at"], f"{kk}.look_at"))
+            elif "transform" in k:
+                matrices.append(_transform(ctx, k["transform"], f"{kk}.transform"))
+            else:
+                ctx.fail(kk, "expected a transform" + (" or look_at" if camera else ""))
+        try:
+            return Track(tuple(times), tuple(matrices), name=key)
+        except SceneError as exc:
+            ctx.fail(key, str(exc).split(": ", 1)[-1])
+
+    camera = track(t["camera"], "animation.camera", True) if "camera" in t else None
+    shapes = {}
+    entries = t.get("shapes", [])
+    if not isinstance(entries, list):
+        ctx.fail("animation.shapes", "expected an array of tables ([[animation.shapes]])")
+    for i, e in enumerate(entries):
+        key = f"animation.shapes[{i}]"
+        e = ctx.table(e, key)
+        _check_keys(ctx, e, key, {"shape", "keys"})
+        name = ctx.string(e.get("shape"), f"{key}.shape")
+        found = [j for j, shape in enumerate(scene.shapes) if shape.name == name]
+        if len(found) != 1:
+            ctx.fail(f"{key}.shape", f"names {len(found)} shapes ({name!r}); key exactly one "
+                     f"shape, by a unique name")
+        if found[0] in shapes:
+            ctx.fail(f"{key}.shape", f"{name!r} is keyed twice")
+        shapes[found[0]] = track(e.get("keys"), f"{key}.keys", False)
+    try:
+        return Animation(fps, frames, camera, shapes)
+    except SceneError as exc:
+        ctx.fail("animation", str(exc).split(": ", 1)[-1])
 
 
 def load_toml(path, **params) -> m.Scene:
@@ -558,6 +623,8 @@ def load_toml(path, **params) -> m.Scene:
     scene = m.Scene(source=str(path))
     state = _State(scene, SceneFiles(path.parent))
     _load_file(path, params, state, ())
+    if state.animation is not None:
+        scene.animation = _animation(*state.animation, scene)
     unused = sorted(set(params) - state.used)
     if unused:
         warn(f"{path}: parameters given but not used: {', '.join(unused)}")

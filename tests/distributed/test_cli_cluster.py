@@ -1,0 +1,107 @@
+"""glrender render --workers / --scheduler / --frames, run as users run it."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import glrender
+from glrender.film.io import read_exr_layers
+from glrender.render.renderer import Renderer, settings_from_scene
+from glrender.scene.animation import scene_at_frame
+
+from dist_run import CORNELL, DaskProcesses, animated_cornell, free_port, glrender as run, \
+    one_error_line
+
+SMALL = ["--width", 48, "--height", 40, "--spp", 16, "--seed", 5]
+
+
+def single(tmp_path, name="single.exr"):
+    out = tmp_path / name
+    r = run("render", CORNELL, *SMALL, "-o", out, "--quiet")
+    assert r.returncode == 0, r.stderr
+    return out.read_bytes()
+
+
+@pytest.mark.slow
+def test01_local_cluster_writes_the_same_exr(tmp_path):
+    out = tmp_path / "cluster.exr"
+    r = run("render", CORNELL, *SMALL, "-o", out, "--workers", 2, "--unit-size", 48 * 8 * 16 * 2,
+            "--stats", tmp_path / "s.json")
+    assert r.returncode == 0, r.stderr
+    assert "3 units" in r.stderr and "local cluster of 2 worker processes" in r.stderr
+    assert out.read_bytes() == single(tmp_path)
+    import json
+
+    stats = json.loads((tmp_path / "s.json").read_text())
+    assert stats["unit_size"] == 48 * 8 * 16 * 2 and stats["plan"]["units"] == 3
+    assert stats["scene_by"] == "value" and stats["workers"] == 2
+
+
+@pytest.mark.slow
+def test02_dask_scheduler_and_workers(tmp_path):
+    """`dask scheduler` and two `dask worker` processes on 127.0.0.1: the same file."""
+    cluster = DaskProcesses(tmp_path)
+    try:
+        cluster.wait_for_workers(2)
+        out = tmp_path / "remote.exr"
+        r = run("render", CORNELL, *SMALL, "-o", out, "--scheduler", cluster.address,
+                "--unit-size", 48 * 8 * 16)
+        assert r.returncode == 0, r.stderr
+        assert "5 units" in r.stderr and cluster.address in r.stderr
+    finally:
+        cluster.close()
+    assert out.read_bytes() == single(tmp_path)
+
+
+@pytest.mark.slow
+def test03_two_frames_of_an_animation_in_tiles(tmp_path, gl_ctx):
+    scene_path = animated_cornell(tmp_path)
+    r = run("render", scene_path, *SMALL, "--frames", "0:1", "-o", tmp_path / "f{frame:02d}.exr",
+            "--workers", 2, "--unit-size", 48 * 8 * 16)
+    assert r.returncode == 0, r.stderr
+    assert "10 units" in r.stderr
+    scene = glrender.load(scene_path)
+    scene.film.width, scene.film.height = 48, 40
+    images = []
+    for frame in (0, 1):
+        s = scene_at_frame(scene, frame)
+        rr = Renderer(s, settings_from_scene(s, spp=16, seed=5))
+        rr.step(16)
+        ref = rr.film()
+        rr.release()
+        got = read_exr_layers(tmp_path / f"f{frame:02d}.exr")
+        rgb = got["RGB"]
+        np.testing.assert_array_equal(rgb, ref.mean)
+        images.append(ref.mean)
+    assert np.mean(images[0] != images[1]) > 0.5      # the frames differ: the motion is there
+
+
+@pytest.mark.slow
+def test04_bad_input_is_one_line(tmp_path):
+    out = tmp_path / "out.exr"
+    r = run("render", CORNELL, *SMALL, "-o", out, "--workers", 0)
+    assert "--workers 0" in one_error_line(r)
+    port = free_port()
+    r = run("render", CORNELL, *SMALL, "-o", out, "--scheduler", f"tcp://127.0.0.1:{port}")
+    assert "cannot reach the scheduler" in one_error_line(r)
+    r = run("render", CORNELL, *SMALL, "-o", tmp_path / "f.exr", "--frames", "0:1")
+    assert "has no [animation]" in one_error_line(r)
+    r = run("render", animated_cornell(tmp_path), *SMALL, "-o", out, "--frames", "0:1")
+    assert "{frame}" in one_error_line(r)
+    r = run("render", CORNELL, *SMALL, "-o", out, "--scheduler", "tls://127.0.0.1:1")
+    assert "--tls-ca" in one_error_line(r)
+    assert list(tmp_path.glob("*.exr")) == [] and list(tmp_path.glob("*.ckpt")) == []
+
+
+@pytest.mark.slow
+def test05_a_scene_the_workers_cannot_read(tmp_path):
+    out = tmp_path / "out.exr"
+    r = run("render", CORNELL, *SMALL, "-o", out, "--workers", 1,
+            "--scene-on-workers", tmp_path / "missing" / "scene.toml")
+    # the error happens on a worker, after the render began: exit 2, no traceback, the
+    # error on one line at the end (after the line that announced the render)
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    errors = [line for line in r.stderr.splitlines() if "error" in line.lower()]
+    assert len(errors) == 1 and errors[0] == r.stderr.strip().splitlines()[-1], r.stderr
+    assert "a worker cannot read the scene" in errors[0] and "missing" in errors[0]
+    assert not out.exists() and list(tmp_path.iterdir()) == []
