@@ -240,6 +240,22 @@ def _add_render(sub) -> None:
                    help="write a checkpoint every SECONDS of rendering and at exit")
     g.add_argument("--resume", action="store_true",
                    help="continue from the checkpoint (bitwise the same final image)")
+    g = p.add_argument_group("cluster (pip install 'glrender[distributed]'; docs/scale-out.md)")
+    g.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="render on a local Dask cluster of N worker processes")
+    g.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="render on the Dask cluster of this scheduler (tcp://HOST:PORT, tls://...)")
+    g.add_argument("--frames", default=None, metavar="A:B",
+                   help="render frames A through B of an animated scene (':' all of its range) "
+                        "to -o with a {frame} pattern, e.g. -o 'out/f{frame:04d}.exr'")
+    g.add_argument("--unit-size", type=int, default=None, metavar="N",
+                   help="pixel-samples per work unit (default 2^22)")
+    g.add_argument("--scene-on-workers", default=None, metavar="PATH",
+                   help="workers load the scene from PATH (a shared file system) instead of "
+                        "receiving its files from this process")
+    g.add_argument("--tls-ca", default=None, metavar="FILE", help="TLS: the cluster's CA certificate")
+    g.add_argument("--tls-cert", default=None, metavar="FILE", help="TLS: this client's certificate")
+    g.add_argument("--tls-key", default=None, metavar="FILE", help="TLS: this client's private key")
     g = p.add_argument_group("device and messages")
     _add_device(g)
     g.add_argument("--quiet", action="store_true", help="print nothing but errors")
