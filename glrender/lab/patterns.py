@@ -130,6 +130,13 @@ def fit_slope(ns, rmse) -> float:
     return float(np.polyfit(x, y, 1)[0])
 
 
+def slope_stderr(ns, runs: int) -> float:
+    """Standard error of the fitted slope: each log RMSE from ``runs`` independent runs has
+    a standard error of about 1/sqrt(2 runs) (the RMSE is a root mean of squares)."""
+    x = np.log(np.asarray(ns, float))
+    return float(1.0 / math.sqrt(2.0 * runs) / math.sqrt(((x - x.mean()) ** 2).sum()))
+
+
 def run(lab) -> Section:
     counts = lab.size([16, 64, 256, 1024], [16, 64, 256, 1024, 4096, 16384])
     runs = lab.size(24, 64)
@@ -154,7 +161,7 @@ def run(lab) -> Section:
         slopes[integrand] = {p: fit_slope(counts, curves[integrand][p]) for p in PATTERNS}
         section.extra.setdefault("rmse", {})[integrand] = {
             "exact": exact, "counts": counts, "rmse": curves[integrand],
-            "slopes": slopes[integrand],
+            "slopes": slopes[integrand], "slope_stderr": slope_stderr(counts, runs),
             "bias_z": {p: [per_n[n][i].z() for n in counts] for i, p in enumerate(PATTERNS)}}
         section.findings.append(f"{title}: slopes of log RMSE vs log N: " + ", ".join(
             f"{PATTERNS[p][0]} {s:+.2f}" for p, s in slopes[integrand].items()))
