@@ -172,13 +172,13 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
     pending = dict(finals)
     try:
         while pending:
-            if stop is not None and stop():
-                result.complete = False
-                break
             try:
                 distributed.wait(list(pending.values()), timeout=poll, return_when="FIRST_COMPLETED")
             except (TimeoutError, distributed.TimeoutError):
                 pass
+            # units counted before bands are collected: a counted unit's band, when it was
+            # the band's last, is in the result (a stop keeps every band it reported)
+            finished = [ps for f, ps in unit_futures if f.status == "finished"]
             for key, fut in list(pending.items()):
                 if fut.status == "finished":
                     part = fut.result()
@@ -186,11 +186,13 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
                     result.bytes_to_client += part.nbytes
                     del pending[key]
                 elif fut.status in ("error", "cancelled"):
-                    fut.result()            # raises the worker's exception here
+                    _raise_failure(fut)
             if progress is not None:
-                finished = [ps for f, ps in unit_futures if f.status == "finished"]
                 progress(units_before + len(finished), units_total, sum(finished),
                          time.perf_counter() - t0)
+            if pending and stop is not None and stop():
+                result.complete = False
+                break
     finally:
         for fut in list(pending.values()) + [f for f, _ in unit_futures]:
             fut.release()
@@ -203,6 +205,21 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
                 image.place(band, first, result.bands[(frame, band)])
             result.films[frame] = image.film(settings.sampler.spp, settings.sampler.kind)
     return result
+
+
+def _raise_failure(fut):
+    """A unit's or merge's failure, as the error of the worker (a GlrenderError: a scene
+    a worker cannot read, ...) or one line naming what the cluster reported."""
+    from ..errors import GlrenderError
+
+    try:
+        fut.result()
+    except GlrenderError:
+        raise
+    except Exception as exc:
+        text = str(exc).splitlines()[0] if str(exc) else ""
+        raise UsageError(f"the cluster failed a task ({type(exc).__name__}{': ' + text if text else ''})"
+                         f"; its workers' logs tell why") from exc
 
 
 def _submit_tree(client, tree, leaves: list, prefix: str):

@@ -128,3 +128,34 @@ def test04_a_killed_worker_changes_nothing(gl_ctx, cluster, scene):
     assert len(res.plan.units()) == 7
     assert_same(res.films[None], ref)
     client.wait_for_workers(2, timeout=60)
+
+
+def test05_stop_checkpoint_resume(gl_ctx, cluster, scene, tmp_path):
+    """A render stopped after some units (as Ctrl-C stops it) keeps its finished bands;
+    saved to a checkpoint and given back, the render runs only the rest, and the image is
+    bitwise the uninterrupted one."""
+    from glrender.distributed.command import _load_checkpoint, _save_checkpoint
+
+    _, client = cluster
+    settings = settings_from_scene(scene, spp=16, seed=9)
+    ref = single_process(scene, settings)
+    seen = []
+
+    def progress(done, total, pixel_samples, seconds):
+        seen.append((done, total))
+
+    res = render(scene, client=client, settings=settings, unit_size=72 * 8 * 16,
+                 progress=progress, stop=lambda: bool(seen) and seen[-1][0] >= 2, poll=0.01)
+    assert not res.complete and res.films == {}
+    assert 2 <= len(res.bands) < 7
+    path = tmp_path / "render.ckpt"
+    _save_checkpoint(path, {"job": "the job"}, res.bands)
+    with pytest.raises(glrender.errors.UsageError, match="another scene"):
+        _load_checkpoint(path, "another job")
+    done = _load_checkpoint(path, "the job")
+    assert done.keys() == res.bands.keys()
+    seen.clear()
+    res2 = render(scene, client=client, settings=settings, unit_size=72 * 8 * 16, done=done,
+                  progress=progress)
+    assert res2.complete and seen[0][0] >= len(done)        # the finished units count as done
+    assert_same(res2.films[None], ref)
