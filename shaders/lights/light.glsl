@@ -56,7 +56,7 @@ struct LightSample {
 // u = atan2(x, -z) / 2 pi wrapped to [0, 1), v = theta / pi; the light's frame columns
 // are LightData e1, e2, n (world_from_light's rotation). The importance distribution
 // is piecewise constant over the texels (weighted by sin theta); radiance is looked
-// up bilinearly. theta comes from atan (llvmpipe's acos is off by up to 4e-4).
+// up bilinearly (envmap_lookup). theta comes from atan (llvmpipe's acos is off by up to 4e-4).
 vec2 envmap_uv(LightData l, vec3 w_world, out float sin_theta) {
     vec3 w = vec3(dot(w_world, l.e1.xyz), dot(w_world, l.e2.xyz), dot(w_world, l.n.xyz));
     sin_theta = length(w.xz);
@@ -72,8 +72,13 @@ vec3 envmap_direction(LightData l, vec2 uv, out float sin_theta) {
     return w.x * l.e1.xyz + w.y * l.e2.xyz + w.z * l.n.xyz;
 }
 
+// Bilinear radiance at uv as Mitsuba 3 interpolates its lat-long images: columns centred
+// at u = (i + 1/2) / width (as GL's texels), but rows at v = j / (height - 1), the first
+// and last rows on the poles (src/emitters/envmap.cpp, eval_spectrum).
 vec3 envmap_lookup(LightData l, vec2 uv) {
-    return textureLod(u_envmap, uv, 0.0).rgb * l.params.x;
+    float h = float(textureSize(u_envmap, 0).y);
+    vec2 st = vec2(uv.x, (uv.y * (h - 1.0) + 0.5) / h);
+    return textureLod(u_envmap, st, 0.0).rgb * l.params.x;
 }
 
 // Radiance leaving an area light's surface with normal n toward direction w (unit, away).

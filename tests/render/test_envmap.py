@@ -61,10 +61,11 @@ def env_scene(image, shapes=(), width=48, height=24, fov=70, **integrator):
 
 
 def bilinear(image, uv):
-    """GL bilinear lookup: texel centres at (i + 0.5) / size, u repeats, v clamps."""
+    """Mitsuba 3's bilinear lookup of a lat-long image: columns centred at (i + 0.5) / width
+    (u repeats), rows at v = j / (height - 1) (the first and last on the poles)."""
     h, w = image.shape[:2]
     x = uv[..., 0] * w - 0.5
-    y = uv[..., 1] * h - 0.5
+    y = uv[..., 1] * (h - 1)
     x0, y0 = np.floor(x).astype(int), np.floor(y).astype(int)
     fx, fy = (x - x0)[..., None], (y - y0)[..., None]
     def at(yy, xx):
@@ -73,8 +74,11 @@ def bilinear(image, uv):
             fy * ((1 - fx) * at(y0 + 1, x0) + fx * at(y0 + 1, x0 + 1)))
 
 
-def test03_directly_seen_environment_follows_mitsubas_convention(gl_ctx):
-    image = read_hdr(HDR)
+@pytest.mark.parametrize("image_kind", ["hdr", "coarse"])
+def test03_directly_seen_environment_follows_mitsubas_convention(gl_ctx, image_kind):
+    # a coarse image (8 x 16 texels) makes the placement of its rows visible
+    image = read_hdr(HDR) if image_kind == "hdr" else \
+        np.random.default_rng(5).uniform(0.1, 1.0, (8, 16, 3)).astype(np.float32)
     scene = env_scene(image, max_depth=1)
     film = glrender.render(scene, spp=64, seed=1, sampler="sobol")
     from glrender.render.renderer import camera_tangents
