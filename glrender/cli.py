@@ -201,6 +201,13 @@ def _add_render(sub) -> None:
                    help="sample generator (default: the scene's)")
     g.add_argument("--seed", type=int, default=None, metavar="S",
                    help="seed: the same seed gives the same image")
+    g.add_argument("--noise-threshold", type=float, default=None, metavar="R",
+                   help="render as many samples as make the mean relative standard error R "
+                        "(e.g. 0.02), predicted by an independent 32-spp pilot so the image "
+                        "stays unbiased; --spp caps it")
+    g.add_argument("--clamp", type=float, default=None, metavar="L",
+                   help="scale down samples whose largest RGB component exceeds L (removes "
+                        "fireflies; biased, marked in --stats; default: off)")
     g = p.add_argument_group("light transport")
     g.add_argument("--integrator", choices=INTEGRATORS, default=None,
                    help="path tracer, direct lighting or ambient occlusion (default: the scene's)")
@@ -213,6 +220,9 @@ def _add_render(sub) -> None:
     g = p.add_argument_group("scene")
     g.add_argument("--width", type=int, default=None, metavar="W", help="image width in pixels")
     g.add_argument("--height", type=int, default=None, metavar="H", help="image height in pixels")
+    g.add_argument("--crop", default=None, metavar="X0,Y0,X1,Y1",
+                   help="render only pixels X0 <= x < X1, Y0 <= y < Y1 of the film; they equal "
+                        "the same pixels of a full render bitwise")
     g.add_argument("-D", dest="define", action="append", default=[], metavar="KEY=VALUE",
                    help="set the scene parameter $KEY (repeatable)")
     g = p.add_argument_group("outputs")

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -74,6 +74,17 @@ class Film:
             raise UsageError(f"AOV {name!r} was not rendered (available: {have}; "
                              f"render with aovs=True for albedo, normal, depth)")
         return self.aovs[name]
+
+    def crop(self, x0: int, y0: int, x1: int, y1: int) -> "Film":
+        """The pixels x0 <= x < x1, y0 <= y < y1 of this film (its own pixel coordinates)
+        as a new film, every array and AOV cut alike."""
+        rows, cols = slice(y0, y1), slice(x0, x1)
+        loops = None if self.loop_counts is None else self.loop_counts[rows, cols].copy()
+        return replace(self, mean=self.mean[rows, cols].copy(), m2=self.m2[rows, cols].copy(),
+                       count=self.count[rows, cols].copy(),
+                       nonfinite=self.nonfinite[rows, cols].copy(),
+                       aovs={k: v[rows, cols].copy() for k, v in self.aovs.items()},
+                       loop_counts=loops)
 
     def save(self, path: str | os.PathLike[str], *, exposure: float = 0.0, curve: str = "clamp",
              srgb: bool = True, half: bool = False) -> None:

@@ -64,7 +64,8 @@ def save_checkpoint(path, renderer, **info) -> None:
     state = renderer.state()
     meta = {"format": FORMAT, "version": VERSION, "fingerprint": state["fingerprint"],
             "spp_done": int(state["spp_done"]), "settings": settings_record(renderer),
-            "files": dict(getattr(renderer.scene, "files", {}) or {}), **info}
+            "files": dict(getattr(renderer.scene, "files", {}) or {}),
+            "rows": [int(r) for r in state.get("rows", (0, 0))], **info}
 
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as f:
@@ -95,6 +96,8 @@ def load_checkpoint(path) -> Checkpoint:
                      "width": int(meta["settings"]["width"]),
                      "height": int(meta["settings"]["height"]),
                      **{name: np.array(data[name], np.float32) for name in ARRAYS}}
+            if "rows" in meta:    # the tile rows held (a crop or a distributed band)
+                state["rows"] = tuple(int(r) for r in meta["rows"])
             if "splat" in data:   # light tracing's and BDPT's fixed-point splat sums
                 state["splat"] = np.array(data["splat"], np.uint32)
     except unreadable as exc:

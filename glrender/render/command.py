@@ -24,7 +24,8 @@ FIRST_HIT_AOVS = ("albedo", "normal", "depth")
 # sample indices are 32-bit on the device: the open-ended target of a time budget
 SPP_LIMIT = 1 << 31
 # the options a checkpoint remembers; --resume takes those not given again
-RESUMABLE = ("spp", "seed", "sampler", "integrator", "strategy", "max_depth", "width", "height")
+RESUMABLE = ("spp", "seed", "sampler", "integrator", "strategy", "max_depth", "width", "height",
+             "clamp", "crop")
 
 
 def parse_defines(items: list[str]) -> dict[str, str]:
@@ -66,6 +67,27 @@ def _check_options(args) -> None:
     need("--seed", args.seed, lambda v: 0 <= v < 1 << 32, "an integer in 0..2^32-1")
     need("--max-depth", args.max_depth, lambda v: v == -1 or v >= 1,
          "-1 (unbounded) or a number of path segments >= 1")
+    need("--clamp", args.clamp, lambda v: math.isfinite(v) and v > 0,
+         "a positive number (the largest RGB component a sample keeps)")
+    need("--noise-threshold", args.noise_threshold, lambda v: 0 < v < 1,
+         "a relative error in (0, 1), e.g. 0.02 for 2%")
+    if args.crop is not None:
+        parse_crop(args.crop)
+
+
+def parse_crop(text: str, width: int | None = None, height: int | None = None) -> list[int]:
+    """``X0,Y0,X1,Y1`` -> [x0, y0, x1, y1] (pixels, x1 and y1 excluded), inside the film
+    when its size is given."""
+    parts = [p.strip() for p in str(text).split(",")]
+    if len(parts) != 4 or not all(p.lstrip("-").isdigit() for p in parts):
+        raise UsageError(f"--crop {text}: expected X0,Y0,X1,Y1 in whole pixels")
+    x0, y0, x1, y1 = map(int, parts)
+    if not (0 <= x0 < x1 and 0 <= y0 < y1):
+        raise UsageError(f"--crop {text}: expected 0 <= X0 < X1 and 0 <= Y0 < Y1")
+    if width is not None and height is not None and (x1 > width or y1 > height):
+        raise UsageError(f"--crop {text}: outside the {width}x{height} film (X1 <= {width}, "
+                         f"Y1 <= {height})")
+    return [x0, y0, x1, y1]
 
 
 def _check_scene_file(path: Path) -> None:
@@ -167,10 +189,9 @@ def _denoise(film, scene, say) -> tuple[np.ndarray, dict]:
 
 
 def _mean_relative_stderr(film) -> float | None:
-    lit = film.mean > 0
-    if not lit.any():
-        return None
-    return float(np.mean(film.stderr[lit] / film.mean[lit]))
+    from .noise import mean_relative_stderr
+
+    return mean_relative_stderr(film)
 
 
 def _write_stats(path: Path, stats: dict) -> None:
@@ -193,7 +214,8 @@ def run_render(args, signals) -> int:
     from .checkpoint import check_resumable, load_checkpoint, save_checkpoint
     from .job import RenderJob
     from .progress import ProgressBar
-    from .renderer import Renderer, settings_from_scene
+    from .noise import crop_band, crop_rows
+    from .renderer import SPLATTING, Renderer, settings_from_scene
 
     from ..distributed.command import run_distributed, uses_cluster
 
@@ -243,7 +265,8 @@ def run_render(args, signals) -> int:
                                    spp=options.get("spp"), seed=options.get("seed"),
                                    sampler=options.get("sampler"),
                                    max_depth=options.get("max_depth"),
-                                   strategy=options.get("strategy"), aovs=first_hit)
+                                   strategy=options.get("strategy"), aovs=first_hit,
+                                   clamp=options.get("clamp"))
     if "spp" in options or args.time is None:
         target = settings.sampler.spp
     else:
@@ -256,13 +279,38 @@ def run_render(args, signals) -> int:
             raise DeviceError(f"{exc}; `glrender info` lists the devices (choose with --device "
                               f"or $GLRENDER_DEVICE)") from exc
     _check_memory(width, height, first_hit, ctx.is_llvmpipe)
+    crop = parse_crop(",".join(map(str, options["crop"])) if isinstance(options.get("crop"), list)
+                      else options["crop"], width, height) if options.get("crop") else None
+    if crop is not None:
+        options["crop"] = crop
+        if settings.integrator.kind in SPLATTING:
+            raise UsageError(f"--crop: not available with the {settings.integrator.kind} "
+                             f"integrator (its light paths reach every pixel of the film)")
+    noise_plan = None
+    if args.noise_threshold is not None and ckpt is None:
+        from .noise import plan_spp
+
+        noise_plan = plan_spp(scene, settings, args.noise_threshold, ctx=ctx,
+                              max_spp=options.get("spp"), region=crop)
+        say(f"glrender: pilot of {noise_plan.pilot_spp} spp ({noise_plan.pilot_seconds:.2f} s): "
+            f"{noise_plan.spp} spp for a mean relative error of {noise_plan.threshold:g}")
+        options["spp"] = target = noise_plan.spp
+        settings = replace(settings, sampler=replace(settings.sampler, spp=noise_plan.spp))
     try:
         renderer = Renderer(scene, settings, ctx=ctx)
     except moderngl.Error as exc:
         raise UsageError(f"cannot allocate the device buffers of a {width}x{height} image "
                          f"({str(exc).strip()}): render fewer pixels (--width/--height)") from exc
     timer.update(renderer.timings)
+    if crop is not None:      # the tile rows the crop covers; columns are cut at the end
+        renderer.reset(rows=crop_rows(crop))
     if ckpt is not None:
+        saved_crop = ckpt.meta.get("options", {}).get("crop")
+        if saved_crop != crop:
+            raise UsageError(f"{ckpt_path}: the checkpoint holds "
+                             f"{'crop ' + ','.join(map(str, saved_crop)) if saved_crop else 'the whole film'}, "
+                             f"this render {'crop ' + ','.join(map(str, crop)) if crop else 'the whole film'}: "
+                             f"resume with the same --crop, or render without --resume")
         check_resumable(ckpt, renderer)
         renderer.restore(ckpt.state)
         if ckpt.meta.get("device") != ctx.renderer:
@@ -310,6 +358,8 @@ def run_render(args, signals) -> int:
 
     # -- outputs -----------------------------------------------------------------------------
     film = renderer.film()
+    if crop is not None:
+        film = crop_band(film, crop, renderer.rows)
     interrupted = result.stopped == "interrupted"
     written, ckpt_written, denoised, denoise_info = [], None, None, None
     if film.spp > 0:
@@ -321,7 +371,7 @@ def run_render(args, signals) -> int:
         if interrupted or keep_checkpoint:
             write_checkpoint()
             ckpt_written = str(ckpt_path)
-    new_samples = (result.spp_done - result.spp_start) * width * height
+    new_samples = (result.spp_done - result.spp_start) * renderer.width * renderer.band_height
     rate = new_samples / result.render_seconds if result.render_seconds > 0 else None
     timer["total"] = time.perf_counter() - t_start
     stats = {
@@ -344,6 +394,11 @@ def run_render(args, signals) -> int:
                                                     "checkpoint", "denoise", "write",
                                                     "total")},
         "denoise": denoise_info,
+        "crop": crop, "clamp": settings.clamp, "biased": settings.clamp is not None,
+        "noise_threshold": None if noise_plan is None else {
+            "threshold": noise_plan.threshold, "pilot_spp": noise_plan.pilot_spp,
+            "pilot_error": noise_plan.pilot_error, "pilot_seconds": noise_plan.pilot_seconds,
+            "planned_spp": noise_plan.spp, "predicted_error": noise_plan.predicted_error()},
         "samples_per_second": rate,
         "nonfinite_samples": film.nonfinite_total,
         "mean_relative_stderr": _mean_relative_stderr(film),

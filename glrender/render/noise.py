@@ -61,6 +61,23 @@ class NoisePlan:
         return self.pilot_error * math.sqrt(self.pilot_spp / (spp or self.spp))
 
 
+def crop_rows(region) -> tuple[int, int]:
+    """The tile rows (first, count) that hold the pixel rows of region (x0, y0, x1, y1)."""
+    from .renderer import TILE
+
+    first = region[1] // TILE
+    return first, -(-region[3] // TILE) - first
+
+
+def crop_band(film: Film, region, rows: tuple[int, int]) -> Film:
+    """The region's pixels of a film that holds the tile rows ``rows`` of the image."""
+    from .renderer import TILE
+
+    x0, y0, x1, y1 = region
+    top = TILE * rows[0]
+    return film.crop(x0, y0 - top, x1, y1 - top)
+
+
 def check_threshold(threshold: float) -> float:
     if isinstance(threshold, bool) or not isinstance(threshold, (int, float)) or \
             not math.isfinite(threshold) or not 0 < threshold < 1:
@@ -70,10 +87,11 @@ def check_threshold(threshold: float) -> float:
 
 
 def plan_spp(scene, settings, threshold: float, *, pilot_spp: int = PILOT_SPP, ctx=None,
-             max_spp: int | None = None) -> NoisePlan:
+             max_spp: int | None = None, region=None) -> NoisePlan:
     """Render an independent pilot of ``pilot_spp`` samples per pixel and return the sample
     count at which the image's mean relative stderr is predicted to reach ``threshold``
-    (capped at ``max_spp``)."""
+    (capped at ``max_spp``); ``region`` (x0, y0, x1, y1): measure (and render) only
+    those pixels."""
     import time
 
     from .renderer import Renderer
@@ -86,8 +104,12 @@ def plan_spp(scene, settings, threshold: float, *, pilot_spp: int = PILOT_SPP, c
     t0 = time.perf_counter()
     renderer = Renderer(scene, pilot, ctx=ctx)
     try:
+        if region is not None:
+            renderer.reset(rows=crop_rows(region))
         renderer.step(pilot_spp)
         film = renderer.film()
+        if region is not None:
+            film = crop_band(film, region, renderer.rows)
     finally:
         renderer.release()
     seconds = time.perf_counter() - t0
