@@ -36,6 +36,9 @@ system_packages() {
     if [ "${1:-}" = test ]; then
         command -v Xvfb >/dev/null 2>&1 || missing+=(xvfb)
         command -v xdotool >/dev/null 2>&1 || missing+=(xdotool)
+        # the docs test opens the built site in headless Chromium (the small headless shell)
+        command -v chromium-headless-shell >/dev/null 2>&1 || command -v chromium >/dev/null 2>&1 ||
+            missing+=(chromium-headless-shell)
     fi
     if [ ${#missing[@]} -gt 0 ]; then apt_install "${missing[@]}"; fi
 }
