@@ -146,3 +146,23 @@ def test_index_shows_gallery_in_chromium(site, tmp_path):
     assert sorted(src for src, *_ in images) == sorted(f"gallery/{n}.png" for n in scene_names())
     for src, complete, width, height, shown in images:
         assert complete and width > 0 and height > 0 and shown > 0, f"{src} not shown"
+
+
+def python_blocks(path: Path) -> list[str]:
+    return re.findall(r"```python\n(.*?)```", path.read_text(), re.S)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("page", ["docs/getting-started.md", "README.md"])
+def test_python_snippets_run(page, tmp_path, monkeypatch):
+    """The Python a newcomer copies from Getting started and the README runs as written
+    (from a scratch folder, with the scene paths pointing into the repository)."""
+    blocks = python_blocks(ROOT / page)
+    assert blocks
+    monkeypatch.chdir(tmp_path)
+    code = "\n".join(blocks).replace('"scenes/', f'"{ROOT.as_posix()}/scenes/')
+    namespace: dict[str, object] = {}
+    exec(compile(code, page, "exec"), namespace)   # noqa: S102 (the documentation's own code)
+    film = namespace["film"]
+    assert isinstance(film, glrender.Film) and film.spp > 0
+    assert any(tmp_path.iterdir())   # the snippets save an image
