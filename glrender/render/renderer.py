@@ -29,9 +29,10 @@ from .params import shader_defines
 
 TILE = 8
 INTEGRATOR_FILES = {"path": "integrators/path.glsl", "direct": "integrators/direct.glsl",
-                    "ao": "integrators/ao.glsl", "lighttrace": "integrators/lighttrace.glsl"}
+                    "ao": "integrators/ao.glsl", "lighttrace": "integrators/lighttrace.glsl",
+                    "bdpt": "integrators/bdpt.glsl"}
 # integrators that splat light-path contributions onto the whole film (integrators/splat.glsl)
-SPLATTING = ("lighttrace",)
+SPLATTING = ("lighttrace", "bdpt")
 SPLAT_SCALE = 65536.0   # kSplatScale: fixed-point units per unit of splatted value
 
 
@@ -247,6 +248,10 @@ class Renderer:
         s = self.settings
         integ = s.integrator
         p = self.packed
+        infinite = sorted(p.light_kinds & {"directional", "constant", "envmap"})
+        if integ.kind == "bdpt" and infinite:
+            raise UsageError(f"bdpt: lights at infinity ({', '.join(infinite)}) are not supported "
+                             f"yet; render with path or lighttrace")
         geometry = codegen.generate(p, has_bvh=p.has_bvh, lights=self.lights_final)
         library = shaders.ShaderLibrary().with_generated({codegen.GENERATED_PATH: geometry})
         self.defines = shader_defines(
@@ -264,6 +269,11 @@ class Renderer:
             library=library)
         if s.samples_per_pass is not None:
             self.samples_per_pass = max(1, int(s.samples_per_pass))
+        elif integ.kind == "bdpt" and not 0 < integ.max_depth <= 8:
+            # a bdpt sample traces two subpaths and up to ~(max_depth + 1)^2 / 2 connections:
+            # beyond depth 8 (up to its cap of 16), 2 per invocation keep the loop count far
+            # below llvmpipe's cap (tests/render/test_bdpt.py checks the worst scenes)
+            self.samples_per_pass = 2
         else:
             # samples per invocation and pass: measured loop counts stay in the hundreds per
             # sample (tests/render/test_determinism.py checks the worst scenes), far below

@@ -1,0 +1,205 @@
+// Bidirectional path tracing: a camera subpath and a light subpath per sample, joined
+// by every connection strategy (s, t) and weighted by multiple importance sampling.
+//
+// Strategies (Veach 1997, ch. 10; pbrt-v3's BDPTIntegrator): s = 0, the camera subpath
+// reaches an area light; s = 1, next-event estimation (a light point sampled afresh
+// from the camera vertex, as the path tracer does); t = 1, a light subpath vertex
+// connected to the lens and splatted onto the film (integrators/splat.glsl); s, t >= 2,
+// a visibility ray between the two subpaths' ends. (s, t) = (1, 1), the lens connected
+// to a sampled light point, is left out: s = 0, t = 2 sees the lights. Each is
+// weighted by bdpt_mis_weight (balance or power heuristic, kStrategy). max_depth
+// counts the segments of a path (s + t - 1), at most kBdptDepthCap; the subpaths do
+// not use Russian roulette (the vertex storage bounds them). Lights at infinity
+// (directional, environment) are not supported (the renderer refuses them).
+#include "integrators/integrator_common.glsl"
+#include "integrators/shading.glsl"
+#include "integrators/pixel.glsl"
+#include "integrators/light_path.glsl"
+#include "integrators/splat.glsl"
+#include "integrators/bdpt_vertex.glsl"
+
+Vertex vertex_from_hit(SurfaceHit hit, vec3 beta) {
+    return Vertex(hit.p, hit.ng, hit.ns, beta, hit.uv, kVertexSurface, hit.material, hit.light,
+                  false, 0.0, 0.0);
+}
+
+// Extends a subpath from path[n - 1] along (o, d) until it leaves the scene, reaches
+// max_vertices vertices, or a sample ends it; radiance (camera) or importance (light,
+// adjoint) transport. Returns the vertex count.
+int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, float pdf_sa,
+                int max_vertices, inout SamplerState s, inout Aov aov) {
+    while (n < max_vertices) {
+        LOOP_TICK();
+        SurfaceHit hit;
+        if (!scene_intersect(o, d, t_max, g_time, hit)) break;
+        vec2 u_choice = sampler_2d(s);
+        vec2 u_bsdf = sampler_2d(s);
+        Vertex prev = light_path ? g_light[n - 1] : g_camera[n - 1];
+        Vertex v = vertex_from_hit(hit, beta);
+        v.pdf_fwd = solid_angle_to_area(pdf_sa, prev, v);
+        if (!light_path && n == 1) record_aov(aov, hit);
+        if (light_path) g_light[n] = v; else g_camera[n] = v;
+        n += 1;
+        if (n >= max_vertices) break;
+
+        Bsdf b = bsdf_from_material(hit.material, hit.uv);
+        Frame frame = frame_from_z(hit.ns);
+        vec3 wo = frame_to_local(frame, -d);
+        BsdfSample bs = bsdf_sample(b, wo, u_choice.x, u_bsdf, light_path);
+        if (!bs.valid) break;
+        vec3 wi = frame_from_local(frame, bs.wi);
+        if (dot(wi, hit.ng) * bs.wi.z <= 0.0) break;
+        vec3 weight = bs.weight;
+        if (light_path) weight *= shading_normal_correction(-d, wi, hit.ns, hit.ng);
+        beta *= weight;
+        // densities: forward of the next vertex, reverse of the previous one
+        pdf_sa = bs.delta ? 0.0 : bs.pdf;
+        float pdf_rev_sa = bs.delta ? 0.0 : bsdf_pdf(b, bs.wi, wo);
+        float prev_rev = solid_angle_to_area(pdf_rev_sa, v, prev);
+        if (light_path) {
+            g_light[n - 1].delta = bs.delta;
+            g_light[n - 2].pdf_rev = prev_rev;
+        } else {
+            g_camera[n - 1].delta = bs.delta;
+            g_camera[n - 2].pdf_rev = prev_rev;
+        }
+        if (max_component(beta) <= 0.0) break;
+        o = offset_ray_origin(hit.p, hit.ng, wi);
+        d = wi;
+        t_max = kInfinity;
+    }
+    return n;
+}
+
+// f |cos| of a surface vertex v toward the world point `to`, reached from `from`
+// (importance transport with the shading-normal correction when adjoint).
+vec3 vertex_f(Vertex v, vec3 from, vec3 to, bool adjoint) {
+    Frame frame = frame_from_z(v.ns);
+    vec3 wo_w = normalize(from - v.p), wi_w = normalize(to - v.p);
+    vec3 wo = frame_to_local(frame, wo_w), wi = frame_to_local(frame, wi_w);
+    vec3 f = bsdf_eval(bsdf_from_material(v.material, v.uv), wo, wi, adjoint);
+    if (adjoint) f *= shading_normal_correction(wo_w, wi_w, v.ns, v.ng);
+    return f;
+}
+
+bool segment_visible(Vertex a, Vertex b, uint ignore) {
+    vec3 d = b.p - a.p;
+    float dist = length(d);
+    if (!(dist > 0.0)) return false;
+    d /= dist;
+    vec3 o = vertex_on_surface(a) ? offset_ray_origin(a.p, a.ng, d) : a.p;
+    return !scene_occluded(o, d, dist * (1.0 - kShadowEpsilon), g_time, ignore);
+}
+
+// The weighted contribution of strategy (s, t); t = 1 contributions are splatted here.
+vec3 bdpt_connect(int s, int t, inout SamplerState smp) {
+    vec2 u_a = sampler_2d(smp);
+    float u_b = sampler_1d(smp);
+    vec3 L = vec3(0.0);
+    if (s == 0) {
+        // the camera subpath found an area light
+        Vertex pt = g_camera[t - 1];
+        if (pt.light == 0u || pt.kind != kVertexSurface || (t == 2 && kHideEmitters)) return L;
+        LightData l = scene_light(pt.light - 1u);
+        L = pt.beta * area_light_radiance(l, pt.ng, normalize(g_camera[t - 2].p - pt.p));
+        if (max_component(L) <= 0.0) return vec3(0.0);
+        return L * bdpt_mis_weight(0, t);
+    }
+    if (t == 1) {
+        // a light subpath vertex seen by the lens
+        Vertex qs = g_light[s - 1];
+        if (!vertex_connectible(qs)) return L;
+        CameraConnection c = camera_connect(qs.p, u_a, g_time);
+        if (!c.valid) return L;
+        Vertex lens = vertex_point(kVertexCamera, c.p, vec3(0.0), vec3(1.0));
+        L = qs.beta * vertex_f(qs, g_light[s - 2].p, c.p, true) * c.importance;
+        if (max_component(abs(L)) <= 0.0 || !segment_visible(qs, lens, kNoPrimitive)) return vec3(0.0);
+        Vertex saved = g_camera[0];
+        g_camera[0] = lens;
+        float w = bdpt_mis_weight(s, 1);
+        g_camera[0] = saved;
+        splat_film(c.film, L * w);
+        return vec3(0.0);
+    }
+    Vertex pt = g_camera[t - 1];
+    if (!vertex_connectible(pt)) return L;
+    if (s == 1) {
+        // next-event estimation: a light point sampled from pt
+        LightChoice choice = select_light(u_b);
+        LightData l = scene_light(choice.index);
+        LightSample ls = sample_light(l, pt.p, u_a);
+        if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return L;
+        vec3 q = pt.p + ls.dist * ls.wi;
+        vec3 n = vec3(0.0);
+        if (light_is_area(l)) n = l.info.x == kLightSphere ? normalize(q - l.p.xyz) : l.n.xyz;
+        Vertex light = vertex_point(kVertexLight, q, n, vec3(1.0));
+        light.light = choice.index + 1u;
+        light.pdf_fwd = vertex_pdf_light_origin(light);
+        L = pt.beta * vertex_f(pt, g_camera[t - 2].p, q, false) * ls.Le / (choice.pmf * ls.pdf);
+        if (max_component(L) <= 0.0) return vec3(0.0);
+        vec3 o = offset_ray_origin(pt.p, pt.ng, ls.wi);
+        if (scene_occluded(o, ls.wi, ls.dist * (1.0 - kShadowEpsilon), g_time, l.info.z)) return vec3(0.0);
+        Vertex saved = g_light[0];
+        g_light[0] = light;
+        float w = bdpt_mis_weight(1, t);
+        g_light[0] = saved;
+        return L * w;
+    }
+    // both subpaths end on surfaces: join them
+    Vertex qs = g_light[s - 1];
+    if (!vertex_connectible(qs)) return L;
+    vec3 d = pt.p - qs.p;
+    float d2 = dot(d, d);
+    L = qs.beta * vertex_f(qs, g_light[s - 2].p, pt.p, true) *
+        vertex_f(pt, g_camera[t - 2].p, qs.p, false) * pt.beta / d2;
+    if (max_component(L) <= 0.0 || !segment_visible(qs, pt, kNoPrimitive)) return vec3(0.0);
+    return L * bdpt_mis_weight(s, t);
+}
+
+// One sample: both subpaths, then every strategy; returns the camera-side radiance.
+vec3 bdpt_sample(uvec2 pixel, inout SamplerState s, inout Aov aov) {
+    CameraSample c = camera_sample(pixel, s);
+    g_time = c.time;
+    // the lens point: the ray starts at the near clip plane
+    vec3 axis = normalize(world_from_camera_at(c.time)[2].xyz);
+    vec3 lens = c.o - (u_params.camera_clip.x / max(dot(c.d, axis), 1e-6)) * c.d;
+    g_camera[0] = vertex_point(kVertexCamera, lens, vec3(0.0), vec3(c.weight));
+    int n_camera = random_walk(false, 1, c.o, c.d, c.t_max, vec3(c.weight), camera_pdf_dir(c.d, c.time),
+                               kBdptMaxSegments + 1, s, aov);
+
+    int n_light = 0;
+    LightPathStart st = light_path_start(s);
+    if (st.valid) {
+        LightData l = scene_light(st.light);
+        vec3 n = light_is_area(l) ? st.e.n : vec3(0.0);
+        g_light[0] = vertex_point(kVertexLight, st.e.p, n, st.e.Le / (st.pmf * st.e.pdf_pos));
+        g_light[0].light = st.light + 1u;
+        g_light[0].pdf_fwd = st.pmf * st.e.pdf_pos;
+        Aov unused = Aov(vec3(0.0), vec3(0.0), 0.0);
+        n_light = random_walk(true, 1, st.o, st.e.d, kInfinity, st.beta, st.e.pdf_dir,
+                              kBdptMaxSegments, s, unused);
+    }
+
+    vec3 L = vec3(0.0);
+    for (int t = 1; t <= n_camera; ++t) {
+        for (int k = 0; k <= n_light; ++k) {
+            LOOP_TICK();
+            int segments = k + t - 1;
+            if (segments < 1 || segments > kBdptMaxSegments || (k == 1 && t == 1) || (t == 1 && k < 2))
+                continue;
+            L += bdpt_connect(k, t, s);
+        }
+    }
+    return L;
+}
+
+// Samples [first, first + count) of a pixel.
+void integrator_pixel(uvec2 pixel, uint pixel_hash, uint first, uint count, inout Accumulator acc) {
+    for (uint k = 0u; k < count; ++k) {
+        LOOP_TICK();
+        SamplerState s = pixel_sampler(pixel_hash, first + k);
+        Aov aov = Aov(vec3(0.0), vec3(0.0), 0.0);
+        vec3 L = bdpt_sample(pixel, s, aov);
+        accumulate(acc, L, aov, first + k);
+    }
+}

@@ -1,0 +1,150 @@
+// Vertices of bidirectional subpaths, their area-measure densities, and the MIS weight
+// of a connection strategy by Veach's ratio recurrence.
+//
+// A path of k segments x_0 ... x_k (x_0 on a light, x_k the lens) can be made by k + 1
+// strategies (s, t): s vertices from the light subpath, t from the camera subpath,
+// s + t = k + 1 (plus s = k + 1, t = 0, which a lens nothing hits cannot use). Each
+// vertex keeps the density with which its subpath reached it (pdf_fwd) and the one the
+// other direction would have (pdf_rev), both per unit area. The weight of (s, t) under
+// the balance (exponent 1) or power (exponent 2) heuristic is 1 / sum_i (p_i / p_s)^e,
+// and p_{i+1} / p_i is a ratio of one vertex's pdf_rev and pdf_fwd: walking outward from
+// the connection along each subpath multiplies one ratio per step (Veach 1997, sec.
+// 10.2-10.3; pbrt-v3's MISWeight). Strategies that would connect at a delta vertex
+// (a specular bounce, a point light) cannot make the path and are left out; a zero
+// density (a delta direction) counts as 1 in the ratios, as it cancels.
+#include "integrators/integrator_common.glsl"
+#include "integrators/shading.glsl"
+#include "camera/importance.glsl"
+
+// Subpath vertices stored per invocation: max_depth segments (at most kBdptDepthCap;
+// unbounded depth is capped there) need max_depth + 1 camera vertices.
+const int kBdptDepthCap = 16;
+const int kBdptMaxSegments = (kMaxDepth < 0 || kMaxDepth > kBdptDepthCap) ? kBdptDepthCap : kMaxDepth;
+const int kBdptVertices = kBdptMaxSegments + 1;
+
+const uint kVertexCamera = 0u;
+const uint kVertexLight = 1u;
+const uint kVertexSurface = 2u;
+
+struct Vertex {
+    vec3 p;
+    vec3 ng;        // geometric normal (0 for points off surfaces: pinhole, lens, point lights)
+    vec3 ns;        // shading normal
+    vec3 beta;      // subpath throughput up to and including this vertex's arrival
+    vec2 uv;
+    uint kind;      // kVertexCamera, kVertexLight, kVertexSurface
+    uint material;
+    uint light;     // index + 1 of the light at p (light vertices, emitting surfaces), else 0
+    bool delta;     // a Dirac lobe was sampled here (the vertex cannot be connected)
+    float pdf_fwd;  // area density of this vertex from its own subpath
+    float pdf_rev;  // area density of this vertex from the other direction
+};
+
+Vertex g_camera[kBdptVertices];
+Vertex g_light[kBdptVertices];
+float g_time;   // the sample's shutter time
+
+Vertex vertex_point(uint kind, vec3 p, vec3 ng, vec3 beta) {
+    return Vertex(p, ng, ng, beta, vec2(0.0), kind, 0u, 0u, false, 0.0, 0.0);
+}
+
+bool vertex_on_surface(Vertex v) {
+    return dot(v.ng, v.ng) > 0.0;
+}
+
+// Whether a strategy may end a subpath at v (delta-only surfaces cannot be connected).
+bool vertex_connectible(Vertex v) {
+    return v.kind != kVertexSurface || !bsdf_is_delta(bsdf_from_material(v.material, v.uv));
+}
+
+// The area density at `next` of a solid-angle density pdf_sa at v toward it.
+float solid_angle_to_area(float pdf_sa, Vertex v, Vertex next) {
+    vec3 w = next.p - v.p;
+    float d2 = dot(w, w);
+    if (!(d2 > 0.0)) return 0.0;
+    float pdf = pdf_sa / d2;
+    if (vertex_on_surface(next)) pdf *= abs(dot(next.ng, w)) * inversesqrt(d2);
+    return pdf;
+}
+
+// Area density at `next` of light paths leaving v, a point on a light.
+float vertex_pdf_light(Vertex v, Vertex next) {
+    LightData l = scene_light(v.light - 1u);
+    vec3 w = normalize(next.p - v.p);
+    vec3 n = v.ng;
+    if ((l.info.y & kLightFlagTwoSided) != 0u && dot(n, w) < 0.0) n = -n;
+    float pdf_pos, pdf_dir;
+    light_emission_pdf(l, v.p, n, w, u_params.scene_sphere, pdf_pos, pdf_dir);
+    return solid_angle_to_area(pdf_dir, v, next);
+}
+
+// Area density of v, a point on a light, as the start of a light path.
+float vertex_pdf_light_origin(Vertex v) {
+    LightData l = scene_light(v.light - 1u);
+    float pdf_pos, pdf_dir;
+    light_emission_pdf(l, v.p, v.ng, v.ng, u_params.scene_sphere, pdf_pos, pdf_dir);
+    return light_selection_pmf(v.light - 1u) * pdf_pos;
+}
+
+// Area density at `next` with which vertex v samples it, v having been reached from prev.
+float vertex_pdf(Vertex v, Vertex prev, Vertex next) {
+    if (v.kind == kVertexLight) return vertex_pdf_light(v, next);
+    vec3 wn = normalize(next.p - v.p);
+    if (v.kind == kVertexCamera) return solid_angle_to_area(camera_pdf_dir(wn, g_time), v, next);
+    Frame f = frame_from_z(v.ns);
+    float pdf = bsdf_pdf(bsdf_from_material(v.material, v.uv), frame_to_local(f, normalize(prev.p - v.p)),
+                         frame_to_local(f, wn));
+    return solid_angle_to_area(pdf, v, next);
+}
+
+// Whether v, a light vertex, lies on a point or spot light (a delta position).
+bool light_is_delta_position(Vertex v) {
+    uint kind = scene_light(v.light - 1u).info.x;
+    return kind == kLightPoint || kind == kLightSpot;
+}
+
+// One factor of the recurrence: (pdf_rev / pdf_fwd)^e, zeros counting as 1.
+float mis_ratio(float pdf_rev, float pdf_fwd) {
+    float r = (pdf_rev != 0.0 ? pdf_rev : 1.0) / (pdf_fwd != 0.0 ? pdf_fwd : 1.0);
+    return kStrategy == kStrategyMisBalance ? r : r * r;
+}
+
+// MIS weight of strategy (s, t) for the path g_light[0, s) + g_camera[0, t) (for s = 1
+// or t = 1 the caller has put the sampled light or lens vertex at index 0).
+float bdpt_mis_weight(int s, int t) {
+    if (s + t == 2) return 1.0;
+    // the densities the connection changes (restored below)
+    Vertex pt = g_camera[t - 1];
+    bool has_pt_minus = t > 1, has_qs = s > 0, has_qs_minus = s > 1;
+    Vertex pt_minus = g_camera[max(t - 2, 0)];
+    Vertex qs = g_light[max(s - 1, 0)];
+    Vertex qs_minus = g_light[max(s - 2, 0)];
+    float pt_rev = has_qs ? vertex_pdf(qs, qs_minus, pt) : vertex_pdf_light_origin(pt);
+    float pt_minus_rev = !has_pt_minus ? 0.0
+                       : (has_qs ? vertex_pdf(pt, qs, pt_minus) : vertex_pdf_light(pt, pt_minus));
+    float qs_rev = has_qs ? vertex_pdf(pt, pt_minus, qs) : 0.0;
+    float qs_minus_rev = has_qs_minus ? vertex_pdf(qs, pt, qs_minus) : 0.0;
+
+    float sum = 0.0;
+    // strategies with fewer camera vertices: walk the camera subpath back from the connection
+    float r = 1.0;
+    for (int i = t - 1; i > 0; --i) {
+        LOOP_TICK();
+        float rev = i == t - 1 ? pt_rev : (i == t - 2 ? pt_minus_rev : g_camera[i].pdf_rev);
+        r *= mis_ratio(rev, g_camera[i].pdf_fwd);
+        bool delta_i = i == t - 1 ? false : g_camera[i].delta;
+        if (!delta_i && !g_camera[i - 1].delta) sum += r;
+    }
+    // strategies with fewer light vertices: walk the light subpath back
+    r = 1.0;
+    for (int i = s - 1; i >= 0; --i) {
+        LOOP_TICK();
+        float rev = i == s - 1 ? qs_rev : (i == s - 2 ? qs_minus_rev : g_light[i].pdf_rev);
+        r *= mis_ratio(rev, g_light[i].pdf_fwd);
+        bool delta_i = i == s - 1 ? false : g_light[i].delta;
+        // a delta light's own point cannot be found by the camera subpath
+        bool delta_before = i > 0 ? g_light[i - 1].delta : light_is_delta_position(g_light[0]);
+        if (!delta_i && !delta_before) sum += r;
+    }
+    return 1.0 / (1.0 + sum);
+}

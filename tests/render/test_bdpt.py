@@ -1,0 +1,89 @@
+"""Bidirectional path tracing against the path tracer (and the enclosure's closed form),
+per 16x16 block (4x4 on the small analytic scenes) at a Šidák-corrected alpha of 0.01
+over every block, channel and scene of this file (glrender.testing.images, sigma from
+four independent seeds of each integrator), under both MIS heuristics; and the same
+seed gives the same image bitwise however a pass is split into dispatches (integer
+fixed-point splats for the t = 1 strategies).
+"""
+import numpy as np
+import pytest
+
+from glrender.render.renderer import Renderer, settings_from_scene
+from glrender.testing.images import compare_images
+
+from bidir_scenes import (caustic, closed_enclosure, cornell, glossy, point_light, renders,
+                          thin_lens)
+
+SEEDS_PATH, SEEDS_BDPT = (11, 12, 13, 14), (31, 32, 33, 34)
+# name: (scene, block, path spp, bdpt spp)
+SCENES = {
+    "cornell": (cornell, 16, 64, 16),
+    "glossy": (glossy, 16, 64, 16),
+    "thin-lens": (thin_lens, 16, 64, 16),
+    "point-light": (point_light, 4, 16, 16),
+    "enclosure": (closed_enclosure, 4, 16, 8),
+    "caustic": (caustic, 8, 256, 64),
+}
+CASES = [(name, "mis-power") for name in SCENES] + [("cornell", "mis-balance")]
+
+
+def block_tests(scene, block):
+    f = scene.film
+    return 3 * -(-f.width // block) * -(-f.height // block) + 2
+
+
+@pytest.fixture(scope="module")
+def all_tests():
+    return sum(block_tests(SCENES[name][0](), SCENES[name][1]) for name, _ in CASES)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name, heuristic", CASES)
+def test01_bdpt_matches_path(gl_ctx, all_tests, name, heuristic):
+    make, block, spp_path, spp_bdpt = SCENES[name]
+    scene = make()
+    extra = all_tests - block_tests(scene, block)
+    bd = renders(scene, "bdpt", spp_bdpt, SEEDS_BDPT, strategy=heuristic)
+    if name == "enclosure":
+        # closed form: L = Le / (1 - albedo) = 2 (bdpt stops at 16 segments: 2 (1 - 2^-16))
+        ref, ref_se = np.full(bd.shape[1:], 2.0), None
+    else:
+        paths = renders(scene, "path", spp_path, SEEDS_PATH)
+        ref, ref_se = paths.mean(axis=0), paths.std(axis=0, ddof=1) / np.sqrt(len(SEEDS_PATH))
+    c = compare_images(bd, ref, ref_se, block=block, extra_tests=extra)
+    assert c.passed, c.summary() + " " + "; ".join(c.messages)
+    assert c.detectable_bias < (0.04 if name == "caustic" else 0.02), c.summary()
+
+
+def test02_one_dispatch_or_many_bitwise(gl_ctx):
+    scene = cornell(16)
+    images = []
+    for time_target in (1e-9, 10.0):   # one tile per dispatch vs the whole image in one
+        r = Renderer(scene, settings_from_scene(scene, integrator="bdpt", spp=4, seed=5,
+                                                time_target=time_target), ctx=gl_ctx)
+        r.step(4)
+        images.append(r.film().mean)
+        r.release()
+    assert np.array_equal(images[0], images[1]) and images[0].sum() > 0
+
+
+@pytest.mark.parametrize("make", [caustic, closed_enclosure])
+def test03_loop_counts_far_below_the_cap(gl_ctx, make):
+    """The worst invocation of a pass: the caustic scene (BVH, glass) at max depth 8, and
+    the enclosure at unbounded depth (bdpt's cap of 16 segments)."""
+    scene = make(16)
+    r = Renderer(scene, settings_from_scene(scene, integrator="bdpt", spp=8, seed=3, count_loops=True),
+                 ctx=gl_ctx)
+    r.step(8)
+    worst = int(r.film().loop_counts.max())
+    r.release()
+    assert 0 < worst < 30_000, worst
+
+
+def test04_lights_at_infinity_refused(gl_ctx):
+    from glrender.errors import UsageError
+
+    from render_scenes import sphere_in_environment
+    scene = sphere_in_environment(width=8, height=8)
+    with pytest.raises(UsageError, match="bdpt: lights at infinity"):
+        Renderer(scene, settings_from_scene(scene, integrator="bdpt", spp=1), ctx=gl_ctx)
