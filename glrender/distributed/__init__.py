@@ -10,7 +10,7 @@ that Dask schedules on a cluster's workers, merged there in a fixed order.
 Needs the optional extra ``distributed`` (``pip install 'glrender[distributed]'``).
 See docs/scale-out.md.
 """
-from .client import DEFAULT_UNIT_SIZE, Result, connect, local_cluster, render
-from .plan import Plan, Unit
+from .client import Result, connect, local_cluster, render
+from .plan import Plan, Unit, default_unit_size
 
-__all__ = ["DEFAULT_UNIT_SIZE", "Plan", "Result", "Unit", "connect", "local_cluster", "render"]
+__all__ = ["Plan", "Result", "Unit", "connect", "default_unit_size", "local_cluster", "render"]

@@ -20,12 +20,9 @@ from pathlib import Path
 
 from ..errors import UsageError
 from .merge import FrameImage
-from .plan import Plan
+from .plan import Plan, default_unit_size
 from .worker import Job, hold, merge_partials, render_unit
 
-# pixel-samples per unit: about 1-2 s on one llvmpipe thread for the Cornell box
-# (benchmarks/scale.py), recorded with every render
-DEFAULT_UNIT_SIZE = 1 << 22
 
 
 def _dask():
@@ -110,7 +107,7 @@ def job_id(job: Job, plan: Plan) -> str:
 
 
 def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
-           unit_size: int = DEFAULT_UNIT_SIZE, device=None, params: dict | None = None,
+           unit_size: int | None = None, device=None, params: dict | None = None,
            width: int | None = None, height: int | None = None, source=None,
            scene_on_workers: str | None = None, done: dict | None = None, stop=None,
            progress=None, poll: float = 0.2) -> Result:
@@ -120,7 +117,7 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
     ``params``: the scene file's parameters (-D); ``width``/``height`` override the
     film's size. ``settings`` (RenderSettings; default: the scene's, with ``spp``), ``frames``
     (frame numbers of an animated scene, None: a still), ``unit_size`` (pixel-samples
-    per unit), ``device`` (each worker's --device), ``done`` (finished bands
+    per unit; None: plan.default_unit_size, recorded in ``Result.plan``), ``device`` (each worker's --device), ``done`` (finished bands
     {(frame, band): Partial} of an earlier run with the same plan, e.g. a checkpoint),
     ``source`` (the SceneSource workers load, when ``scene`` is that source's Scene),
     ``stop()`` (asked while waiting: True ends the render early, with the finished
@@ -143,6 +140,8 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
     frame_list = (None,) if frames is None else tuple(int(f) for f in frames)
     if frames is not None and scene_obj.animation is None:
         raise UsageError(f"{scene_obj.source} has no [animation]: render it without frames")
+    if unit_size is None:
+        unit_size = default_unit_size(width, height, settings.sampler.spp)
     plan = Plan(width, height, settings.sampler.spp, unit_size, frame_list)
     job = Job(source, settings, width, height, device)
     jid = job_id(job, plan)

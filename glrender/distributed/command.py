@@ -165,7 +165,7 @@ def run_distributed(args, signals) -> int:
                                    sampler=args.sampler, max_depth=args.max_depth,
                                    strategy=args.strategy,
                                    aovs=any(n in FIRST_HIT_AOVS for n in aov_names))
-    unit_size = args.unit_size or cl.DEFAULT_UNIT_SIZE
+    unit_size = args.unit_size or cl.default_unit_size(width, height, settings.sampler.spp)
     plan = cl.Plan(width, height, settings.sampler.spp, unit_size, tuple(frames))
     job = cl.Job(source, settings, width, height, args.device)
     jid = cl.job_id(job, plan)

@@ -20,6 +20,7 @@ A unit's transfer is its band's accumulation: 32 bytes per pixel (64 with AOVs),
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -124,10 +125,29 @@ def tree_ranges(tree) -> tuple[int, int]:
     return tree_ranges(tree[0])[0], tree_ranges(tree[1])[1]
 
 
+# the largest default unit in pixel-samples: ~2-4 s on one llvmpipe thread for the Cornell box
+# (benchmarks/scale.py measured ~1-2 M pixel-samples/s per thread), long enough that a
+# task's scheduling and transfer overhead (~10 ms) is below 1%
+NOMINAL_UNIT_SIZE = 1 << 22
+
+
+def default_unit_size(width: int, height: int, spp: int, frames: int = 1) -> int:
+    """The unit size when none is given: a pure function of the render (never of the
+    cluster). About 1/32 of a frame's pixel-samples (work for 32 task slots), at most
+    NOMINAL_UNIT_SIZE, rounded up to a power of two; but at least one tile row at the full
+    sample count when that row costs no more than 4 nominal units, so bands keep every
+    sample and the image is bitwise the single-process one."""
+    total = width * height * spp
+    size = 1 << max(12, math.ceil(math.log2(max(total / 32, 1))))
+    size = min(size, NOMINAL_UNIT_SIZE)
+    row = width * TILE * spp
+    if row <= 4 * NOMINAL_UNIT_SIZE:
+        size = max(size, row)
+    return max(size, MIN_UNIT_SIZE)
+
+
 def calibrated_unit_size(pixel_samples_per_second: float, seconds: float) -> int:
     """A unit size from a measured rate: about ``seconds`` of work per unit, rounded to
     a power of two (so nearby measurements give the same plan)."""
-    import math
-
     target = max(pixel_samples_per_second * seconds, MIN_UNIT_SIZE)
     return 1 << max(12, min(40, round(math.log2(target))))

@@ -89,3 +89,17 @@ def test06_frame_image_places_bands():
         img.place(band, first, Partial(mean, np.zeros((4 * h, 4)), None, (0, 1)))
     film = img.film(1, "sobol")
     assert (film.mean[:8] == 1).all() and (film.mean[8:] == 2).all() and film.spp == 1
+
+
+def test07_default_unit_size():
+    from glrender.distributed.plan import NOMINAL_UNIT_SIZE, default_unit_size
+
+    # Cornell 256^2 at 64 spp: 32 units of one tile row each, every band at full spp
+    size = default_unit_size(256, 256, 64)
+    plan = Plan(256, 256, 64, size)
+    assert size == 256 * 8 * 64 and len(plan.units()) == 32 and plan.ranges == ((0, 64),)
+    # 4K at 64k spp: a tile row costs far more than a nominal unit: sample ranges
+    size = default_unit_size(3840, 2160, 65536)
+    assert size == NOMINAL_UNIT_SIZE and len(Plan(3840, 2160, 65536, size).ranges) > 1
+    # small renders: at least the minimum; always a power of two or a tile row's cost
+    assert default_unit_size(4, 4, 1) == 1 << 12
