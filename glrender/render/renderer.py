@@ -459,33 +459,91 @@ class Renderer:
         so far are undone (from a copy taken before the pass) and the pass returns False,
         so the accumulation always holds whole passes."""
         prm = self._param_block(first_sample, samples)
-        tiles = self.tiles_x * self.rows[1]
+        total = self.tiles_x * self.rows[1]
+        done = 0
         self._bind()
-        start = 0
-        while start < tiles:
-            if self._tile_rate is None:
-                count = min(tiles, 16)
-            else:
-                count = int(self.settings.time_target / max(self._tile_rate * samples, 1e-9))
-                count = max(1, min(tiles - start, count, 65535))
-            count = min(count, tiles - start)
-            if should_stop is not None:
-                if start == 0 and count < tiles:
-                    self._take_snapshot()
-                elif start > 0 and should_stop():
-                    self._restore_snapshot()
-                    self._bind()
-                    return False
-            prm["dispatch"][0], prm["dispatch"][1] = start, count
-            self._params.write(prm.tobytes())
-            t0 = time.perf_counter()
-            self.program.run(group_x=count)
-            self.gl.finish()
-            elapsed = time.perf_counter() - t0
-            rate = elapsed / (count * samples)
-            self._tile_rate = rate if self._tile_rate is None else 0.7 * self._tile_rate + 0.3 * rate
-            start += count
+        slices = self._slices()
+        for first_row, n_rows in slices:
+            if len(slices) > 1:
+                self._bind_slice(first_row, n_rows)
+            prm["image"][3], prm["counts"][3] = n_rows, first_row
+            tiles = self.tiles_x * n_rows
+            start = 0
+            while start < tiles:
+                if self._tile_rate is None:
+                    count = min(tiles, 16)
+                else:
+                    count = int(self.settings.time_target / max(self._tile_rate * samples, 1e-9))
+                    count = max(1, min(tiles - start, count, 65535))
+                count = min(count, tiles - start)
+                if should_stop is not None:
+                    if done == 0 and count < total:
+                        self._take_snapshot()
+                    elif done > 0 and should_stop():
+                        self._restore_snapshot()
+                        self._bind()
+                        return False
+                prm["dispatch"][0], prm["dispatch"][1] = start, count
+                self._params.write(prm.tobytes())
+                t0 = time.perf_counter()
+                self.program.run(group_x=count)
+                self.gl.finish()
+                elapsed = time.perf_counter() - t0
+                rate = elapsed / (count * samples)
+                self._tile_rate = rate if self._tile_rate is None else 0.7 * self._tile_rate + 0.3 * rate
+                start += count
+                done += count
+        if len(slices) > 1:
+            self._bind()
         return True
+
+    def _slice_bytes_per_pixel(self) -> list[tuple[Any, int]]:
+        """The per-pixel accumulation buffers and their bytes per pixel."""
+        bufs = [(self._mean, 16), (self._m2, 16)]
+        if self.settings.aovs:
+            bufs.append((self._aov, 32))
+        if self.settings.count_loops:
+            bufs.append((self._debug, 4))
+        return bufs
+
+    def _slices(self) -> list[tuple[int, int]]:
+        """The accumulation's tile rows in slices (first row, rows) whose part of every
+        per-pixel buffer fits one storage-buffer binding (llvmpipe: 128 MiB, so a film of
+        more than 8.4M pixels, or 4.2M with AOVs, takes several), each starting at an
+        offset the device can bind."""
+        limit = self._binding_limit()
+        widest = max(bpp for _, bpp in self._slice_bytes_per_pixel())
+        row_bytes = TILE * self.width * widest
+        first, count = self.rows
+        if row_bytes * count <= limit:
+            return [(first, count)]
+        align = max(1, int(self._ssbo_alignment()))
+        # rows of a slice: a multiple of k, so that every buffer's offset stays aligned
+        smallest = min(bpp for _, bpp in self._slice_bytes_per_pixel())
+        k = align // math.gcd(align, TILE * self.width * smallest)
+        per = (limit // row_bytes) // k * k
+        if per < 1:
+            raise UsageError(f"a {self.width}-pixel-wide image does not fit this device's "
+                             f"storage buffers ({limit} bytes a binding): render fewer columns")
+        return [(r, min(per, first + count - r)) for r in range(first, first + count, per)]
+
+    def _binding_limit(self) -> int:
+        return int(self.gl.info["GL_MAX_SHADER_STORAGE_BLOCK_SIZE"])
+
+    def _ssbo_alignment(self) -> int:
+        from ..gl.egl import gl as raw_gl
+
+        return int(raw_gl.get_integer(0x90DF))   # GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT
+
+    def _bind_slice(self, first_row: int, n_rows: int) -> None:
+        """Bind the part of the per-pixel buffers that holds tile rows [first_row, +n_rows)."""
+        top = TILE * (first_row - self.rows[0])
+        rows = min(self.height, TILE * (first_row + n_rows)) - TILE * first_row
+        slots = {id(self._mean): layout.SSBO_ACCUM_MEAN, id(self._m2): layout.SSBO_ACCUM_M2,
+                 id(self._aov): layout.SSBO_AOV, id(self._debug): layout.SSBO_DEBUG}
+        for buf, bpp in self._slice_bytes_per_pixel():
+            buf.bind_to_storage_buffer(slots[id(buf)], offset=top * self.width * bpp,
+                                       size=rows * self.width * bpp)
 
     def _accumulators(self) -> tuple[Any, ...]:
         return (self._mean, self._m2, self._aov, self._debug, self._splat)
