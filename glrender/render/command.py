@@ -395,6 +395,10 @@ def run_render(args, signals) -> int:
                                                     "total")},
         "denoise": denoise_info,
         "crop": crop, "clamp": settings.clamp, "biased": settings.clamp is not None,
+        "memory": {"device_bytes_per_pixel": renderer.device_bytes_per_pixel(),
+                   "device_accumulation_bytes": renderer.device_bytes_per_pixel()
+                   * renderer.width * renderer.band_height,
+                   "slices": len(renderer._slices())},
         "noise_threshold": None if noise_plan is None else {
             "threshold": noise_plan.threshold, "pilot_spp": noise_plan.pilot_spp,
             "pilot_error": noise_plan.pilot_error, "pilot_seconds": noise_plan.pilot_seconds,

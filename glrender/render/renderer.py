@@ -527,6 +527,15 @@ class Renderer:
                              f"storage buffers ({limit} bytes a binding): render fewer columns")
         return [(r, min(per, first + count - r)) for r in range(first, first + count, per)]
 
+    def device_bytes_per_pixel(self) -> int:
+        """Bytes of device memory per accumulated pixel: mean and M2, AOVs and loop counters
+        when enabled, a whole-image splat image for light tracing and BDPT, and the copy that
+        undoes a stopped pass."""
+        per = sum(bpp for _, bpp in self._slice_bytes_per_pixel())
+        if self.settings.integrator.kind in SPLATTING:
+            per += 24
+        return 2 * per
+
     def _binding_limit(self) -> int:
         return int(self.gl.info["GL_MAX_SHADER_STORAGE_BLOCK_SIZE"])
 

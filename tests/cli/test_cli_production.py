@@ -39,6 +39,13 @@ def test02_crop_resumes_from_its_checkpoint(tmp_path):
     assert "the checkpoint holds crop 4,10,30,22, this render crop 0,0,8,8" in line
 
 
+def test02b_memory_is_reported(tmp_path):
+    _, stats = render(tmp_path, "m", "--spp", 1, "--aov", "albedo")
+    # mean and M2 (16 bytes each), albedo/normal/depth (32), doubled by the undo copy
+    assert stats["memory"] == {"device_bytes_per_pixel": 128,
+                               "device_accumulation_bytes": 128 * 40 * 30, "slices": 1}
+
+
 def test03_clamp_is_marked_biased(tmp_path):
     free, fstats = render(tmp_path, "free", "--spp", 8)
     clamped, cstats = render(tmp_path, "clamped", "--spp", 8, "--clamp", 0.5)
