@@ -283,7 +283,7 @@ class Film:
         return {"box": 0.5, "tent": 1.0, "gaussian": 4.0 * self.gaussian_stddev, "mitchell": 2.0}[self.filter]
 
 
-INTEGRATORS = ("path", "direct", "ao", "lighttrace", "bdpt")
+INTEGRATORS = ("path", "direct", "ao", "lighttrace", "bdpt", "sppm")
 STRATEGIES = ("light", "bsdf", "mis-balance", "mis-power")
 
 

@@ -1,0 +1,71 @@
+"""The hash grid over SPPM's visible points, built in vectorised numpy.
+
+Every visible point is listed in each cell of a uniform grid that its search sphere
+overlaps; the cell edge is the largest radius, so a sphere overlaps at most two cells
+along each axis (eight in all). Cells are stored by spatial hash (Teschner et al.
+2003, the hash of ``shaders/photon/hash_grid.glsl``) in a table with one slot per
+visible point: ``cells[h] .. cells[h + 1]`` are the positions in ``cells`` of the pixel
+indices listed under hash ``h``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+_PRIMES = np.array([73856093, 19349663, 83492791], np.uint64)
+_MASK = np.uint64(0xFFFFFFFF)
+# spheres are listed with this much slack, so a float32 cell lookup on the device
+# near a cell boundary finds the points a float64 one would
+_SLACK = 1e-5
+
+
+@dataclass
+class HashGrid:
+    cells: np.ndarray        # uint32: table_size + 1 offsets, then pixel indices
+    size: np.ndarray         # cells along x, y, z (uint32)
+    table_size: int          # 0: no grid (no visible points)
+    lo: np.ndarray           # corner of cell (0, 0, 0)
+    cell: float              # cell edge length
+
+    @property
+    def max_cell_entries(self) -> int:
+        """The most pixel indices listed under one hash (what one photon may visit)."""
+        if self.table_size == 0:
+            return 0
+        return int(np.diff(self.cells[:self.table_size + 1]).max())
+
+
+def grid_hash(cell: np.ndarray) -> np.ndarray:
+    """The 32-bit spatial hash of integer cell coordinates (N, 3), as in GLSL's grid_hash."""
+    c = cell.astype(np.uint64) * _PRIMES
+    return (c[:, 0] ^ c[:, 1] ^ c[:, 2]) & _MASK
+
+
+def build_grid(positions: np.ndarray, radius: np.ndarray, pixels: np.ndarray) -> HashGrid:
+    """The grid over points ``positions`` (N, 3) with search radii ``radius`` (N,),
+    listing their ``pixels`` (N,) indices."""
+    n = len(positions)
+    if n == 0:
+        return HashGrid(np.zeros(2, np.uint32), np.zeros(3, np.uint32), 0, np.zeros(3), 1.0)
+    p = np.asarray(positions, np.float64)
+    r = np.asarray(radius, np.float64)[:, None] * (1 + _SLACK)
+    cell = float(r.max())
+    lo = (p - r).min(axis=0) - _SLACK * cell
+    hi = (p + r).max(axis=0)
+    size = np.minimum(np.floor((hi - lo) / cell).astype(np.int64) + 1, 1 << 30)
+    c0 = np.clip(np.floor((p - r - lo) / cell).astype(np.int64), 0, size - 1)
+    c1 = np.clip(np.floor((p + r - lo) / cell).astype(np.int64), 0, size - 1)
+    hashes, owners = [], []
+    for offset in np.ndindex(2, 2, 2):
+        c = c0 + np.array(offset)
+        keep = np.all(c <= c1, axis=1)
+        hashes.append(grid_hash(c[keep]) % np.uint64(n))
+        owners.append(np.asarray(pixels)[keep])
+    h = np.concatenate(hashes).astype(np.int64)
+    entries = np.concatenate(owners).astype(np.uint32)
+    order = np.argsort(h, kind="stable")
+    counts = np.bincount(h, minlength=n)
+    offsets = (n + 1) + np.concatenate([[0], np.cumsum(counts)])
+    cells = np.concatenate([offsets.astype(np.uint32), entries[order]])
+    return HashGrid(cells, size.astype(np.uint32), n, lo, cell)

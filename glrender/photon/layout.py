@@ -1,0 +1,31 @@
+"""Host mirror of ``shaders/photon/layout.glsl``: binding numbers and the std140
+uniform block of the photon kernels (tests/photon/test_photon_trace.py checks the block
+on the device)."""
+from __future__ import annotations
+
+import numpy as np
+
+UBO_PHOTON = 1
+
+SSBO_VP_POSITION = 8
+SSBO_VP_SHADING = 9
+SSBO_VP_EXTRA = 10
+SSBO_VP_RADIANCE = 11
+SSBO_RADIUS2 = 12
+SSBO_GRID = 13
+SSBO_DEPOSITS = 14
+SSBO_RECORDS = 15
+
+# bytes per pixel of the SPPM device buffers: position 16, shading 32, extra 32,
+# radiance 16, radius^2 4, deposits 16 (the grid adds 4 per listed cell and entry)
+BYTES_PER_PIXEL = 16 + 32 + 32 + 16 + 4 + 16
+BYTES_PER_RECORD = 16      # a photon's emission record (tests, photon statistics)
+RECORD_HEADER_WORDS = 4    # counters before the records: skipped, visited, max visited, -
+
+PHOTON_PARAMS = np.dtype([
+    ("photons", "<u4", 4),     # first, count, per iteration, iteration
+    ("grid_size", "<u4", 4),   # cells xyz, hash table size
+    ("grid_lo", "<f4", 4),     # corner xyz, cell edge
+    ("options", "<u4", 4),     # deposit from segment, max segments, record emission, -
+])
+assert PHOTON_PARAMS.itemsize == 64

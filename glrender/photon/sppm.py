@@ -1,0 +1,343 @@
+"""Stochastic progressive photon mapping on the device (Hachisuka & Jensen 2009).
+
+Each iteration runs a camera pass (``shaders/photon/sppm_camera.comp.glsl``: one
+visible point per pixel, found through delta surfaces, with the emission and direct
+light the camera path collects), builds a hash grid over the visible points in numpy
+(:mod:`glrender.photon.grid`), and a photon pass (``photon_trace.comp.glsl``) that
+deposits flux into the visible points around every photon hit. The per-pixel state
+(radius r, photon count N, flux tau, the camera passes' radiance) lives on the host in
+float64 and follows Hachisuka & Jensen's rule: with M new photons and flux Phi,
+
+    N' = N + alpha M,   r' = r sqrt(N' / (N + M)),   tau' = (tau + Phi) (r' / r)^2,
+
+and the image is L = Ld / n + tau / (n P pi r^2) after n iterations of P photons
+(pbrt-v3's SPPMIntegrator). The radius shrinks like n^((alpha - 1) / 2), so the bias
+(proportional to r^2) and the noise both vanish: the estimate is consistent.
+
+The scene is packed, uploaded and compiled by a :class:`Renderer` held inside (its
+scene buffers, parameter block and defines); only the photon kernels are compiled here.
+"""
+from __future__ import annotations
+
+import hashlib
+import math
+import time
+from dataclasses import dataclass, replace
+from typing import Any, Callable
+
+import numpy as np
+
+from ..errors import UsageError
+from ..film import Film
+from ..gl import shaders
+from ..gl.context import Context
+from ..gpu import codegen
+from ..render.renderer import RenderSettings, Renderer, camera_tangents, settings_from_scene
+from ..scene import model as m
+from . import layout as pl
+from .grid import build_grid
+
+PHOTONS_PER_DISPATCH = 1 << 16   # photons per photon-pass dispatch (64 per work group)
+MAX_RECORDS = (128 << 20) // pl.BYTES_PER_RECORD - 1   # emission records fit one SSBO
+DEFAULT_RADIUS_PIXELS = 2.0      # default initial radius, in pixel footprints at the scene's centre
+
+
+@dataclass(frozen=True)
+class SppmSettings:
+    """SPPM's own parameters: ``photons_per_iteration`` (None: one per pixel, at
+    least 16,384), ``initial_radius`` in scene units (None: DEFAULT_RADIUS_PIXELS pixel
+    footprints at the scene's centre), ``alpha`` in (0, 1): the fraction of new photons
+    kept each iteration."""
+
+    photons_per_iteration: int | None = None
+    initial_radius: float | None = None
+    alpha: float = 0.7
+
+    def __post_init__(self) -> None:
+        p = self.photons_per_iteration
+        if p is not None and (not isinstance(p, (int, np.integer)) or p < 1):
+            raise UsageError(f"photons per iteration: expected a positive integer, got {p!r}")
+        r = self.initial_radius
+        if r is not None and not (isinstance(r, (int, float)) and math.isfinite(r) and r > 0):
+            raise UsageError(f"initial radius: expected a positive number of scene units, got {r!r}")
+        a = self.alpha
+        if not (isinstance(a, (int, float)) and 0 < a < 1):
+            raise UsageError(f"alpha: expected a number in (0, 1), got {a!r}")
+
+
+class SppmRenderer:
+    """A scene on the device rendered by SPPM, iteration by iteration.
+
+    Offers what :class:`Renderer` offers to the command line: ``step(iterations,
+    callback, should_stop)``, ``film()``, ``state()``/``restore()``, ``fingerprint()``,
+    ``spp_done`` (iterations done), ``release()``."""
+
+    def __init__(self, scene: m.Scene, settings: RenderSettings | None = None,
+                 sppm: SppmSettings | None = None, *, ctx: Context | None = None,
+                 device: str | int | None = None, record_emission: bool = False,
+                 **overrides: Any) -> None:
+        self.sppm = sppm or SppmSettings()
+        settings = settings or settings_from_scene(scene, **overrides)
+        # the inner renderer packs, uploads and compiles the scene (its own kernel is the
+        # path tracer's, unused here)
+        inner = replace(settings, integrator=replace(settings.integrator, kind="path"))
+        t0 = time.perf_counter()
+        self.base = Renderer(scene, inner, ctx=ctx, device=device)
+        self.scene, self.settings = scene, settings
+        self.ctx, self.gl = self.base.ctx, self.base.gl
+        self.width, self.height = self.base.width, self.base.height
+        self.rows = self.base.rows
+        self.samples_per_pass = 1
+        n = self.width * self.height
+        self.photons_per_iteration = int(self.sppm.photons_per_iteration or max(n, 16384))
+        self.record_emission = record_emission
+        if record_emission and self.photons_per_iteration > MAX_RECORDS:
+            raise UsageError(f"photons per iteration: at most {MAX_RECORDS} when recording emission")
+        self.initial_radius = float(self.sppm.initial_radius or self._default_radius())
+        self._compile()
+        self._allocate()
+        self.reset()
+        self.timings = {"build": self.base.timings["build"], "compile": time.perf_counter() - t0
+                        - self.base.timings["build"]}
+
+    # -- setup -------------------------------------------------------------------------------
+    def _default_radius(self) -> float:
+        center, radius = self.base.packed.sphere_bounds
+        cam = self.scene.camera.world_from_camera
+        dist = max(float(np.linalg.norm(np.asarray(center) - cam[:3, 3])), 1e-3 * radius)
+        _, ty = camera_tangents(self.scene.camera, self.width, self.height)
+        return DEFAULT_RADIUS_PIXELS * 2 * ty * dist / self.height
+
+    def _compile(self) -> None:
+        p = self.base.packed
+        geometry = codegen.generate(p, has_bvh=p.has_bvh, lights=self.base.lights_final)
+        library = shaders.ShaderLibrary().with_generated({codegen.GENERATED_PATH: geometry})
+        slots = {"scene": codegen.GENERATED_PATH}
+        self.camera_kernel: Any = shaders.compile_compute(
+            self.ctx, "photon/sppm_camera.comp.glsl", defines=self.base.defines, slots=slots,
+            library=library)
+        self.photon_kernel: Any = shaders.compile_compute(
+            self.ctx, "photon/photon_trace.comp.glsl", defines=self.base.defines, slots=slots,
+            library=library)
+        h = hashlib.sha256()
+        for entry in ("photon/sppm_camera.comp.glsl", "photon/photon_trace.comp.glsl"):
+            h.update(shaders.preprocess(entry, defines=self.base.defines, slots=slots,
+                                        library=library).source.encode())
+        self._kernel_hash = h.hexdigest()
+
+    def _allocate(self) -> None:
+        gl, n = self.gl, self.width * self.height
+        self._vp_position = gl.buffer(reserve=16 * n)
+        self._vp_shading = gl.buffer(reserve=32 * n)
+        self._vp_extra = gl.buffer(reserve=32 * n)
+        self._vp_radiance = gl.buffer(reserve=16 * n)
+        self._radius2 = gl.buffer(reserve=4 * n)
+        self._deposits = gl.buffer(reserve=16 * n)
+        self._grid = gl.buffer(reserve=16)
+        records = pl.RECORD_HEADER_WORDS * 4 + (pl.BYTES_PER_RECORD * self.photons_per_iteration
+                                                 if self.record_emission else 0)
+        self._records = gl.buffer(reserve=records)
+        self._photon_params = gl.buffer(reserve=pl.PHOTON_PARAMS.itemsize)
+        self._own = [self._vp_position, self._vp_shading, self._vp_extra, self._vp_radiance,
+                     self._radius2, self._deposits, self._grid, self._records, self._photon_params]
+
+    def reset(self) -> None:
+        """Forget every iteration: radii back to the initial radius."""
+        n = self.width * self.height
+        self.iterations = 0
+        self.radius = np.full(n, self.initial_radius, np.float64)
+        self.n_photons = np.zeros(n, np.float64)
+        self.tau = np.zeros((n, 3), np.float64)
+        self.ld_sum = np.zeros((n, 3), np.float64)
+        self.counters = {"skipped": 0, "visited": 0, "max_visited": 0, "max_cell": 0}
+
+    @property
+    def spp_done(self) -> int:
+        """Iterations done (one camera sample per pixel each)."""
+        return self.iterations
+
+    @property
+    def band_height(self) -> int:
+        return self.height
+
+    def fingerprint(self) -> str:
+        """The inner renderer's fingerprint (scene, camera, sampler, seed) with SPPM's
+        kernels and parameters."""
+        h = hashlib.sha256()
+        h.update(self.base.fingerprint().encode())
+        h.update(self._kernel_hash.encode())
+        h.update(repr(("sppm", self.photons_per_iteration, self.initial_radius,
+                       float(self.sppm.alpha))).encode())
+        return h.hexdigest()
+
+    # -- rendering ---------------------------------------------------------------------------
+    def _bind(self) -> None:
+        self.base._bind()
+        for binding, buf in ((pl.SSBO_VP_POSITION, self._vp_position), (pl.SSBO_VP_SHADING, self._vp_shading),
+                             (pl.SSBO_VP_EXTRA, self._vp_extra), (pl.SSBO_VP_RADIANCE, self._vp_radiance),
+                             (pl.SSBO_RADIUS2, self._radius2), (pl.SSBO_GRID, self._grid),
+                             (pl.SSBO_DEPOSITS, self._deposits), (pl.SSBO_RECORDS, self._records)):
+            buf.bind_to_storage_buffer(binding)
+        self._photon_params.bind_to_uniform_block(pl.UBO_PHOTON)
+
+    def _photon_block(self, iteration: int) -> Any:
+        prm = np.zeros(1, pl.PHOTON_PARAMS)[0]
+        prm["photons"] = (0, 0, self.photons_per_iteration, iteration)
+        max_depth = self.settings.integrator.max_depth
+        prm["options"] = (2, 256 if max_depth < 0 else max_depth, int(self.record_emission), 0)
+        return prm
+
+    def camera_pass(self, iteration: int) -> tuple[np.ndarray, np.ndarray]:
+        """Runs the camera pass of ``iteration``: visible points' positions (N, 4: xyz and
+        camera segments, 0 for none) and the camera paths' radiance (N, 3)."""
+        prm = self.base._param_block(iteration, 1)
+        self._bind()
+        self.base._params.write(prm.tobytes())
+        self._photon_params.write(self._photon_block(iteration).tobytes())
+        self.camera_kernel.run(group_x=-(-self.width // 8), group_y=-(-self.height // 8))
+        self.gl.memory_barrier()
+        position = np.frombuffer(self._vp_position.read(), np.float32).reshape(-1, 4)
+        radiance = np.frombuffer(self._vp_radiance.read(), np.float32).reshape(-1, 4)[:, :3]
+        return position, radiance
+
+    def photon_pass(self, iteration: int, position: np.ndarray,
+                    should_stop: Callable[[], bool] | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+        """Traces the photons of ``iteration`` into the visible points ``position`` (from
+        camera_pass): their flux Phi (N, 3) and photon counts M (N,); None if stopped."""
+        valid = np.nonzero(position[:, 3] > 0)[0]
+        grid = build_grid(position[valid, :3], self.radius[valid], valid.astype(np.uint32))
+        self.counters["max_cell"] = max(self.counters["max_cell"], grid.max_cell_entries)
+        self._grid.orphan(grid.cells.nbytes)
+        self._grid.write(grid.cells.tobytes())
+        self._radius2.write((self.radius ** 2).astype(np.float32).tobytes())
+        self._deposits.clear()
+        self._records.write(np.zeros(pl.RECORD_HEADER_WORDS, np.uint32).tobytes())
+        prm = self._photon_block(iteration)
+        prm["grid_size"] = (*grid.size, grid.table_size)
+        prm["grid_lo"] = (*grid.lo, grid.cell)
+        self._bind()
+        first = 0
+        while first < self.photons_per_iteration:
+            if first > 0 and should_stop is not None and should_stop():
+                return None
+            count = min(PHOTONS_PER_DISPATCH, self.photons_per_iteration - first)
+            prm["photons"][:2] = (first, count)
+            self._photon_params.write(prm.tobytes())
+            self.photon_kernel.run(group_x=-(-count // 64))
+            first += count
+        self.gl.memory_barrier()
+        dep = np.frombuffer(self._deposits.read(), np.float32).reshape(-1, 4).astype(np.float64)
+        head = np.frombuffer(self._records.read(pl.RECORD_HEADER_WORDS * 4), np.uint32)
+        self.counters["skipped"] += int(head[0])
+        self.counters["visited"] += int(head[1])
+        self.counters["max_visited"] = max(self.counters["max_visited"], int(head[2]))
+        return dep[:, :3], dep[:, 3]
+
+    def emission_records(self) -> tuple[np.ndarray, np.ndarray]:
+        """The last photon pass's emitted photons (record_emission=True): power (P, 3)
+        float64 and light index (P,), 0xFFFFFFFF for a photon that could not start."""
+        if not self.record_emission:
+            raise UsageError("emission_records: construct the renderer with record_emission=True")
+        words = np.frombuffer(self._records.read(), np.uint32)[pl.RECORD_HEADER_WORDS:].reshape(-1, 4)
+        return words[:, :3].copy().view(np.float32).astype(np.float64), words[:, 3].copy()
+
+    def _update(self, phi: np.ndarray, m_new: np.ndarray) -> None:
+        """Hachisuka & Jensen's progressive radius and flux update (pbrt-v3's form)."""
+        hit = m_new > 0
+        alpha = float(self.sppm.alpha)
+        n_old = self.n_photons[hit]
+        n_new = n_old + alpha * m_new[hit]
+        r_old = self.radius[hit]
+        r_new = r_old * np.sqrt(n_new / (n_old + m_new[hit]))
+        self.tau[hit] = (self.tau[hit] + phi[hit]) * ((r_new / r_old) ** 2)[:, None]
+        self.n_photons[hit] = n_new
+        self.radius[hit] = r_new
+
+    def iterate(self, should_stop: Callable[[], bool] | None = None) -> bool:
+        """One SPPM iteration; False (and nothing changed) when stopped part way."""
+        t = self.iterations
+        position, radiance = self.camera_pass(t)
+        deposits = self.photon_pass(t, position, should_stop)
+        if deposits is None:
+            return False
+        self.ld_sum += radiance
+        self._update(*deposits)
+        self.iterations += 1
+        return True
+
+    def step(self, iterations: int, callback: Callable[[int, int], None] | None = None,
+             should_stop: Callable[[], bool] | None = None) -> int:
+        """Run ``iterations`` more iterations; ``callback(done, total)`` after each.
+        ``should_stop()`` is asked before every iteration and between photon dispatches;
+        an iteration stopped part way is dropped. Returns the iterations added."""
+        if iterations < 0:
+            raise UsageError(f"iterations: expected a non-negative integer, got {iterations}")
+        first, target = self.iterations, self.iterations + iterations
+        while self.iterations < target:
+            if should_stop is not None and should_stop():
+                break
+            if not self.iterate(should_stop):
+                break
+            if callback is not None:
+                callback(self.iterations, target)
+        return self.iterations - first
+
+    def radiance(self) -> np.ndarray:
+        """The SPPM estimate (H, W, 3) float64."""
+        n = max(self.iterations, 1)
+        photons = float(n) * self.photons_per_iteration
+        L = self.ld_sum / n + self.tau / (photons * math.pi * self.radius ** 2)[:, None]
+        return L.reshape(self.height, self.width, 3)
+
+    def image(self) -> Film:
+        return self.film()
+
+    def film(self) -> Film:
+        """The image as a :class:`Film`: ``count`` holds the iterations; SPPM has no
+        per-sample variance (``m2`` is zero), error bars come from independent runs."""
+        h, w = self.height, self.width
+        return Film(mean=self.radiance().astype(np.float32), m2=np.zeros((h, w, 3), np.float32),
+                    count=np.full((h, w), float(self.iterations), np.float32),
+                    nonfinite=np.zeros((h, w), np.float32), spp=self.iterations,
+                    aovs={"radius": self.radius.reshape(h, w).astype(np.float32)},
+                    sampler=self.settings.sampler.kind)
+
+    def state(self) -> dict[str, Any]:
+        """The per-pixel SPPM state: what a checkpoint saves."""
+        return {"fingerprint": self.fingerprint(), "spp_done": self.iterations,
+                "radius": self.radius.copy(), "n_photons": self.n_photons.copy(),
+                "tau": self.tau.copy(), "ld_sum": self.ld_sum.copy(),
+                "width": self.width, "height": self.height, "rows": self.rows}
+
+    def restore(self, state: dict[str, Any]) -> None:
+        """Continue from ``state()`` of an equal renderer (same fingerprint)."""
+        if state.get("fingerprint") != self.fingerprint():
+            raise UsageError("the saved SPPM state belongs to a different scene or different "
+                             "render settings (fingerprints differ)")
+        n = self.width * self.height
+        arrays = {}
+        for name, shape in (("radius", (n,)), ("n_photons", (n,)), ("tau", (n, 3)), ("ld_sum", (n, 3))):
+            a = np.asarray(state[name], np.float64)
+            if a.shape != shape:
+                raise UsageError(f"the saved SPPM state's {name} has shape {a.shape}, expected {shape}")
+            arrays[name] = a.copy()
+        for name, a in arrays.items():
+            setattr(self, name, a)
+        self.iterations = int(state["spp_done"])
+
+    def memory(self) -> dict[str, int]:
+        """Device bytes per pixel and per photon (photons are not stored: deposited at once)."""
+        return {"bytes_per_pixel": pl.BYTES_PER_PIXEL,
+                "bytes_per_photon": pl.BYTES_PER_RECORD if self.record_emission else 0}
+
+    def release(self) -> None:
+        for buf in self._own:
+            buf.release()
+        self._own = []
+        self.base.release()
+
+    def __enter__(self) -> "SppmRenderer":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.release()

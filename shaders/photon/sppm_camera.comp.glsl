@@ -1,0 +1,73 @@
+#version 450
+// SPPM's camera pass: one camera sample per pixel and iteration (sample index = the
+// iteration), followed through delta surfaces (mirrors, glass, null) to its first
+// non-delta surface, the visible point. On the way it collects what the photons do
+// not carry: emission seen directly or through delta surfaces, and direct light at
+// the visible point by next-event estimation (light sampling alone: photons that
+// reach a surface straight from a light are not deposited, pbrt-v3's SPPM split).
+// Path depth counts segments as Mitsuba's max_depth: the visible point records how
+// many camera segments led to it so the photon pass can respect the total.
+layout(local_size_x = 8, local_size_y = 8) in;
+
+#include "common/params.glsl"
+#include "common/loop_counter.glsl"
+#include "scene/layout.glsl"
+#include "photon/layout.glsl"
+#include "integrators/integrator_common.glsl"
+#include "integrators/shading.glsl"
+#include "integrators/pixel.glsl"
+
+void main() {
+    uvec2 pixel = gl_GlobalInvocationID.xy;
+    if (any(greaterThanEqual(pixel, u_params.image.xy))) return;
+    uint i = pixel.y * u_params.image.x + pixel.x;
+    int max_segments = kMaxDepth < 0 ? kUnboundedDepthCap : kMaxDepth;
+    SamplerState s = pixel_sampler(sampler_pixel_hash(pixel, u_params.dispatch.z), u_photon.photons.w);
+    CameraSample c = camera_sample(pixel, s);
+    vec3 L = vec3(0.0), beta = vec3(c.weight);
+    vec3 o = c.o, d = c.d;
+    float t_max = c.t_max;
+    vec4 position = vec4(0.0);
+    for (int depth = 0; depth < max_segments; ++depth) {
+        LOOP_TICK();
+        SurfaceHit hit;
+        if (!scene_intersect(o, d, t_max, c.time, hit)) {
+            L += beta * environment_contribution(d, depth, o, 1.0, true);
+            break;
+        }
+        if (hit.light != 0u) L += beta * emitter_hit_contribution(hit, d, depth, o, 1.0, true);
+        Bsdf b = bsdf_from_material(hit.material, hit.uv);
+        Frame frame = frame_from_z(hit.ns);
+        vec3 wo = frame_to_local(frame, -d);
+        vec2 u_choice = sampler_2d(s);
+        vec2 u_light = sampler_2d(s);
+        vec2 u_bsdf = sampler_2d(s);
+        if (!bsdf_is_delta(b)) {
+            // the visible point: direct light here, photons for the rest
+            if (depth + 2 <= max_segments)
+                L += beta * next_event(hit.p, hit, b, frame, wo, c.time, u_choice.x, u_light, false);
+            position = vec4(hit.p, float(depth + 1));
+            vp_shading[2u * i] = vec4(-d, uintBitsToFloat(hit.material));
+            vp_shading[2u * i + 1u] = vec4(hit.ns, hit.uv.x);
+            vp_extra[2u * i] = vec4(hit.ng, hit.uv.y);
+            vp_extra[2u * i + 1u] = vec4(beta, 0.0);
+            break;
+        }
+        BsdfSample bs = bsdf_sample(b, wo, u_choice.y, u_bsdf, false);
+        if (!bs.valid) break;
+        vec3 wi = frame_from_local(frame, bs.wi);
+        if (dot(wi, hit.ng) * bs.wi.z <= 0.0) break;
+        beta *= bs.weight;
+        if (!(max_component(beta) > 0.0)) break;
+        o = offset_ray_origin(hit.p, hit.ng, wi);
+        d = wi;
+        t_max = kInfinity;
+    }
+    if (!is_finite(L) || !is_finite(beta)) {
+        L = vec3(0.0);
+        position = vec4(0.0);
+    }
+    vp_position[i] = position;
+    vp_radiance[i] = vec4(L, 0.0);
+    if (kCountLoops) debug_counters[i] = max(debug_counters[i], g_loop_count);
+}

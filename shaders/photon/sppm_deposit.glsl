@@ -1,0 +1,60 @@
+// SPPM's photon step: a photon at a surface adds its contribution to every visible
+// point whose search disk holds it (Hachisuka & Jensen 2009; pbrt-v3 SPPMIntegrator).
+//
+// For visible point i with throughput beta_i, radius r_i, outgoing direction wo_i:
+//     Phi_i += beta_i f_i(wo_i, wi) beta_photon,   M_i += 1,
+// where wi points back along the photon. The host turns Phi and M into the
+// progressive radiance estimate (glrender/photon/sppm.py). Only visible points whose
+// geometric normal agrees with the photon's surface count (kNormalAgreement): a
+// photon on the far side of a thin wall, or on the other wall of a corner, is
+// another surface. Every photon visits at most kMaxCellCandidates entries of its
+// cell and kCandidateBudget over its whole path, far below llvmpipe's silent
+// ~65,535-iteration cap; skipped entries are counted (photon_records[0]).
+// (the kernel enables GL_NV_shader_atomic_float: #extension must precede all code)
+#include "photon/layout.glsl"
+#include "photon/hash_grid.glsl"
+#include "integrators/integrator_common.glsl"
+#include "bsdf/bsdf.glsl"
+#include "bsdf/material.glsl"
+
+const uint kMaxCellCandidates = 4096u;
+const uint kCandidateBudget = 16384u;
+const float kNormalAgreement = 0.5;   // cos 60 degrees
+
+// Deposits a photon of power beta that reached surface point p (geometric normal ng)
+// from the unit direction wi (pointing back toward where it came from), after
+// `segments` path segments from its light. `budget`: candidates this photon may
+// still visit.
+void sppm_deposit(vec3 p, vec3 ng, vec3 wi, vec3 beta, int segments, inout uint budget, inout uint visited) {
+    uvec3 cell;
+    if (!grid_cell_of(p, cell)) return;
+    uvec2 range = grid_cell_range(cell);
+    uint n = range.y - range.x;
+    uint visit = min(n, min(kMaxCellCandidates, budget));
+    if (visit < n) atomicAdd(photon_records[0], n - visit);
+    budget -= visit;
+    visited += visit;
+    float max_segments = float(u_photon.options.y);
+    for (uint k = 0u; k < visit; ++k) {
+        LOOP_TICK();
+        uint i = grid_cells[range.x + k];
+        vec4 vp = vp_position[i];
+        vec3 dp = p - vp.xyz;
+        if (dot(dp, dp) > vp_radius2[i] || vp.w + float(segments) > max_segments) continue;
+        vec4 extra = vp_extra[2u * i];
+        if (dot(extra.xyz, ng) < kNormalAgreement) continue;
+        vec4 s0 = vp_shading[2u * i], s1 = vp_shading[2u * i + 1u];
+        Bsdf b = bsdf_from_material(floatBitsToUint(s0.w), vec2(s1.w, extra.w));
+        Frame frame = frame_from_z(s1.xyz);
+        vec3 wo_l = frame_to_local(frame, s0.xyz), wi_l = frame_to_local(frame, wi);
+        // the photon arrives on the geometric side its shading direction claims
+        if (!(abs(wi_l.z) > 0.0) || dot(wi, extra.xyz) * wi_l.z <= 0.0) continue;
+        // bsdf_eval includes |cos theta_i|; the photon density already accounts for it
+        vec3 phi = vp_extra[2u * i + 1u].rgb * (bsdf_eval(b, wo_l, wi_l, false) / abs(wi_l.z)) * beta;
+        if (!is_finite(phi)) continue;
+        atomicAdd(deposit_flux[4u * i], phi.r);
+        atomicAdd(deposit_flux[4u * i + 1u], phi.g);
+        atomicAdd(deposit_flux[4u * i + 2u], phi.b);
+        atomicAdd(deposit_flux[4u * i + 3u], 1.0);
+    }
+}
