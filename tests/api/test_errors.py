@@ -60,7 +60,7 @@ def test_load_unfilled_parameter(tmp_path):
     (lambda: glrender.Light("laser"), r"light \?: unknown kind 'laser'"),
     (lambda: glrender.Camera(fov=180.0), r"camera\.fov: expected degrees in \(0, 180\)"),
     (lambda: glrender.FilmSettings(width=0), r"film\.width: expected an integer"),
-    (lambda: glrender.Integrator(kind="bdpt"), r"integrator: expected one of path"),
+    (lambda: glrender.Integrator(kind="photon-map"), r"integrator: expected one of path"),
     (lambda: glrender.Sampler(kind="halton"), r"sampler: expected one of independent"),
     (lambda: glrender.look_at((0, 0, 0), (0, 0, 0), (0, 1, 0)), r"look_at: origin and target"),
 ])
@@ -84,7 +84,7 @@ def test_render_checks_the_scene():
     (dict(spp=2.5), glrender.UsageError, r"spp: expected a positive integer, got 2\.5"),
     (dict(time=-1.0), glrender.UsageError, r"time: expected a positive number of seconds"),
     (dict(time=float("nan")), glrender.UsageError, r"time: expected a positive number"),
-    (dict(integrator="bdpt"), glrender.SceneError, r"integrator: expected one of path"),
+    (dict(integrator="photon-map"), glrender.SceneError, r"integrator: expected one of path"),
     (dict(sampler="halton"), glrender.SceneError, r"sampler: expected one of"),
     (dict(strategy="best"), glrender.SceneError, r"integrator\.strategy"),
     (dict(max_depth=0), glrender.SceneError, r"integrator\.max_depth"),
