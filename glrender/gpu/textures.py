@@ -1,13 +1,15 @@
-"""Surface textures on the device: one ``sampler2DArray`` of image layers and a table of
+"""Surface textures on the device: one ``sampler2DArray`` of atlas pages and a table of
 texture records (``shaders/bsdf/texture.glsl`` reads both).
 
 GLSL cannot index an array of samplers with a value that varies per ray, so every
-bitmap becomes one layer of a single array texture whose layers all have the size of
-the largest bitmap; a bitmap smaller than that occupies the corner ``[0, w) x [0, h)``
-of its layer and the shader addresses it through its own size. Filtering (nearest or
-bilinear, Mitsuba's ``uv * size - 0.5`` texel centres) and wrapping (repeat, mirror,
-clamp) happen in the shader with ``texelFetch``, per texture, so layers need no
-resampling and each texture keeps its own filter and wrap mode.
+bitmap goes into one array texture: its layers are atlas pages, square and as large as
+the largest bitmap (up to :data:`PAGE_SIZE` when that packs all on one page), and bitmaps are packed into them on
+shelves (tallest first), each at its own offset, so dozens of textures of different
+sizes share a few pages instead of taking a page as large as the largest each.
+Filtering (nearest or bilinear, Mitsuba's ``uv * size - 0.5`` texel centres) and
+wrapping (repeat, mirror, clamp) happen in the shader with ``texelFetch``, per texture
+and inside its own rectangle, so neighbours never bleed into each other without any
+padding, and each texture keeps its own filter and wrap mode.
 
 Layers are stored as half floats (RGBA16F): a linear colour keeps a relative error
 below 2^-11, far below what 8-bit sources resolve. Bitmaps wider or taller than
@@ -15,10 +17,10 @@ below 2^-11, far below what 8-bit sources resolve. Bitmaps wider or taller than
 
 Texture record (5 RGBA32F texels per texture, in a buffer texture):
 
-    0: kind (0 bitmap, 1 checkerboard), layer, width, height
+    0: kind (0 bitmap, 1 checkerboard), layer (atlas page), width, height
     1: first row of the 2x3 uv transform, filter (0 nearest, 1 bilinear)
     2: second row of the uv transform, wrap (0 repeat, 1 mirror, 2 clamp)
-    3: checkerboard colour 0 (rgb)
+    3: checkerboard colour 0 (rgb); bitmaps: the texel offset (x, y) in the page
     4: checkerboard colour 1 (rgb)
 """
 from __future__ import annotations
@@ -36,6 +38,29 @@ FILTERS = {"nearest": 0, "bilinear": 1}
 WRAPS = {"repeat": 0, "mirror": 1, "clamp": 2}
 MAX_TEXTURE_SIZE = 4096
 MAX_LAYER_BYTES = 1 << 30          # all layers together, as RGBA16F
+PAGE_SIZE = 2048                   # atlas pages are at least this wide and tall
+
+
+def pack_shelves(sizes: list[tuple[int, int]], page: int) -> list[tuple[int, int, int]]:
+    """Places rectangles (height, width) on shelves in square pages of side ``page``:
+    returns (page, x, y) per rectangle. Tallest first; a shelf is as tall as its first
+    rectangle; a rectangle that does not fit the shelf's remaining width opens a new
+    shelf, one that does not fit below the last shelf opens a new page."""
+    order = sorted(range(len(sizes)), key=lambda i: (-sizes[i][0], -sizes[i][1]))
+    places: list[tuple[int, int, int]] = [(0, 0, 0)] * len(sizes)
+    layer, shelf_y, shelf_h, x = 0, 0, 0, 0
+    for i in order:
+        h, w = sizes[i]
+        if h > page or w > page:
+            raise ValueError(f"a {w}x{h} image does not fit pages of {page}")
+        if x + w > page:                      # next shelf
+            shelf_y, shelf_h, x = shelf_y + shelf_h, 0, 0
+        if shelf_y + h > page:                # next page
+            layer, shelf_y, shelf_h, x = layer + 1, 0, 0, 0
+        places[i] = (layer, x, shelf_y)
+        shelf_h = max(shelf_h, h)
+        x += w
+    return places
 
 
 def _box_halve(image: np.ndarray) -> np.ndarray:
@@ -121,21 +146,34 @@ class TextureTable:
                     rec[row, :3] = rgb
         if not images:
             return np.zeros((1, 1, 1, 4), np.float16), records
-        h = max(img.shape[0] for img in images)
-        w = max(img.shape[1] for img in images)
-        while len(images) * h * w * 8 > MAX_LAYER_BYTES:
-            # too much memory for one array: halve the largest images, keep the records right
+        while True:
+            # the smallest page (from the largest bitmap's side, doubling up to PAGE_SIZE)
+            # that holds everything on one page, else pages of PAGE_SIZE
+            page = max(max(img.shape[:2]) for img in images)
+            while True:
+                places = pack_shelves([img.shape[:2] for img in images], page)
+                pages = 1 + max(p[0] for p in places)
+                if pages == 1 or page >= PAGE_SIZE:
+                    break
+                page = min(PAGE_SIZE, 2 * page)
+            if pages * page * page * 8 <= MAX_LAYER_BYTES:
+                break
+            # too much memory for one array: halve the largest image and pack again
             big = max(range(len(images)), key=lambda i: images[i].size)
             images[big] = _box_halve(images[big])
-            for k, tex in enumerate(self.textures):
-                if tex.kind == "bitmap" and int(records[k * RECORD_TEXELS, 1]) == big:
-                    records[k * RECORD_TEXELS, 2:4] = (images[big].shape[1], images[big].shape[0])
-            h = max(img.shape[0] for img in images)
-            w = max(img.shape[1] for img in images)
-        layers = np.zeros((len(images), h, w, 4), np.float16)
-        for i, img in enumerate(images):
-            layers[i, :img.shape[0], :img.shape[1], :3] = img
-            layers[i, :img.shape[0], :img.shape[1], 3] = 1.0
+        layers = np.zeros((pages, page, page, 4), np.float16)
+        for k, tex in enumerate(self.textures):
+            if tex.kind != "bitmap":
+                continue
+            base = k * RECORD_TEXELS
+            i = int(records[base, 1])          # the image's index, before packing
+            img = images[i]
+            layer, x, y = places[i]
+            records[base, 1:4] = (layer, img.shape[1], img.shape[0])
+            records[base + 3, :2] = (x, y)
+        for img, (layer, x, y) in zip(images, places):
+            layers[layer, y:y + img.shape[0], x:x + img.shape[1], :3] = img
+            layers[layer, y:y + img.shape[0], x:x + img.shape[1], 3] = 1.0
         return layers, records
 
     def fingerprint(self) -> bytes:

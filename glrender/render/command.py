@@ -398,7 +398,8 @@ def run_render(args, signals) -> int:
         "memory": {"device_bytes_per_pixel": renderer.device_bytes_per_pixel(),
                    "device_accumulation_bytes": renderer.device_bytes_per_pixel()
                    * renderer.width * renderer.band_height,
-                   "slices": len(renderer._slices())},
+                   "slices": len(renderer._slices()),
+                   "texture_bytes": renderer.texture_bytes},
         "noise_threshold": None if noise_plan is None else {
             "threshold": noise_plan.threshold, "pilot_spp": noise_plan.pilot_spp,
             "pilot_error": noise_plan.pilot_error, "pilot_seconds": noise_plan.pilot_seconds,

@@ -195,8 +195,10 @@ class Renderer:
         from ..gpu import textures
 
         self._surface_textures = []
+        self.texture_bytes = 0      # the atlas pages (RGBA16F) on the device
         if len(self.packed.textures):
             array, records = textures.upload(self.ctx, self.packed.textures)
+            self.texture_bytes = array.width * array.height * array.layers * 8
             self._buffers += [array, records]
             self._surface_textures = [(layout.TEX_TEXTURES, array.use),
                                       (layout.TEX_TEXTURE_RECORDS, records.bind)]

@@ -1,9 +1,10 @@
 // Surface textures as Mitsuba 3 evaluates them: `bitmap` (nearest or bilinear lookups,
 // repeat / mirror / clamp wrapping) and `checkerboard`, each after its own affine uv
 // transform. Records and layers come from glrender/gpu/textures.py: five texels per
-// texture in u_texture_records, bitmaps in layers of u_textures (a bitmap fills the
-// corner [0, w) x [0, h) of its layer). Filtering is done here with texelFetch, so
-// every texture keeps its own size, filter and wrap mode inside the one array.
+// texture in u_texture_records, bitmaps packed into atlas pages (layers of u_textures),
+// each at its own texel offset. Filtering and wrapping are done here with texelFetch
+// inside the bitmap's own rectangle, so every texture keeps its own size, filter and
+// wrap mode and never reads its neighbours in the page.
 //
 // uv convention (Mitsuba's): u runs along the image rows, v down its rows (v = 0 is the
 // first row of the file); loaders flip v where a format counts it upward (OBJ).
@@ -34,9 +35,10 @@ int texture_wrap(float i, float n, uint mode) {
     return int(clamp(j, 0.0, n - 1.0));
 }
 
-// One texel of a bitmap layer, wrapped.
-vec3 texture_texel(float x, float y, vec2 size, int layer, uint wrap) {
-    ivec3 p = ivec3(texture_wrap(x, size.x, wrap), texture_wrap(y, size.y, wrap), layer);
+// One texel of a bitmap at `offset` in atlas page `layer`, wrapped inside its size.
+vec3 texture_texel(float x, float y, vec2 size, ivec2 offset, int layer, uint wrap) {
+    ivec3 p = ivec3(offset + ivec2(texture_wrap(x, size.x, wrap), texture_wrap(y, size.y, wrap)),
+                    layer);
     return texelFetch(u_textures, p, 0).rgb;
 }
 
@@ -56,18 +58,19 @@ vec3 texture_eval(uint index, vec2 uv) {
     }
     int layer = int(header.y);
     vec2 size = header.zw;
+    ivec2 offset = ivec2(texelFetch(u_texture_records, base + 3).xy);
     uint wrap = uint(row1.w);
     vec2 x = st * size;
     if (uint(row0.w) == kTextureFilterNearest) {
-        return texture_texel(floor(x.x), floor(x.y), size, layer, wrap);
+        return texture_texel(floor(x.x), floor(x.y), size, offset, layer, wrap);
     }
     // bilinear between the four nearest texel centres (at integer + 1/2)
     x -= 0.5;
     vec2 i0 = floor(x);
     vec2 w = x - i0;
-    vec3 c00 = texture_texel(i0.x, i0.y, size, layer, wrap);
-    vec3 c10 = texture_texel(i0.x + 1.0, i0.y, size, layer, wrap);
-    vec3 c01 = texture_texel(i0.x, i0.y + 1.0, size, layer, wrap);
-    vec3 c11 = texture_texel(i0.x + 1.0, i0.y + 1.0, size, layer, wrap);
+    vec3 c00 = texture_texel(i0.x, i0.y, size, offset, layer, wrap);
+    vec3 c10 = texture_texel(i0.x + 1.0, i0.y, size, offset, layer, wrap);
+    vec3 c01 = texture_texel(i0.x, i0.y + 1.0, size, offset, layer, wrap);
+    vec3 c11 = texture_texel(i0.x + 1.0, i0.y + 1.0, size, offset, layer, wrap);
     return mix(mix(c00, c10, w.x), mix(c01, c11, w.x), w.y);
 }

@@ -43,7 +43,8 @@ def test02b_memory_is_reported(tmp_path):
     _, stats = render(tmp_path, "m", "--spp", 1, "--aov", "albedo")
     # mean and M2 (16 bytes each), albedo/normal/depth (32), doubled by the undo copy
     assert stats["memory"] == {"device_bytes_per_pixel": 128,
-                               "device_accumulation_bytes": 128 * 40 * 30, "slices": 1}
+                               "device_accumulation_bytes": 128 * 40 * 30, "slices": 1,
+                               "texture_bytes": 0}
 
 
 def test03_clamp_is_marked_biased(tmp_path):

@@ -65,7 +65,7 @@ def evaluate(gl_ctx, table: textures.TextureTable, index: np.ndarray, uv: np.nda
 @pytest.mark.parametrize("filt", ["nearest", "bilinear"])
 def test01_bitmaps_match_mitsubas_lookup(gl_ctx, filt):
     rng = np.random.default_rng(7)
-    # sizes differ: each texture sits in the corner of layers as large as the largest
+    # sizes differ: each texture sits at its own offset in a shared atlas page
     texs = [m.Texture("bitmap", image=rng.random((h, w, 3)).astype(np.float32), filter=filt, wrap=wrap)
             for (h, w), wrap in (((3, 5), "repeat"), ((7, 4), "mirror"), ((2, 2), "clamp"))]
     texs[1].uv_transform = np.array([[2.0, 0.5, 0.1], [-0.3, 1.5, 0.2], [0, 0, 1]])
@@ -210,3 +210,37 @@ def test05_huge_texture_headers_are_refused_before_decoding(write, fmt, size, me
                               'value="huge.png"/></texture></bsdf></shape></scene>')
     with pytest.raises(SceneError, match=message):
         glrender.load(path)
+
+
+def test09_atlas_packs_many_textures_without_overlap(gl_ctx):
+    """Forty bitmaps of very different sizes share a few atlas pages (memory far below one
+    page per bitmap), no two overlap, and every lookup reads its own bitmap exactly."""
+    rng = np.random.default_rng(11)
+    sizes = [(int(rng.integers(1, 300)), int(rng.integers(1, 300))) for _ in range(39)] + [(700, 1000)]
+    places = textures.pack_shelves(sizes, 2048)
+    cover = np.zeros((1 + max(p[0] for p in places), 2048, 2048), np.int32)
+    for (h, w), (layer, x, y) in zip(sizes, places):
+        assert x + w <= 2048 and y + h <= 2048
+        cover[layer, y:y + h, x:x + w] += 1
+    assert cover.max() == 1                         # no texel holds two bitmaps
+
+    texs = [m.Texture("bitmap", image=rng.random((h, w, 3)).astype(np.float32),
+                      filter=("nearest", "bilinear")[k % 2], wrap=("repeat", "mirror", "clamp")[k % 3])
+            for k, (h, w) in enumerate(sizes)]
+    table = textures.TextureTable()
+    for t in texs:
+        table.index(t)
+    layers, _ = table.build()
+    assert layers.nbytes <= len(texs) * 1000 * 1000 * 8 / 4      # vs a 1000^2 layer each
+    n = 40000
+    index = rng.integers(0, len(texs), n)
+    uv = rng.uniform(-2, 2, (n, 2))
+    got = evaluate(gl_ctx, table, index, uv)
+    want = np.empty((n, 3))
+    for k, t in enumerate(texs):
+        sel = index == k
+        want[sel] = reference(t, uv[sel].astype(np.float32).astype(np.float64))
+    bilinear = np.array([texs[k].filter == "bilinear" for k in index])
+    err = np.abs(got - want).max(axis=1)
+    assert err[bilinear].max() <= F16_TOL + 4e-6
+    assert np.mean(err[~bilinear] > F16_TOL) < 1e-3   # float32 uv at a texel edge
