@@ -384,7 +384,7 @@ class Renderer:
         if getattr(self, "_splat", None) is not None:
             self._splat.release()
         splats = self.settings.integrator.kind in SPLATTING
-        self._splat = self.gl.buffer(reserve=24 * self.width * self.height if splats else 16)
+        self._splat: Any = self.gl.buffer(reserve=24 * self.width * self.height if splats else 16)
         for buf in (self._mean, self._m2, self._aov, self._debug, self._splat):
             buf.clear()
         self.spp_done = int(start)
