@@ -59,7 +59,7 @@ def veach_bound(renders, mask) -> dict:
 
 def run(lab) -> Section:
     width, height = lab.size((96, 64), (384, 256))
-    runs, spp = lab.size((8, 64), (16, 128))
+    runs, spp = lab.size((16, 32), (16, 128))
     scene = load_scene("veach-mis", width, height)
     variants = {s: dict(integrator="direct", strategy=s) for s in STRATEGIES}
     renders = render_variants(lab, scene, variants, runs, spp, aovs_of="mis-power")

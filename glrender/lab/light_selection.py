@@ -25,7 +25,7 @@ CHOICES = {"uniform": "uniform", "power": "∝ power"}
 
 def run(lab) -> Section:
     width, height = lab.size((96, 64), (384, 256))
-    runs, spp = lab.size((8, 64), (16, 128))
+    runs, spp = lab.size((16, 32), (16, 128))
     scene = load_scene("veach-mis", width, height)
     variants = {c: dict(integrator="direct", strategy="mis-power", light_selection=c) for c in CHOICES}
     renders = render_variants(lab, scene, variants, runs, spp, aovs_of="uniform")
