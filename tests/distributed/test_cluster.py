@@ -30,6 +30,15 @@ def scene():
     return s
 
 
+@pytest.fixture(scope="module")
+def larger():
+    """16 tile rows of 128 pixels at 64 spp: ~1 s of work for two single-threaded workers,
+    far longer than the client takes to see the first unit finish."""
+    s = glrender.load(CORNELL)
+    s.film.width, s.film.height = 128, 128
+    return s
+
+
 def single_process(scene, settings):
     r = Renderer(scene, settings)
     r.step(settings.sampler.spp)
@@ -105,49 +114,52 @@ def test03_sample_ranges_merge_in_a_fixed_order(gl_ctx, cluster, scene):
     assert (np.abs(film.mean - ref.mean) <= bound).all()
 
 
-def test04_a_killed_worker_changes_nothing(gl_ctx, cluster, scene):
+@pytest.mark.slow
+def test04_a_killed_worker_changes_nothing(gl_ctx, cluster, larger):
     """A worker process killed by its PID while units run: Dask reruns its units on the
     other worker (and the nanny restarts it); the image is bitwise the same."""
     _, client = cluster
-    settings = settings_from_scene(scene, spp=32, seed=4)
-    ref = single_process(scene, settings)
+    settings = settings_from_scene(larger, spp=64, seed=4)
+    ref = single_process(larger, settings)
     killed = []
 
     def progress(done, total, pixel_samples, seconds):
         if killed or done == total:
             return
         busy = [w for w, tasks in client.processing().items() if tasks]
-        if busy and done >= 1:
+        if busy:
             pid = client.run(os.getpid, workers=[busy[0]])[busy[0]]
             os.kill(pid, signal.SIGKILL)
             killed.append(pid)
 
-    res = render(scene, client=client, settings=settings, unit_size=72 * 8 * 32, progress=progress,
-                 poll=0.05)
+    res = render(larger, client=client, settings=settings, unit_size=128 * 8 * 64,
+                 progress=progress, poll=0.02)
     assert killed, "the render ended before a worker could be killed"
-    assert len(res.plan.units()) == 7
+    assert len(res.plan.units()) == 16
     assert_same(res.films[None], ref)
     client.wait_for_workers(2, timeout=60)
 
 
-def test05_stop_checkpoint_resume(gl_ctx, cluster, scene, tmp_path):
+@pytest.mark.slow
+def test05_stop_checkpoint_resume(gl_ctx, cluster, larger, tmp_path):
     """A render stopped after some units (as Ctrl-C stops it) keeps its finished bands;
     saved to a checkpoint and given back, the render runs only the rest, and the image is
     bitwise the uninterrupted one."""
     from glrender.distributed.command import _load_checkpoint, _save_checkpoint
 
     _, client = cluster
-    settings = settings_from_scene(scene, spp=16, seed=9)
-    ref = single_process(scene, settings)
+    settings = settings_from_scene(larger, spp=64, seed=9)
+    ref = single_process(larger, settings)
     seen = []
 
     def progress(done, total, pixel_samples, seconds):
         seen.append((done, total))
 
-    res = render(scene, client=client, settings=settings, unit_size=72 * 8 * 16,
-                 progress=progress, stop=lambda: bool(seen) and seen[-1][0] >= 2, poll=0.01)
+    # stopped once a unit has finished (waiting for it, not for a time)
+    res = render(larger, client=client, settings=settings, unit_size=128 * 8 * 64,
+                 progress=progress, stop=lambda: bool(seen) and seen[-1][0] >= 1, poll=60)
     assert not res.complete and res.films == {}
-    assert 2 <= len(res.bands) < 7
+    assert 1 <= len(res.bands) < 16
     path = tmp_path / "render.ckpt"
     _save_checkpoint(path, {"job": "the job"}, res.bands)
     with pytest.raises(glrender.errors.UsageError, match="another scene"):
@@ -155,7 +167,7 @@ def test05_stop_checkpoint_resume(gl_ctx, cluster, scene, tmp_path):
     done = _load_checkpoint(path, "the job")
     assert done.keys() == res.bands.keys()
     seen.clear()
-    res2 = render(scene, client=client, settings=settings, unit_size=72 * 8 * 16, done=done,
+    res2 = render(larger, client=client, settings=settings, unit_size=128 * 8 * 64, done=done,
                   progress=progress)
     assert res2.complete and seen[0][0] >= len(done)        # the finished units count as done
     assert_same(res2.films[None], ref)
