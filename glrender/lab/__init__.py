@@ -47,8 +47,11 @@ def run(names=None, out="lab", *, quick: bool = False, seed: int = 0, ctx=None, 
         section = module.run(lab)
         section.seconds = time.perf_counter() - t
         sections.append(section)
+    from .defaults import defaults_section
+
+    summary = defaults_section(sections)
     info = ctx.info()
     meta = {"device": info.get("GL_RENDERER"), "seed": seed, "quick": quick,
             "experiments": names, "seconds": time.perf_counter() - t0}
-    write_report(lab.out, sections, meta)
+    write_report(lab.out, sections + ([summary] if summary else []), meta)
     return sections
