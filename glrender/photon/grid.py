@@ -1,8 +1,9 @@
 """The hash grid over SPPM's visible points, built in vectorised numpy.
 
 Every visible point is listed in each cell of a uniform grid that its search sphere
-overlaps; the cell edge is the largest radius, so a sphere overlaps at most two cells
-along each axis (eight in all). Cells are stored by spatial hash (Teschner et al.
+overlaps; the cell edge is the largest radius (pbrt-v3's choice), so a sphere spans at
+most three cells along each axis (27 in all; a sphere of diameter 2 r straddles the
+cell boundaries on both sides of its centre's cell). Cells are stored by spatial hash (Teschner et al.
 2003, the hash of ``shaders/photon/hash_grid.glsl``) in a table with one slot per
 visible point: ``cells[h] .. cells[h + 1]`` are the positions in ``cells`` of the pixel
 indices listed under hash ``h``.
@@ -17,7 +18,7 @@ _PRIMES = np.array([73856093, 19349663, 83492791], np.uint64)
 _MASK = np.uint64(0xFFFFFFFF)
 # spheres are listed with this much slack, so a float32 cell lookup on the device
 # near a cell boundary finds the points a float64 one would
-_SLACK = 1e-5
+_SLACK = 1e-3
 
 
 @dataclass
@@ -57,15 +58,17 @@ def build_grid(positions: np.ndarray, radius: np.ndarray, pixels: np.ndarray) ->
     c0 = np.clip(np.floor((p - r - lo) / cell).astype(np.int64), 0, size - 1)
     c1 = np.clip(np.floor((p + r - lo) / cell).astype(np.int64), 0, size - 1)
     hashes, owners = [], []
-    for offset in np.ndindex(2, 2, 2):
+    for offset in np.ndindex(3, 3, 3):
         c = c0 + np.array(offset)
         keep = np.all(c <= c1, axis=1)
         hashes.append(grid_hash(c[keep]) % np.uint64(n))
         owners.append(np.asarray(pixels)[keep])
-    h = np.concatenate(hashes).astype(np.int64)
-    entries = np.concatenate(owners).astype(np.uint32)
-    order = np.argsort(h, kind="stable")
+    # one entry per (hash, pixel): two cells of one sphere that share a hash must not
+    # list it twice (a photon there would be counted twice)
+    keys = np.unique((np.concatenate(hashes) << np.uint64(32)) | np.concatenate(owners).astype(np.uint64))
+    h = (keys >> np.uint64(32)).astype(np.int64)
+    entries = (keys & _MASK).astype(np.uint32)
     counts = np.bincount(h, minlength=n)
     offsets = (n + 1) + np.concatenate([[0], np.cumsum(counts)])
-    cells = np.concatenate([offsets.astype(np.uint32), entries[order]])
+    cells = np.concatenate([offsets.astype(np.uint32), entries])
     return HashGrid(cells, size.astype(np.uint32), n, lo, cell)

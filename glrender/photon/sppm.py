@@ -47,13 +47,17 @@ class SppmSettings:
     """SPPM's own parameters: ``photons_per_iteration`` (None: one per pixel, at
     least 16,384), ``initial_radius`` in scene units (None: DEFAULT_RADIUS_PIXELS pixel
     footprints at the scene's centre), ``alpha`` in (0, 1): the fraction of new photons
-    kept each iteration."""
+    kept each iteration; ``direct``: direct light by next-event estimation in the
+    camera pass (``nee``) or by the photons like the rest (``photons``)."""
 
     photons_per_iteration: int | None = None
     initial_radius: float | None = None
     alpha: float = 0.7
+    direct: str = "nee"    # direct light by next-event estimation, or "photons" (density estimation)
 
     def __post_init__(self) -> None:
+        if self.direct not in ("nee", "photons"):
+            raise UsageError(f"direct: expected nee or photons, got {self.direct!r}")
         p = self.photons_per_iteration
         if p is not None and (not isinstance(p, (int, np.integer)) or p < 1):
             raise UsageError(f"photons per iteration: expected a positive integer, got {p!r}")
@@ -167,7 +171,7 @@ class SppmRenderer:
         h.update(self.base.fingerprint().encode())
         h.update(self._kernel_hash.encode())
         h.update(repr(("sppm", self.photons_per_iteration, self.initial_radius,
-                       float(self.sppm.alpha))).encode())
+                       float(self.sppm.alpha), self.sppm.direct)).encode())
         return h.hexdigest()
 
     # -- rendering ---------------------------------------------------------------------------
@@ -184,7 +188,8 @@ class SppmRenderer:
         prm = np.zeros(1, pl.PHOTON_PARAMS)[0]
         prm["photons"] = (0, 0, self.photons_per_iteration, iteration)
         max_depth = self.settings.integrator.max_depth
-        prm["options"] = (2, 256 if max_depth < 0 else max_depth, int(self.record_emission), 0)
+        deposit_from = 2 if self.sppm.direct == "nee" else 1
+        prm["options"] = (deposit_from, 256 if max_depth < 0 else max_depth, int(self.record_emission), 0)
         return prm
 
     def camera_pass(self, iteration: int) -> tuple[np.ndarray, np.ndarray]:

@@ -4,7 +4,8 @@
 // non-delta surface, the visible point. On the way it collects what the photons do
 // not carry: emission seen directly or through delta surfaces, and direct light at
 // the visible point by next-event estimation (light sampling alone: photons that
-// reach a surface straight from a light are not deposited, pbrt-v3's SPPM split).
+// reach a surface straight from a light are not deposited, pbrt-v3's SPPM split;
+// with options.x = 1 the photons carry direct light too and the camera pass skips it).
 // Path depth counts segments as Mitsuba's max_depth: the visible point records how
 // many camera segments led to it so the photon pass can respect the total.
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -44,7 +45,7 @@ void main() {
         vec2 u_bsdf = sampler_2d(s);
         if (!bsdf_is_delta(b)) {
             // the visible point: direct light here, photons for the rest
-            if (depth + 2 <= max_segments)
+            if (depth + 2 <= max_segments && u_photon.options.x >= 2u)
                 L += beta * next_event(hit.p, hit, b, frame, wo, c.time, u_choice.x, u_light, false);
             position = vec4(hit.p, float(depth + 1));
             vp_shading[2u * i] = vec4(-d, uintBitsToFloat(hit.material));
