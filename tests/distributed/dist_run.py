@@ -6,26 +6,17 @@ import os
 import socket
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-CORNELL = ROOT / "scenes" / "cornell-box" / "scene.toml"
-COMMAND = [sys.executable, "-m", "glrender"]
-DASK = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
+sys.path.insert(0, str(ROOT / "tests" / "cli"))   # the command-line helpers of tests/cli
+from cli_run import CORNELL, one_error_line  # noqa: E402,F401  (used by the tests)
+from cli_run import glrender as _glrender  # noqa: E402
 
 
 def glrender(*args, timeout: float = 180, env=None) -> subprocess.CompletedProcess:
-    return subprocess.run([*COMMAND, *map(str, args)], capture_output=True, text=True,
-                          timeout=timeout, env=env)
-
-
-def one_error_line(result: subprocess.CompletedProcess) -> str:
-    assert result.returncode == 2, (result.returncode, result.stderr)
-    assert "Traceback" not in result.stderr, result.stderr
-    lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1, result.stderr
-    return lines[0]
+    """``python -m glrender ARGS`` (a cluster's start-up included in the timeout)."""
+    return _glrender(*args, timeout=timeout, env=env)
 
 
 def free_port() -> int:

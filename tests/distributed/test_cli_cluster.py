@@ -105,3 +105,58 @@ def test05_a_scene_the_workers_cannot_read(tmp_path):
     assert len(errors) == 1 and errors[0] == r.stderr.strip().splitlines()[-1], r.stderr
     assert "a worker cannot read the scene" in errors[0] and "missing" in errors[0]
     assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.slow
+def test06_ctrl_c_writes_a_checkpoint_that_resume_finishes(tmp_path):
+    """On a terminal (a pty) the progress line counts units; Ctrl-C once some are done
+    writes the finished bands to OUT.ckpt and exits 130; --resume renders the rest, and
+    the image is bitwise the single-process one."""
+    import os
+    import pty
+    import signal
+    import subprocess
+    import sys
+    import threading
+    import time
+
+    out = tmp_path / "big.exr"
+    size = ["--width", 128, "--height", 128, "--spp", 64, "--seed", 5]
+    master, slave = pty.openpty()
+    proc = subprocess.Popen([sys.executable, "-m", "glrender", "render", str(CORNELL),
+                             *map(str, size), "-o", str(out), "--workers", "2"],
+                            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=slave)
+    os.close(slave)
+    text = []
+
+    def read():
+        while True:
+            try:
+                data = os.read(master, 4096)
+            except OSError:
+                return
+            if not data:
+                return
+            text.append(data.decode(errors="replace"))
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    import re
+
+    end = time.monotonic() + 120
+    while not re.search(r"\] ([1-9]|1[0-5])/16 units", "".join(text)):   # some, not all
+        assert proc.poll() is None and time.monotonic() < end, "".join(text)
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGINT)
+    assert proc.wait(timeout=60) == 130, "".join(text)
+    reader.join(timeout=5)
+    os.close(master)
+    log = "".join(text)
+    assert "stopped by SIGINT" in log and "continue with --resume" in log, log
+    assert not out.exists() and (tmp_path / "big.exr.ckpt").is_file()
+    r = run("render", CORNELL, *size, "-o", out, "--workers", 2, "--resume")
+    assert r.returncode == 0, r.stderr
+    assert "bands done" in r.stderr
+    single = tmp_path / "single.exr"
+    assert run("render", CORNELL, *size, "-o", single, "--quiet").returncode == 0
+    assert out.read_bytes() == single.read_bytes()
