@@ -18,31 +18,37 @@
 #include "integrators/splat.glsl"
 #include "integrators/bdpt_vertex.glsl"
 
-Vertex vertex_from_hit(SurfaceHit hit, vec3 beta) {
+Vertex vertex_from_hit(SurfaceHit hit, Bsdf b, vec3 beta) {
     return Vertex(hit.p, hit.ng, hit.ns, beta, hit.uv, kVertexSurface, hit.material, hit.light,
-                  false, 0.0, 0.0);
+                  false, !bsdf_is_delta(b), 0.0, 0.0);
 }
 
 // Extends a subpath from path[n - 1] along (o, d) until it leaves the scene, reaches
-// max_vertices vertices, or a sample ends it; radiance (camera) or importance (light,
-// adjoint) transport. Returns the vertex count.
+// max_vertices vertices, or a sample or Russian roulette ends it; radiance (camera) or
+// importance (light, adjoint) transport. Russian roulette from kRrDepth vertices on, on
+// the product of BSDF weights (times eta^2 for radiance, as the path tracer): it
+// scales beta by 1 / q and leaves the MIS densities alone (any weights that sum to 1
+// over the strategies keep the estimator unbiased). Returns the vertex count.
 int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, float pdf_sa,
                 int max_vertices, inout SamplerState s, inout Aov aov) {
+    vec3 throughput = vec3(1.0);
+    float eta_product = 1.0;
     while (n < max_vertices) {
         LOOP_TICK();
         SurfaceHit hit;
         if (!scene_intersect(o, d, t_max, g_time, hit)) break;
         vec2 u_choice = sampler_2d(s);
         vec2 u_bsdf = sampler_2d(s);
+        float u_rr = sampler_1d(s);
         Vertex prev = light_path ? g_light[n - 1] : g_camera[n - 1];
-        Vertex v = vertex_from_hit(hit, beta);
+        Bsdf b = bsdf_from_material(hit.material, hit.uv);
+        Vertex v = vertex_from_hit(hit, b, beta);
         v.pdf_fwd = solid_angle_to_area(pdf_sa, prev, v);
         if (!light_path && n == 1) record_aov(aov, hit);
         if (light_path) g_light[n] = v; else g_camera[n] = v;
         n += 1;
         if (n >= max_vertices) break;
 
-        Bsdf b = bsdf_from_material(hit.material, hit.uv);
         Frame frame = frame_from_z(hit.ns);
         vec3 wo = frame_to_local(frame, -d);
         BsdfSample bs = bsdf_sample(b, wo, u_choice.x, u_bsdf, light_path);
@@ -52,6 +58,8 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
         vec3 weight = bs.weight;
         if (light_path) weight *= shading_normal_correction(-d, wi, hit.ns, hit.ng);
         beta *= weight;
+        throughput *= weight;
+        eta_product *= bs.eta;
         // densities: forward of the next vertex, reverse of the previous one
         pdf_sa = bs.delta ? 0.0 : bs.pdf;
         float pdf_rev_sa = bs.delta ? 0.0 : bsdf_pdf(b, bs.wi, wo);
@@ -62,6 +70,12 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
         } else {
             g_camera[n - 1].delta = bs.delta;
             g_camera[n - 2].pdf_rev = prev_rev;
+        }
+        if (n >= kRrDepth) {
+            float q = min(max_component(throughput) * (light_path ? 1.0 : eta_product * eta_product), 0.95);
+            if (!(u_rr < q)) break;
+            beta /= q;
+            throughput /= q;
         }
         if (max_component(beta) <= 0.0) break;
         o = offset_ray_origin(hit.p, hit.ng, wi);
@@ -91,67 +105,67 @@ bool segment_visible(Vertex a, Vertex b, uint ignore) {
     return !scene_occluded(o, d, dist * (1.0 - kShadowEpsilon), g_time, ignore);
 }
 
-// The weighted contribution of strategy (s, t); t = 1 contributions are splatted here.
-vec3 bdpt_connect(int s, int t, inout SamplerState smp) {
-    vec2 u_a = sampler_2d(smp);
-    float u_b = sampler_1d(smp);
-    vec3 L = vec3(0.0);
-    if (s == 0) {
-        // the camera subpath found an area light
-        Vertex pt = g_camera[t - 1];
-        if (pt.light == 0u || pt.kind != kVertexSurface || (t == 2 && kHideEmitters)) return L;
-        LightData l = scene_light(pt.light - 1u);
-        L = pt.beta * area_light_radiance(l, pt.ng, normalize(g_camera[t - 2].p - pt.p));
-        if (max_component(L) <= 0.0) return vec3(0.0);
-        return L * bdpt_mis_weight(0, t);
-    }
-    if (t == 1) {
-        // a light subpath vertex seen by the lens
-        Vertex qs = g_light[s - 1];
-        if (!vertex_connectible(qs)) return L;
-        CameraConnection c = camera_connect(qs.p, u_a, g_time);
-        if (!c.valid) return L;
-        Vertex lens = vertex_point(kVertexCamera, c.p, vec3(0.0), vec3(1.0));
-        L = qs.beta * vertex_f(qs, g_light[s - 2].p, c.p, true) * c.importance;
-        if (max_component(abs(L)) <= 0.0 || !segment_visible(qs, lens, kNoPrimitive)) return vec3(0.0);
-        Vertex saved = g_camera[0];
-        g_camera[0] = lens;
-        float w = bdpt_mis_weight(s, 1);
-        g_camera[0] = saved;
-        splat_film(c.film, L * w);
-        return vec3(0.0);
-    }
+// s = 0: the camera subpath's vertex t - 1 lies on an area light.
+vec3 strategy_emission(int t) {
     Vertex pt = g_camera[t - 1];
-    if (!vertex_connectible(pt)) return L;
-    if (s == 1) {
-        // next-event estimation: a light point sampled from pt
-        LightChoice choice = select_light(u_b);
-        LightData l = scene_light(choice.index);
-        LightSample ls = sample_light(l, pt.p, u_a);
-        if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return L;
-        vec3 q = pt.p + ls.dist * ls.wi;
-        vec3 n = vec3(0.0);
-        if (light_is_area(l)) n = l.info.x == kLightSphere ? normalize(q - l.p.xyz) : l.n.xyz;
-        Vertex light = vertex_point(kVertexLight, q, n, vec3(1.0));
-        light.light = choice.index + 1u;
-        light.pdf_fwd = vertex_pdf_light_origin(light);
-        L = pt.beta * vertex_f(pt, g_camera[t - 2].p, q, false) * ls.Le / (choice.pmf * ls.pdf);
-        if (max_component(L) <= 0.0) return vec3(0.0);
-        vec3 o = offset_ray_origin(pt.p, pt.ng, ls.wi);
-        if (scene_occluded(o, ls.wi, ls.dist * (1.0 - kShadowEpsilon), g_time, l.info.z)) return vec3(0.0);
-        Vertex saved = g_light[0];
-        g_light[0] = light;
-        float w = bdpt_mis_weight(1, t);
-        g_light[0] = saved;
-        return L * w;
-    }
-    // both subpaths end on surfaces: join them
+    if (pt.light == 0u || (t == 2 && kHideEmitters)) return vec3(0.0);
+    LightData l = scene_light(pt.light - 1u);
+    vec3 L = pt.beta * area_light_radiance(l, pt.ng, normalize(g_camera[t - 2].p - pt.p));
+    if (max_component(L) <= 0.0) return vec3(0.0);
+    return L * bdpt_mis_weight(0, t);
+}
+
+// s = 1: next-event estimation from camera vertex t - 1, a light point sampled afresh.
+vec3 strategy_light_sample(int t, inout SamplerState smp) {
+    vec2 u_light = sampler_2d(smp);
+    float u_select = sampler_1d(smp);
+    Vertex pt = g_camera[t - 1];
+    if (!pt.connectible) return vec3(0.0);
+    LightChoice choice = select_light(u_select);
+    LightData l = scene_light(choice.index);
+    LightSample ls = sample_light(l, pt.p, u_light);
+    if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return vec3(0.0);
+    vec3 q = pt.p + ls.dist * ls.wi;
+    vec3 L = pt.beta * vertex_f(pt, g_camera[t - 2].p, q, false) * ls.Le / (choice.pmf * ls.pdf);
+    if (max_component(L) <= 0.0) return vec3(0.0);
+    vec3 o = offset_ray_origin(pt.p, pt.ng, ls.wi);
+    if (scene_occluded(o, ls.wi, ls.dist * (1.0 - kShadowEpsilon), g_time, l.info.z)) return vec3(0.0);
+    vec3 n = vec3(0.0);
+    if (light_is_area(l)) n = l.info.x == kLightSphere ? normalize(q - l.p.xyz) : l.n.xyz;
+    Vertex light = vertex_point(kVertexLight, q, n, vec3(1.0));
+    light.light = choice.index + 1u;
+    light.pdf_fwd = vertex_pdf_light_origin(light);
+    Vertex saved = g_light[0];
+    g_light[0] = light;
+    float w = bdpt_mis_weight(1, t);
+    g_light[0] = saved;
+    return L * w;
+}
+
+// t = 1: light subpath vertex s - 1 connected to the lens, splatted onto the film.
+void strategy_lens(int s, inout SamplerState smp) {
+    vec2 u_lens = sampler_2d(smp);
     Vertex qs = g_light[s - 1];
-    if (!vertex_connectible(qs)) return L;
+    if (!qs.connectible) return;
+    CameraConnection c = camera_connect(qs.p, u_lens, g_time);
+    if (!c.valid) return;
+    vec3 L = qs.beta * vertex_f(qs, g_light[s - 2].p, c.p, true) * c.importance;
+    Vertex lens = vertex_point(kVertexCamera, c.p, vec3(0.0), vec3(1.0));
+    if (max_component(L) <= 0.0 || !segment_visible(qs, lens, kNoPrimitive)) return;
+    Vertex saved = g_camera[0];
+    g_camera[0] = lens;
+    float w = bdpt_mis_weight(s, 1);
+    g_camera[0] = saved;
+    splat_film(c.film, L * w);
+}
+
+// s, t >= 2: the two subpaths' ends joined by a visibility ray.
+vec3 strategy_connect(int s, int t) {
+    Vertex qs = g_light[s - 1], pt = g_camera[t - 1];
+    if (!qs.connectible || !pt.connectible) return vec3(0.0);
     vec3 d = pt.p - qs.p;
-    float d2 = dot(d, d);
-    L = qs.beta * vertex_f(qs, g_light[s - 2].p, pt.p, true) *
-        vertex_f(pt, g_camera[t - 2].p, qs.p, false) * pt.beta / d2;
+    vec3 L = qs.beta * vertex_f(qs, g_light[s - 2].p, pt.p, true) *
+             vertex_f(pt, g_camera[t - 2].p, qs.p, false) * pt.beta / dot(d, d);
     if (max_component(L) <= 0.0 || !segment_visible(qs, pt, kNoPrimitive)) return vec3(0.0);
     return L * bdpt_mis_weight(s, t);
 }
@@ -180,14 +194,27 @@ vec3 bdpt_sample(uvec2 pixel, inout SamplerState s, inout Aov aov) {
                               kBdptMaxSegments, s, unused);
     }
 
+    // Every strategy, one kind per loop (a loop body runs the same code on every SIMD
+    // lane); path length s + t - 1 <= kBdptMaxSegments holds by the subpath lengths
+    // except for s, t >= 2.
     vec3 L = vec3(0.0);
-    for (int t = 1; t <= n_camera; ++t) {
-        for (int k = 0; k <= n_light; ++k) {
+    for (int t = 2; t <= n_camera; ++t) {
+        LOOP_TICK();
+        L += strategy_emission(t);
+    }
+    int n_light_sample = u_params.counts.x > 0u ? min(n_camera, kBdptMaxSegments) : 0;
+    for (int t = 2; t <= n_light_sample; ++t) {
+        LOOP_TICK();
+        L += strategy_light_sample(t, s);
+    }
+    for (int k = 2; k <= n_light; ++k) {
+        LOOP_TICK();
+        strategy_lens(k, s);
+    }
+    for (int t = 2; t <= n_camera; ++t) {
+        for (int k = 2; k <= min(n_light, kBdptMaxSegments + 1 - t); ++k) {
             LOOP_TICK();
-            int segments = k + t - 1;
-            if (segments < 1 || segments > kBdptMaxSegments || (k == 1 && t == 1) || (t == 1 && k < 2))
-                continue;
-            L += bdpt_connect(k, t, s);
+            L += strategy_connect(k, t);
         }
     }
     return L;

@@ -35,7 +35,8 @@ struct Vertex {
     uint kind;      // kVertexCamera, kVertexLight, kVertexSurface
     uint material;
     uint light;     // index + 1 of the light at p (light vertices, emitting surfaces), else 0
-    bool delta;     // a Dirac lobe was sampled here (the vertex cannot be connected)
+    bool delta;     // a Dirac lobe was sampled here (no strategy may end a subpath here)
+    bool connectible;  // not a delta-only surface: a connection can end here
     float pdf_fwd;  // area density of this vertex from its own subpath
     float pdf_rev;  // area density of this vertex from the other direction
 };
@@ -45,16 +46,11 @@ Vertex g_light[kBdptVertices];
 float g_time;   // the sample's shutter time
 
 Vertex vertex_point(uint kind, vec3 p, vec3 ng, vec3 beta) {
-    return Vertex(p, ng, ng, beta, vec2(0.0), kind, 0u, 0u, false, 0.0, 0.0);
+    return Vertex(p, ng, ng, beta, vec2(0.0), kind, 0u, 0u, false, true, 0.0, 0.0);
 }
 
 bool vertex_on_surface(Vertex v) {
     return dot(v.ng, v.ng) > 0.0;
-}
-
-// Whether a strategy may end a subpath at v (delta-only surfaces cannot be connected).
-bool vertex_connectible(Vertex v) {
-    return v.kind != kVertexSurface || !bsdf_is_delta(bsdf_from_material(v.material, v.uv));
 }
 
 // The area density at `next` of a solid-angle density pdf_sa at v toward it.
