@@ -40,3 +40,18 @@ def textured_cornell() -> m.Scene:
 
 def reference(name: str) -> np.ndarray:
     return np.load(REFS / f"{name}-ref.npy")
+
+
+def away_from_light(ref: np.ndarray) -> np.ndarray:
+    """(H, W) bool: the pixels whose footprint does not reach the light. The light's pixels
+    (reference radiance >= 1 in some channel: the emitter is 18x brighter than any lit
+    surface) grown by one pixel, which takes in the pixels it covers only in part (their
+    reference lies between the ceiling's and the light's)."""
+    light = ref.max(-1) >= 1.0
+    grown = np.pad(light, 1)
+    h, w = light.shape
+    near = np.zeros_like(light)
+    for dy in range(3):
+        for dx in range(3):
+            near |= grown[dy:dy + h, dx:dx + w]
+    return ~near

@@ -3,12 +3,14 @@ command line's --denoise (a separate output; the unbiased image untouched).
 
 The quality test renders at 4 and 16 spp with a fixed seed and asserts the issue's
 factor: the denoised image's MSE against the reference at least 3x below the noisy
-image's. The MSE is taken over the pixels that do not see the light directly
-(reference radiance below 1 in every channel, 99.4% of the pixels): the emitter is 18x
-brighter than any lit surface, and OIDN returns its flat, noise-free face a few percent
-off (measured: +-3% at 16 spp), which alone outweighs the noise of the rest of the image
-in a linear MSE (benchmarks/RESULTS.md gives both). The references' own MSE (Mitsuba's
-Cornell box 7.8e-8, glrender's textured box 3.7e-7) is under 1% of any MSE compared here.
+image's. The MSE is taken over the pixels whose footprint does not reach the light
+(denoise_scenes.away_from_light: 98.6% of the pixels): the emitter is 18x brighter than
+any lit surface, and OIDN returns its face and its partly covered edge pixels a few
+percent off, which alone outweighs the noise of the rest of the image in a linear MSE
+(benchmarks/RESULTS.md gives both). Measured over seeds 5-8 on these pixels: 50-110x at
+4 and 16 spp on the Cornell box, 9-15x on the textured box. The references' own MSE
+(Mitsuba's Cornell box 7.8e-8, glrender's textured box 3.7e-7) is under 5% of any
+denoised MSE compared here.
 """
 import json
 import sys
@@ -22,7 +24,7 @@ from glrender.denoise import Denoiser, aovs_are_clean
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "cli"))
 from cli_run import CORNELL, glrender as run_cli  # noqa: E402
-from denoise_scenes import cornell, reference, textured_cornell  # noqa: E402
+from denoise_scenes import away_from_light, cornell, reference, textured_cornell  # noqa: E402
 
 SCENES = {"cornell-box": cornell, "textured-cornell": textured_cornell}
 FACTOR = 3.0
@@ -44,8 +46,8 @@ def _mse(image, ref, mask):
 def test01_denoised_mse_at_least_3x_lower(gl_ctx, denoiser, name, spp):
     scene = SCENES[name]()
     ref = reference(name)
-    lit = ref.max(-1) < 1.0
-    assert lit.mean() > 0.99                     # only the light's pixels are left out
+    lit = away_from_light(ref)
+    assert lit.mean() > 0.98                     # only the light and its edge are left out
     film = glrender.render(scene, spp=spp, seed=SEED, aovs=True)
     assert aovs_are_clean(scene)
     out = denoiser.denoise_film(film, clean_aux=True)
