@@ -217,6 +217,9 @@ def _add_render(sub) -> None:
     g.add_argument("--max-depth", type=int, default=None, metavar="N",
                    help="path segments: 1 = emitters seen directly, 2 = direct light, "
                         "-1 = unbounded")
+    from .photon.command import add_arguments as add_photon_arguments
+
+    add_photon_arguments(p)
     g = p.add_argument_group("scene")
     g.add_argument("--width", type=int, default=None, metavar="W", help="image width in pixels")
     g.add_argument("--height", type=int, default=None, metavar="H", help="image height in pixels")

@@ -131,6 +131,11 @@ class SppmRenderer:
 
     def _allocate(self) -> None:
         gl, n = self.gl, self.width * self.height
+        limit = int(gl.info["GL_MAX_SHADER_STORAGE_BLOCK_SIZE"])
+        if 32 * n > limit:
+            raise UsageError(f"sppm: a {self.width}x{self.height} image needs {32 * n >> 20} MiB "
+                             f"storage buffers, above the device's {limit >> 20} MiB: render fewer "
+                             f"pixels")
         self._vp_position = gl.buffer(reserve=16 * n)
         self._vp_shading = gl.buffer(reserve=32 * n)
         self._vp_extra = gl.buffer(reserve=32 * n)
@@ -307,11 +312,21 @@ class SppmRenderer:
                     aovs={"radius": self.radius.reshape(h, w).astype(np.float32)},
                     sampler=self.settings.sampler.kind)
 
+    # the per-pixel state in float64, in this order (8 numbers per pixel)
+    _STATE = (("radius", 1), ("n_photons", 1), ("tau", 3), ("ld_sum", 3))
+
     def state(self) -> dict[str, Any]:
-        """The per-pixel SPPM state: what a checkpoint saves."""
+        """The per-pixel SPPM state: what a checkpoint saves. The checkpoint format holds
+        float32 arrays (``mean``, ``m2``, ``aov``, ``splat``): ``mean`` carries the float64
+        state's bits (radius, N, tau rgb, Ld sum rgb per pixel) viewed as float32, so a
+        resumed render continues exactly where it stopped."""
+        n = self.width * self.height
+        packed = np.concatenate([np.asarray(getattr(self, name), np.float64).reshape(n, k)
+                                 for name, k in self._STATE], axis=1)
         return {"fingerprint": self.fingerprint(), "spp_done": self.iterations,
-                "radius": self.radius.copy(), "n_photons": self.n_photons.copy(),
-                "tau": self.tau.copy(), "ld_sum": self.ld_sum.copy(),
+                "mean": np.ascontiguousarray(packed).view(np.float32).reshape(-1),
+                "m2": np.zeros(4, np.float32), "aov": np.zeros(4, np.float32),
+                "splat": np.zeros(4, np.uint32),
                 "width": self.width, "height": self.height, "rows": self.rows}
 
     def restore(self, state: dict[str, Any]) -> None:
@@ -320,15 +335,27 @@ class SppmRenderer:
             raise UsageError("the saved SPPM state belongs to a different scene or different "
                              "render settings (fingerprints differ)")
         n = self.width * self.height
-        arrays = {}
-        for name, shape in (("radius", (n,)), ("n_photons", (n,)), ("tau", (n, 3)), ("ld_sum", (n, 3))):
-            a = np.asarray(state[name], np.float64)
-            if a.shape != shape:
-                raise UsageError(f"the saved SPPM state's {name} has shape {a.shape}, expected {shape}")
-            arrays[name] = a.copy()
-        for name, a in arrays.items():
-            setattr(self, name, a)
+        width = sum(k for _, k in self._STATE)
+        bits = np.ascontiguousarray(state["mean"], np.float32)
+        if bits.size != 2 * width * n:
+            raise UsageError(f"the saved SPPM state has {bits.size // 2} numbers, expected {width * n}")
+        packed = bits.view(np.float64).reshape(n, width)
+        column = 0
+        for name, k in self._STATE:
+            part = packed[:, column:column + k].copy()
+            setattr(self, name, part[:, 0] if k == 1 else part)
+            column += k
         self.iterations = int(state["spp_done"])
+
+    def device_bytes_per_pixel(self) -> int:
+        """Device bytes per pixel: SPPM's visible points, radii and deposits (the grid adds
+        4 bytes per listed cell, up to 27 per visible point) and the inner renderer's
+        accumulation (unused by SPPM but allocated)."""
+        return pl.BYTES_PER_PIXEL + self.base.device_bytes_per_pixel()
+
+    def _slices(self) -> list[tuple[int, int]]:
+        """SPPM binds its per-pixel buffers whole: one slice."""
+        return [self.rows]
 
     def memory(self) -> dict[str, int]:
         """Device bytes per pixel and per photon (photons are not stored: deposited at once)."""
@@ -340,6 +367,14 @@ class SppmRenderer:
             buf.release()
         self._own = []
         self.base.release()
+
+    def __getattr__(self, name: str) -> Any:
+        # what SPPM does not define itself (scene statistics such as texture bytes) is
+        # the inner renderer's
+        base = self.__dict__.get("base")
+        if base is None or name.startswith("__"):
+            raise AttributeError(name)
+        return getattr(base, name)
 
     def __enter__(self) -> "SppmRenderer":
         return self

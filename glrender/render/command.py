@@ -267,7 +267,10 @@ def run_render(args, signals) -> int:
                                    max_depth=options.get("max_depth"),
                                    strategy=options.get("strategy"), aovs=first_hit,
                                    clamp=options.get("clamp"))
-    if "spp" in options or args.time is None:
+    from ..photon.command import photon_settings
+
+    settings, sppm = photon_settings(args, settings)   # --integrator sppm: iterations as spp
+    if "spp" in options or args.time is None or sppm is not None:
         target = settings.sampler.spp
     else:
         target = SPP_LIMIT
@@ -297,7 +300,12 @@ def run_render(args, signals) -> int:
         options["spp"] = target = noise_plan.spp
         settings = replace(settings, sampler=replace(settings.sampler, spp=noise_plan.spp))
     try:
-        renderer = Renderer(scene, settings, ctx=ctx)
+        if sppm is not None:
+            from ..photon import SppmRenderer
+
+            renderer = SppmRenderer(scene, settings, sppm, ctx=ctx)
+        else:
+            renderer = Renderer(scene, settings, ctx=ctx)
     except moderngl.Error as exc:
         raise UsageError(f"cannot allocate the device buffers of a {width}x{height} image "
                          f"({str(exc).strip()}): render fewer pixels (--width/--height)") from exc

@@ -1,0 +1,50 @@
+"""``glrender render --integrator sppm``: options, one-line errors, checkpoints."""
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from glrender.film.io import read_exr
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "cli"))
+from cli_run import CORNELL, glrender, one_error_line  # noqa: E402
+
+SMALL = ("--width", 32, "--height", 32)
+
+
+@pytest.mark.parametrize("args, message", [
+    (("--photons", 0), "photons per iteration"),
+    (("--initial-radius", -0.1), "initial radius"),
+    (("--alpha", 1.0), "alpha"),
+    (("--alpha", 0.0), "alpha"),
+    (("--iterations", 0), "--iterations"),
+])
+def test01_bad_parameters_one_line_exit_2(tmp_path, args, message):
+    line = one_error_line(glrender("render", CORNELL, "-o", tmp_path / "x.exr", "--integrator", "sppm",
+                                   *SMALL, *args))
+    assert message in line
+
+
+def test02_photon_options_need_sppm(tmp_path):
+    line = one_error_line(glrender("render", CORNELL, "-o", tmp_path / "x.exr", "--alpha", 0.5, *SMALL))
+    assert "--alpha" in line and "sppm" in line
+
+
+@pytest.mark.slow
+def test03_resume_continues_the_sppm_state(tmp_path):
+    """4 iterations, a checkpoint, 4 more on resume: the image of 8 iterations in one run
+    (deposits are float atomics: equal up to their summation order, 1e-5 relative)."""
+    common = ("--integrator", "sppm", "--photons", 4096, *SMALL)
+    ckpt = tmp_path / "a.ckpt"
+    first = glrender("render", CORNELL, "-o", tmp_path / "a.exr", "--iterations", 4, "--checkpoint", ckpt,
+                     *common)
+    assert first.returncode == 0, first.stderr
+    second = glrender("render", CORNELL, "-o", tmp_path / "a.exr", "--iterations", 8, "--checkpoint", ckpt,
+                      "--resume", *common)
+    assert second.returncode == 0, second.stderr
+    whole = glrender("render", CORNELL, "-o", tmp_path / "b.exr", "--iterations", 8, *common)
+    assert whole.returncode == 0, whole.stderr
+    a, b = read_exr(tmp_path / "a.exr"), read_exr(tmp_path / "b.exr")
+    np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-6)
+    assert a.mean() > 0.1
