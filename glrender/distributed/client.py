@@ -101,6 +101,22 @@ class Result:
     bytes_to_client: int = 0
 
 
+def make_plan(width: int, height: int, settings, unit_size: int | None, frames) -> Plan:
+    """The plan of a render (unit_size None: plan.default_unit_size). Integrators that
+    splat onto the whole film get whole-frame bands; SPPM's iterations depend on each
+    other and do not split."""
+    from ..render.renderer import SPLATTING
+
+    kind = settings.integrator.kind
+    if kind == "sppm":
+        raise UsageError("--integrator sppm does not run on a cluster yet (its iterations "
+                         "depend on each other): render it in one process")
+    spp = settings.sampler.spp
+    if unit_size is None:
+        unit_size = default_unit_size(width, height, spp)
+    return Plan(width, height, spp, unit_size, tuple(frames), whole_frame=kind in SPLATTING)
+
+
 def job_id(job: Job, plan: Plan) -> str:
     h = hashlib.sha256(pickle.dumps((job.key(None), plan.record()), protocol=4))
     return h.hexdigest()[:16]
@@ -140,9 +156,7 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
     frame_list = (None,) if frames is None else tuple(int(f) for f in frames)
     if frames is not None and scene_obj.animation is None:
         raise UsageError(f"{scene_obj.source} has no [animation]: render it without frames")
-    if unit_size is None:
-        unit_size = default_unit_size(width, height, settings.sampler.spp)
-    plan = Plan(width, height, settings.sampler.spp, unit_size, frame_list)
+    plan = make_plan(width, height, settings, unit_size, frame_list)
     job = Job(source, settings, width, height, device)
     jid = job_id(job, plan)
     done = dict(done or {})

@@ -57,6 +57,8 @@ def _save_checkpoint(path: Path, meta: dict, bands: dict) -> None:
         arrays[f"m2_{tag}"] = p.m2
         if p.aov is not None:
             arrays[f"aov_{tag}"] = p.aov
+        if p.splat is not None:
+            arrays[f"splat_{tag}"] = p.splat
     meta = {**meta, "format": CHECKPOINT_FORMAT,
             "bands": [[frame, band, list(p.samples)] for (frame, band), p in bands.items()]}
 
@@ -85,8 +87,9 @@ def _load_checkpoint(path: Path, job: str) -> dict:
             for frame, band, samples in meta["bands"]:
                 tag = f"{'s' if frame is None else frame}_{band}"
                 aov = z[f"aov_{tag}"] if f"aov_{tag}" in z.files else None
+                splat = z[f"splat_{tag}"] if f"splat_{tag}" in z.files else None
                 bands[(frame, band)] = Partial(z[f"mean_{tag}"], z[f"m2_{tag}"], aov,
-                                               tuple(samples))
+                                               tuple(samples), splat=splat)
             return bands
     except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
         raise UsageError(f"{path}: not a readable checkpoint ({exc})") from None
@@ -165,8 +168,8 @@ def run_distributed(args, signals) -> int:
                                    sampler=args.sampler, max_depth=args.max_depth,
                                    strategy=args.strategy,
                                    aovs=any(n in FIRST_HIT_AOVS for n in aov_names))
-    unit_size = args.unit_size or cl.default_unit_size(width, height, settings.sampler.spp)
-    plan = cl.Plan(width, height, settings.sampler.spp, unit_size, tuple(frames))
+    plan = cl.make_plan(width, height, settings, args.unit_size, frames)
+    unit_size = plan.unit_size
     job = cl.Job(source, settings, width, height, args.device)
     jid = cl.job_id(job, plan)
     done = _load_checkpoint(ckpt_path, jid) if args.resume else {}

@@ -28,18 +28,25 @@ class Partial:
     aov: np.ndarray | None
     samples: tuple[int, int]     # the sample indices [start, stop) it holds
     seconds: float = 0.0         # render time on the worker (units), summed by merges
+    splat: np.ndarray | None = None   # splatting integrators: the whole film's fixed-point
+                                      # sums, (W*H, 3) int64 (they add exactly)
 
     @property
     def nbytes(self) -> int:
-        return self.mean.nbytes + self.m2.nbytes + (0 if self.aov is None else self.aov.nbytes)
+        return sum(a.nbytes for a in (self.mean, self.m2, self.aov, self.splat) if a is not None)
 
 
-def from_state(state: dict, pixels: int, aovs: bool, samples, seconds: float = 0.0) -> Partial:
+def from_state(state: dict, pixels: int, aovs: bool, samples, seconds: float = 0.0,
+               splat: bool = False) -> Partial:
     """A unit's partial from ``Renderer.state()``."""
     mean = state["mean"].reshape(pixels, 4)
     m2 = state["m2"].reshape(pixels, 4)
     aov = state["aov"].reshape(pixels, 2, 4) if aovs else None
-    return Partial(mean, m2, aov, tuple(samples), seconds)
+    sums = None
+    if splat:   # two 32-bit words (low, high) per pixel and channel, as the device adds them
+        words = np.asarray(state["splat"], np.uint32).reshape(-1, 2).astype(np.uint64)
+        sums = ((words[:, 1] << np.uint64(32)) | words[:, 0]).view(np.int64).reshape(-1, 3)
+    return Partial(mean, m2, aov, tuple(samples), seconds, sums)
 
 
 def merge(a: Partial, b: Partial) -> Partial:
@@ -61,7 +68,8 @@ def merge(a: Partial, b: Partial) -> Partial:
     if a.aov is not None:
         aa, ab = a.aov.astype(np.float64), b.aov.astype(np.float64)
         aov = aa + (ab - aa) * w[:, None, :]
-    return Partial(mean, m2, aov, (a.samples[0], b.samples[1]), a.seconds + b.seconds)
+    splat = None if a.splat is None else a.splat + b.splat
+    return Partial(mean, m2, aov, (a.samples[0], b.samples[1]), a.seconds + b.seconds, splat)
 
 
 def merge_tree(tree, leaves: list):
@@ -79,6 +87,7 @@ class FrameImage:
         self.mean = np.zeros((height, width, 4), np.float32)
         self.m2 = np.zeros((height, width, 4), np.float32)
         self.aov = np.zeros((height, width, 2, 4), np.float32) if aovs else None
+        self.splat = None      # fixed-point splat sums of the whole film (whole-frame bands)
         self.bands_done: set[int] = set()
 
     def place(self, band: int, first_row: int, partial: Partial) -> None:
@@ -90,6 +99,8 @@ class FrameImage:
         self.m2[y0:y0 + h] = partial.m2.reshape(h, self.width, 4)
         if self.aov is not None:
             self.aov[y0:y0 + h] = partial.aov.reshape(h, self.width, 2, 4)
+        if partial.splat is not None:
+            self.splat = partial.splat if self.splat is None else self.splat + partial.splat
         self.bands_done.add(band)
 
     def film(self, spp: int, sampler: str):
@@ -99,6 +110,16 @@ class FrameImage:
         if self.aov is not None:
             aovs = {"albedo": self.aov[:, :, 0, :3].copy(), "normal": self.aov[:, :, 1, :3].copy(),
                     "depth": self.aov[:, :, 1, 3].copy()}
-        return Film(mean=self.mean[..., :3].copy(), m2=self.m2[..., :3].copy(),
+        mean = self.mean
+        if self.splat is not None:
+            # as Renderer.film and splat_image: the sums over the light paths (one per
+            # camera sample of every pixel), rounded to float32, added in float32
+            from ..render.renderer import SPLAT_SCALE
+
+            paths = max(spp, 1) * self.width * self.height
+            image = (self.splat.astype(np.float64) / (SPLAT_SCALE * paths)).astype(np.float32)
+            mean = mean.copy()
+            mean[..., :3] += image.reshape(self.height, self.width, 3)
+        return Film(mean=mean[..., :3].copy(), m2=self.m2[..., :3].copy(),
                     count=self.mean[..., 3].copy(), nonfinite=self.m2[..., 3].copy(), spp=spp,
                     aovs=aovs, sampler=sampler)

@@ -15,6 +15,10 @@ over one range of sample indices. The unit size is a budget in pixel-samples
   for every cluster and worker count, and equal to the single-process image to
   float32 rounding.
 
+Integrators that splat light paths onto the whole film (light tracing, BDPT) render
+whole frames (``whole_frame``: one band) split into sample ranges: their splats are
+64-bit fixed-point sums, which add exactly in any order.
+
 A unit's transfer is its band's accumulation: 32 bytes per pixel (64 with AOVs),
 ``width x 8 x rows`` pixels, e.g. 1 MB for one tile row of a 3840-pixel-wide image.
 """
@@ -53,6 +57,7 @@ class Plan:
     unit_size: int
     frames: tuple = (None,)
     samples_per_pass: int = SAMPLES_PER_PASS
+    whole_frame: bool = False     # one band of every tile row (integrators that splat)
 
     def __post_init__(self):
         if self.unit_size < MIN_UNIT_SIZE:
@@ -66,19 +71,26 @@ class Plan:
         return -(-self.height // TILE)
 
     @cached_property
+    def rows_per_band(self) -> int:
+        if self.whole_frame:
+            return self.tile_rows
+        row_cost = self.width * TILE * self.spp
+        return max(1, min(self.tile_rows, self.unit_size // row_cost))
+
+    @cached_property
     def bands(self) -> tuple[tuple[int, int], ...]:
         """(first tile row, tile rows) of each band, top to bottom."""
-        row_cost = self.width * TILE * self.spp
-        per_band = max(1, min(self.tile_rows, self.unit_size // row_cost))
+        per_band = self.rows_per_band
         return tuple((r, min(per_band, self.tile_rows - r)) for r in range(0, self.tile_rows, per_band))
 
     @cached_property
     def ranges(self) -> tuple[tuple[int, int], ...]:
         """The sample ranges [start, stop) every band is split into."""
-        if self.width * TILE * self.spp <= self.unit_size:
+        band_pixels = self.width * min(self.height, TILE * self.rows_per_band)
+        if band_pixels * self.spp <= self.unit_size:
             return ((0, self.spp),)
         k = self.samples_per_pass
-        per = max(k, self.unit_size // (self.width * TILE) // k * k)
+        per = max(k, self.unit_size // band_pixels // k * k)
         return tuple((s, min(s + per, self.spp)) for s in range(0, self.spp, per))
 
     def band_height(self, band: int) -> int:
@@ -114,7 +126,8 @@ class Plan:
         """What a checkpoint or statistics file keeps to reproduce the plan."""
         return {"width": self.width, "height": self.height, "spp": self.spp,
                 "unit_size": self.unit_size, "samples_per_pass": self.samples_per_pass,
-                "frames": list(self.frames), "bands": len(self.bands), "ranges": len(self.ranges),
+                "frames": list(self.frames), "whole_frame": self.whole_frame,
+                "bands": len(self.bands), "ranges": len(self.ranges),
                 "units": len(self.bands) * len(self.ranges) * len(self.frames)}
 
 

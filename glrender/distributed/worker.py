@@ -84,7 +84,10 @@ def render_unit(job: Job, unit) -> Partial:
     r.step(stop - start)
     state = r.state()
     seconds = time.perf_counter() - t0
-    return from_state(state, r.width * r.band_height, job.settings.aovs, unit.samples, seconds)
+    from ..render.renderer import SPLATTING
+
+    return from_state(state, r.width * r.band_height, job.settings.aovs, unit.samples, seconds,
+                      splat=job.settings.integrator.kind in SPLATTING)
 
 
 def hold(job: Job) -> Job:

@@ -171,3 +171,39 @@ def test05_stop_checkpoint_resume(gl_ctx, cluster, larger, tmp_path):
                   progress=progress)
     assert res2.complete and seen[0][0] >= len(done)        # the finished units count as done
     assert_same(res2.films[None], ref)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", ["lighttrace", "bdpt"])
+def test06_splatting_integrators_render_whole_frames(gl_ctx, cluster, kind):
+    """Light tracing and BDPT splat onto the whole film: units are whole frames over sample
+    ranges. One range: bitwise the single-process film. Several: the splats' fixed-point
+    sums are exactly the single process's (integers add in any order), the camera side
+    merges as sample ranges do."""
+    from glrender.render.renderer import SPLAT_SCALE
+
+    _, client = cluster
+    s = glrender.load(CORNELL)
+    s.film.width, s.film.height = 40, 32
+    settings = settings_from_scene(s, spp=16, seed=3, integrator=kind, max_depth=4)
+    r = Renderer(s, settings)
+    r.step(16)
+    ref = r.film()
+    words = np.frombuffer(r._splat.read(), np.uint32).reshape(-1, 2).astype(np.uint64)
+    ref_sums = ((words[:, 1] << np.uint64(32)) | words[:, 0]).view(np.int64).reshape(-1, 3)
+    r.release()
+    assert np.count_nonzero(ref_sums) > ref_sums.size // 2     # the splats are there
+    one = render(s, client=client, settings=settings, unit_size=40 * 32 * 16)
+    assert one.plan.bands == ((0, 4),) and one.plan.ranges == ((0, 16),)
+    assert_same(one.films[None], ref)
+    split = render(s, client=client, settings=settings, unit_size=40 * 32 * 8)
+    assert split.plan.bands == ((0, 4),) and split.plan.ranges == ((0, 8), (8, 16))
+    np.testing.assert_array_equal(split.bands[(None, 0)].splat, ref_sums)
+    film = split.films[None]
+    np.testing.assert_array_equal(film.count, ref.count)
+    splat = (ref_sums.astype(np.float64) / (SPLAT_SCALE * 16 * 40 * 32)).reshape(32, 40, 3)
+    camera = ref.mean - splat.astype(np.float32)
+    # the camera side: float32 Welford over 16 samples vs float64 merges (see test03)
+    eps = np.finfo(np.float32).eps
+    bound = 16 * 3 * eps * (np.abs(camera) + np.sqrt(ref.m2)) + 4 * eps * np.abs(ref.mean)
+    assert (np.abs(film.mean - ref.mean) <= bound + 1e-30).all()
