@@ -19,10 +19,10 @@ import math
 
 import numpy as np
 
-from .core import Section, Table
+from .core import Section, Table, ratio_findings
 from .kernel import Technique, measure
-from .renders import load_scene, log_map, region_table, render_variants
-from .report import bar_figure, pyplot, save
+from .renders import load_scene, pair_variance_figure, region_table, render_variants
+from .report import bar_figure
 
 NAME = "area_lights"
 TITLE = "Area light sampling: by area vs by solid angle"
@@ -96,13 +96,7 @@ def run(lab) -> Section:
                            labels=labels)
     section = Section(NAME, TITLE, __doc__.split("\n\n", 1)[1], tables=[sphere, cornell])
     for t in (sphere, cornell):
-        base = t.base()
-        for r in t.rows[1:]:
-            section.findings.append(
-                f"{t.title.split(':')[0]}: {r.title}: variance ×{r.variance / base.variance:.3g}, "
-                f"cost ×{r.cost / base.cost:.3g}, efficiency ×{r.efficiency / base.efficiency:.3g} "
-                f"of {base.title}" if r.variance > 0 else
-                f"{t.title.split(':')[0]}: {r.title}: zero variance")
+        section.findings += ratio_findings(t, f"{t.title.split(':')[0]}: ")
     bar_figure(lab.figure_path("area_lights_sphere.png"), sphere, "Sphere light: ratios to area sampling")
     _cornell_figure(lab.figure_path("area_lights_cornell.png"), renders, labels)
     section.figures += [("area_lights_sphere.png", "Sphere light: variance, cost and efficiency "
@@ -114,19 +108,6 @@ def run(lab) -> Section:
 
 
 def _cornell_figure(path, renders, labels) -> None:
-    plt = pyplot()
-    fig, axes = plt.subplots(1, 3, figsize=(11, 3.0))
     va, vs = (renders[k].variance.mean(axis=2) for k in labels)
-    pos = np.concatenate([va[va > 0], vs[vs > 0]])
-    lo, hi = (np.percentile(pos, 2), np.percentile(pos, 99.8)) if pos.size else (1e-6, 1.0)
-    for ax, v, k in zip(axes, (va, vs), labels):
-        log_map(ax, fig, v, "log₁₀ variance per sample", labels[k], lo, hi)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where((va > 0) & (vs > 0), np.log10(vs / va), 0.0)
-    im = axes[2].imshow(ratio, cmap="RdBu_r", vmin=-1, vmax=1)
-    axes[2].set_title("variance ratio solid angle / area")
-    axes[2].set_xticks([])
-    axes[2].set_yticks([])
-    axes[2].grid(False)
-    fig.colorbar(im, ax=axes[2], label="log₁₀ ratio (< 0: solid angle better)", shrink=0.8)
-    save(fig, path)
+    pair_variance_figure(path, va, vs, tuple(labels.values()),
+                         "log₁₀ ratio (< 0: solid angle better)")

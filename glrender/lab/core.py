@@ -226,3 +226,23 @@ class Lab:
         """Šidák-corrected two-sided Student-t threshold for ``tests`` comparisons of means
         from ``runs`` independent runs, at the lab's alpha."""
         return sidak_t(self.alpha, max(tests, 1), max(runs - 1, 1))
+
+
+def ratio_findings(table: Table, prefix: str = "") -> list[str]:
+    """One line per non-baseline row: its variance, cost and efficiency relative to the
+    baseline (a zero-variance row is said to be one)."""
+    base = table.base()
+    lines = []
+    for r in table.rows:
+        if r is base:
+            continue
+        if r.zero_variance:
+            lines.append(f"{prefix}{r.title}: zero variance (p ∝ f), cost ×{r.cost / base.cost:.3g} "
+                         f"of {base.title}")
+            continue
+        units = "".join(f", {r.units[u]:.3g} vs {base.units[u]:.3g} {u}" for u in r.units
+                        if u in base.units and r.units[u] != base.units[u])
+        lines.append(f"{prefix}{r.title}: variance ×{r.variance / base.variance:.3g}, cost "
+                     f"×{r.cost / base.cost:.3g}{units}, efficiency "
+                     f"×{r.efficiency / base.efficiency:.3g} of {base.title}")
+    return lines

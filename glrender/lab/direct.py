@@ -83,6 +83,22 @@ def run(lab) -> Section:
             f"{b['var_light']:.4g}, BSDF {b['var_bsdf']:.4g}, power heuristic {b['var_power']:.4g}")
     section.extra["veach_bound"] = bounds
     section.extra["plate_pixels"] = {p: int(m.sum()) for p, m in masks.items()}
+    # Pixels that light and BSDF sampling both render exactly black over every run, and MIS
+    # does not: MIS only reweights those same two kinds of samples, so such pixels point at
+    # an inconsistency between the strategies' code paths (visibility, offsets).
+    black = (renders["light"].means.max(axis=(0, 3)) == 0) & (renders["bsdf"].means.max(axis=(0, 3)) == 0)
+    for s in ("mis-balance", "mis-power"):
+        lit = black & (renders[s].mean.mean(axis=2) > 0)
+        section.extra[f"black_in_single_lit_in_{s}"] = {
+            "pixels": int(lit.sum()), "max_mean": float(renders[s].mean.mean(axis=2)[lit].max(initial=0.0))}
+        if lit.any():
+            ys, xs = np.nonzero(lit)
+            section.findings.append(
+                f"{int(lit.sum())} pixels (rows {ys.min()}–{ys.max()}) are exactly black under light "
+                f"and under BSDF sampling in every run but not under {STRATEGIES[s]} (mean up to "
+                f"{renders[s].mean.mean(axis=2)[lit].max():.3g}): MIS reweights the same two "
+                f"kinds of samples, so one code path lets light through where the others do not "
+                f"(the dark red blocks of the efficiency map)")
     whole = section.tables[0]
     best_single = max(whole.row("light").efficiency, whole.row("bsdf").efficiency)
     for s in ("mis-balance", "mis-power"):

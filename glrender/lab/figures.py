@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 
-from .core import Section, Table
+from .core import Section, Table, ratio_findings
 from .kernel import Technique, measure
 from .report import bar_figure
 
@@ -97,13 +97,5 @@ def run(lab) -> Section:
         name = f"figures_{i}.png"
         bar_figure(lab.figure_path(name), t, t.title)
         section.figures.append((name, f"{t.title}: ratios to {t.base().title}"))
-        base = t.base()
-        for r in t.rows:
-            if r is base:
-                continue
-            section.findings.append(
-                f"{t.title.split(':')[0]}: {r.title} vs {base.title}: variance ×"
-                f"{r.variance / base.variance:.3g}, cost ×{r.cost / base.cost:.3g} "
-                f"({r.units['uniforms']:.3g} vs {base.units['uniforms']:.3g} uniforms), "
-                f"efficiency ×{r.efficiency / base.efficiency:.3g}")
+        section.findings += ratio_findings(t, f"{t.title.split(':')[0]}: ")
     return section

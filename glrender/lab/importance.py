@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from .core import Section, Table
+from .core import Section, Table, ratio_findings
 from .kernel import Technique, measure
 from .report import bar_figure, pyplot, save
 
@@ -95,15 +95,7 @@ def run(lab) -> Section:
                         ("importance_ratios.png",
                          "Variance, cost and efficiency relative to uniform sampling (1D)")]
     for t in (t1, t2):
-        base = t.base()
-        for r in t.rows[1:]:
-            section.findings.append(
-                f"{t.title.split(':')[0]}: {r.title}: variance {r.variance:.3g} vs "
-                f"{base.variance:.3g} uniform (×{r.variance / base.variance:.3g}); "
-                f"efficiency ×{r.efficiency / base.efficiency:.3g}"
-                if base.variance > 0 and math.isfinite(r.efficiency) else
-                f"{t.title.split(':')[0]}: {r.title}: variance {r.variance:.3g} (zero up to "
-                f"float32 rounding), the zero-variance estimator")
+        section.findings += ratio_findings(t, f"{t.title.split(':')[0]}: ")
     return section
 
 

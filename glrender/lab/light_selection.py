@@ -14,8 +14,8 @@ import numpy as np
 
 from .core import Section
 from .direct import plate_masks
-from .renders import load_scene, log_map, region_table, render_variants
-from .report import bar_figure, pyplot, save
+from .renders import load_scene, pair_variance_figure, region_table, render_variants
+from .report import bar_figure
 
 NAME = "light_selection"
 TITLE = "Light selection: uniform vs ∝ power (renderer)"
@@ -52,19 +52,6 @@ def run(lab) -> Section:
 
 
 def _ratio_map(path, renders) -> None:
-    plt = pyplot()
-    fig, axes = plt.subplots(1, 3, figsize=(12, 2.8))
     vu, vp = (renders[c].variance.mean(axis=2) for c in CHOICES)
-    pos = np.concatenate([vu[vu > 0], vp[vp > 0]])
-    lo, hi = (np.percentile(pos, 2), np.percentile(pos, 99.8)) if pos.size else (1e-6, 1.0)
-    log_map(axes[0], fig, vu, "log₁₀ variance per sample", "uniform selection", lo, hi)
-    log_map(axes[1], fig, vp, "log₁₀ variance per sample", "selection ∝ power", lo, hi)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where((vu > 0) & (vp > 0), np.log10(vp / vu), 0.0)
-    im = axes[2].imshow(ratio, cmap="RdBu_r", vmin=-1.5, vmax=1.5)
-    axes[2].set_title("variance ratio ∝ power / uniform")
-    axes[2].set_xticks([])
-    axes[2].set_yticks([])
-    axes[2].grid(False)
-    fig.colorbar(im, ax=axes[2], label="log₁₀ variance ratio (< 0: power better)", shrink=0.8)
-    save(fig, path)
+    pair_variance_figure(path, vu, vp, ("uniform", "∝ power"),
+                         "log₁₀ variance ratio (< 0: power better)", span=1.5)

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 
-from .core import Section, Table
+from .core import Section, Table, ratio_findings
 from .kernel import Technique, measure
 from .report import bar_figure
 
@@ -67,9 +67,5 @@ def run(lab) -> Section:
         bar_figure(lab.figure_path(name), t, t.title)
         section.figures.append((name, f"{t.title}: variance, cost and efficiency relative to "
                                       f"{t.base().title}"))
-        a, b = t.rows
-        section.findings.append(
-            f"{t.title}: {b.title} has {b.variance / a.variance:.3g}× the variance and "
-            f"{b.cost / a.cost:.3g}× the cost of {a.title} (efficiency ×{b.efficiency / a.efficiency:.3g}; "
-            f"{b.units['uniforms']:.3g} vs {a.units['uniforms']:.3g} uniforms per sample)")
+        section.findings += ratio_findings(t, f"{t.title}: ")
     return section

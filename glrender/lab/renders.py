@@ -135,3 +135,25 @@ def log_map(ax, fig, values: np.ndarray, label: str, title: str, lo=None, hi=Non
     ax.grid(False)
     fig.colorbar(im, ax=ax, label=label, shrink=0.8)
     return lo, hi
+
+
+def pair_variance_figure(path, va: np.ndarray, vb: np.ndarray, titles: tuple[str, str],
+                         ratio_label: str, span: float = 1.0) -> None:
+    """Two per-pixel variance maps (log₁₀, shared scale) and log₁₀(vb / va) beside them."""
+    from .report import pyplot, save
+
+    plt = pyplot()
+    fig, axes = plt.subplots(1, 3, figsize=(12, 2.9))
+    pos = np.concatenate([va[va > 0], vb[vb > 0]])
+    lo, hi = (np.percentile(pos, 2), np.percentile(pos, 99.8)) if pos.size else (1e-6, 1.0)
+    for ax, v, title in zip(axes, (va, vb), titles):
+        log_map(ax, fig, v, "log₁₀ variance per sample", title, lo, hi)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where((va > 0) & (vb > 0), np.log10(vb / va), 0.0)
+    im = axes[2].imshow(ratio, cmap="RdBu_r", vmin=-span, vmax=span)
+    axes[2].set_title(f"variance ratio {titles[1]} / {titles[0]}")
+    axes[2].set_xticks([])
+    axes[2].set_yticks([])
+    axes[2].grid(False)
+    fig.colorbar(im, ax=axes[2], label=ratio_label, shrink=0.8)
+    save(fig, path)
