@@ -65,7 +65,8 @@ def build_grid(positions: np.ndarray, radius: np.ndarray, pixels: np.ndarray) ->
         owners.append(np.asarray(pixels)[keep])
     # one entry per (hash, pixel): two cells of one sphere that share a hash must not
     # list it twice (a photon there would be counted twice)
-    keys = np.unique((np.concatenate(hashes) << np.uint64(32)) | np.concatenate(owners).astype(np.uint64))
+    keys = np.sort((np.concatenate(hashes) << np.uint64(32)) | np.concatenate(owners).astype(np.uint64))
+    keys = keys[np.concatenate([[True], keys[1:] != keys[:-1]])]   # (np.unique's hash path: 100x slower)
     h = (keys >> np.uint64(32)).astype(np.int64)
     entries = (keys & _MASK).astype(np.uint32)
     counts = np.bincount(h, minlength=n)
