@@ -347,6 +347,14 @@ class SppmRenderer:
             column += k
         self.iterations = int(state["spp_done"])
 
+    def max_loop_count(self) -> int:
+        """The most loop iterations one invocation of the camera or photon kernels ran
+        (settings with count_loops=True; 0 otherwise): it must stay far below llvmpipe's
+        silent ~65,535 cap."""
+        if not self.settings.count_loops:
+            return 0
+        return int(np.frombuffer(self.base._debug.read(), np.uint32).max())
+
     def device_bytes_per_pixel(self) -> int:
         """Device bytes per pixel: SPPM's visible points, radii and deposits (the grid adds
         4 bytes per listed cell, up to 27 per visible point) and the inner renderer's

@@ -74,3 +74,22 @@ def test01_caustic_window_converges(gl_ctx):
           f"t se {t * se / ref[WINDOW].mean():.4f})")
     assert low - 0.1 <= slope <= high + 0.1, (slope, low, high)
     assert abs(mean - ref[WINDOW].mean()) <= bias_bound + t * se
+
+
+@pytest.mark.slow
+def test02_gathers_stay_far_below_the_loop_cap(gl_ctx):
+    """The dense caustic under the sphere: the worst camera or photon invocation's loop
+    iterations (BVH traversal included) stay far below llvmpipe's ~65,535 cap, and no
+    gather candidate is skipped by the bound."""
+    from glrender.render.renderer import settings_from_scene
+
+    scene = glrender.load(ROOT / "scenes" / "caustic" / "scene.toml")
+    scene.film = replace(scene.film, width=32, height=32)
+    settings = settings_from_scene(scene, integrator="sppm", max_depth=8, count_loops=True)
+    r = SppmRenderer(scene, settings, SppmSettings(photons_per_iteration=PHOTONS), ctx=gl_ctx)
+    try:
+        r.step(2)
+        assert 0 < r.max_loop_count() < 30_000, r.max_loop_count()
+        assert r.counters["skipped"] == 0 and r.counters["max_visited"] > 0
+    finally:
+        r.release()
