@@ -68,8 +68,12 @@ class ObjFile:
     def mesh(self, select: np.ndarray | None = None) -> MeshData:
         """The triangles ``select`` (a boolean mask; all by default) as one mesh."""
         tris = self.triangles if select is None else self.triangles[select]
-        used, inverse = np.unique(tris.reshape(-1), return_inverse=True)
-        c = self.corners[used]
+        if select is None and np.bincount(tris.reshape(-1), minlength=len(self.corners)).all():
+            # every corner used (the usual whole file): no sort needed
+            c, inverse = self.corners, tris.reshape(-1)
+        else:
+            used, inverse = np.unique(tris.reshape(-1), return_inverse=True)
+            c = self.corners[used]
         vertices = self.positions[c[:, 0]]
         uvs = normals = None
         if (c[:, 1] >= 0).any() and len(self.texcoords):
@@ -130,6 +134,25 @@ def _unique_corners(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return corners[first], inverse.reshape(-1)
     unique, inverse = np.unique(corners, axis=0, return_inverse=True)
     return unique, inverse.reshape(-1)
+
+
+def _corners(flat: np.ndarray, nv: int, nvt: int, nvn: int) -> tuple[np.ndarray, np.ndarray]:
+    """Distinct corners of the face corners ``flat`` (C, 3): when every corner's uv and
+    normal index is its position's (or absent in every corner), as exporters usually
+    write, the positions are the corners and no sort is needed; else _unique_corners."""
+    same = []
+    for axis, count in ((1, nvt), (2, nvn)):
+        column = flat[:, axis]
+        if (column < 0).all():
+            same.append(False)
+        elif count >= nv and np.array_equal(column, flat[:, 0]):
+            same.append(True)
+        else:
+            return _unique_corners(flat)
+    ids = np.arange(nv, dtype=np.int64)
+    none = np.full(nv, -1, np.int64)
+    corners = np.stack([ids, ids if same[0] else none, ids if same[1] else none], axis=1)
+    return corners, flat[:, 0].copy()
 
 
 def _read_obj_fast(text: str, path: Path):
@@ -211,7 +234,7 @@ def _read_obj_fast(text: str, path: Path):
     obj_names, tri_obj = numbered(obj_starts)
     order = np.argsort(face_of, kind="stable")          # triangles in file order
     fan, tri_mat, tri_obj = fan[order], tri_mat[order], tri_obj[order]
-    unique, inverse = _unique_corners(fan.reshape(-1, 3))
+    unique, inverse = _corners(fan.reshape(-1, 3), len(v), len(tex), len(nrm))
     positions = pos.reshape(-1, 3)
     if not np.all(np.isfinite(positions)):
         return None
