@@ -8,6 +8,7 @@ from ..errors import UsageError
 from .sppm import SppmSettings
 
 OPTIONS = ("iterations", "photons_per_iteration", "initial_radius", "alpha")
+AOVS = ("radius", "photons")   # SPPM's pictures: search radius, photon-map view
 
 
 def add_arguments(parser: Any) -> None:
@@ -30,9 +31,12 @@ def photon_settings(args: Any, settings: Any) -> tuple[Any, SppmSettings | None]
     """The render settings (iterations as the sample count) and SPPM's own settings for
     ``args``; photon options without ``--integrator sppm`` are refused."""
     given = [name for name in OPTIONS if getattr(args, name, None) is not None]
+    aovs = [n.strip() for n in (getattr(args, "aov", None) or "").split(",") if n.strip() in AOVS]
     if settings.integrator.kind != "sppm":
         if given:
             raise UsageError(f"--{given[0].replace('_', '-')}: only with --integrator sppm")
+        if aovs:
+            raise UsageError(f"--aov {aovs[0]}: only with --integrator sppm")
         return settings, None
     iterations = getattr(args, "iterations", None)
     if iterations is not None:
@@ -41,5 +45,6 @@ def photon_settings(args: Any, settings: Any) -> tuple[Any, SppmSettings | None]
         settings = replace(settings, sampler=replace(settings.sampler, spp=iterations))
     sppm = SppmSettings(photons_per_iteration=getattr(args, "photons_per_iteration", None),
                         initial_radius=getattr(args, "initial_radius", None),
-                        alpha=0.7 if getattr(args, "alpha", None) is None else args.alpha)
+                        alpha=0.7 if getattr(args, "alpha", None) is None else args.alpha,
+                        photon_view="photons" in aovs)
     return settings, sppm

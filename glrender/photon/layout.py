@@ -26,6 +26,6 @@ PHOTON_PARAMS = np.dtype([
     ("photons", "<u4", 4),     # first, count, per iteration, iteration
     ("grid_size", "<u4", 4),   # cells xyz, hash table size
     ("grid_lo", "<f4", 4),     # corner xyz, cell edge
-    ("options", "<u4", 4),     # deposit from segment, max segments, record emission, -
+    ("options", "<u4", 4),     # deposit from segment, max segments, record emission, photon view
 ])
 assert PHOTON_PARAMS.itemsize == 64

@@ -32,7 +32,9 @@ from ..film import Film
 from ..gl import shaders
 from ..gl.context import Context
 from ..gpu import codegen
-from ..render.renderer import RenderSettings, Renderer, camera_tangents, settings_from_scene
+from ..gpu import layout as scene_layout
+from ..render.renderer import (SPLAT_SCALE, RenderSettings, Renderer, camera_tangents,
+                               settings_from_scene)
 from ..scene import model as m
 from . import layout as pl
 from .grid import build_grid
@@ -54,6 +56,7 @@ class SppmSettings:
     initial_radius: float | None = None
     alpha: float = 0.7
     direct: str = "nee"    # direct light by next-event estimation, or "photons" (density estimation)
+    photon_view: bool = False   # also render the photon-map view (the "photons" AOV)
 
     def __post_init__(self) -> None:
         if self.direct not in ("nee", "photons"):
@@ -79,7 +82,7 @@ class SppmRenderer:
     def __init__(self, scene: m.Scene, settings: RenderSettings | None = None,
                  sppm: SppmSettings | None = None, *, ctx: Context | None = None,
                  device: str | int | None = None, record_emission: bool = False,
-                 **overrides: Any) -> None:
+                 photon_view: bool = False, **overrides: Any) -> None:
         self.sppm = sppm or SppmSettings()
         settings = settings or settings_from_scene(scene, **overrides)
         # the inner renderer packs, uploads and compiles the scene (its own kernel is the
@@ -95,6 +98,7 @@ class SppmRenderer:
         n = self.width * self.height
         self.photons_per_iteration = int(self.sppm.photons_per_iteration or max(n, 16384))
         self.record_emission = record_emission
+        self.photon_view = photon_view or self.sppm.photon_view
         if record_emission and self.photons_per_iteration > MAX_RECORDS:
             raise UsageError(f"photons per iteration: at most {MAX_RECORDS} when recording emission")
         self.initial_radius = float(self.sppm.initial_radius or self._default_radius())
@@ -147,7 +151,10 @@ class SppmRenderer:
                                                  if self.record_emission else 0)
         self._records = gl.buffer(reserve=records)
         self._photon_params = gl.buffer(reserve=pl.PHOTON_PARAMS.itemsize)
-        self._own = [self._vp_position, self._vp_shading, self._vp_extra, self._vp_radiance,
+        # the photon-map view: 64-bit fixed-point sums per pixel and channel (integrators/splat.glsl)
+        self._view = gl.buffer(reserve=24 * n if self.photon_view else 16)
+        self._view.clear()
+        self._own = [self._view, self._vp_position, self._vp_shading, self._vp_extra, self._vp_radiance,
                      self._radius2, self._deposits, self._grid, self._records, self._photon_params]
 
     def reset(self) -> None:
@@ -159,6 +166,8 @@ class SppmRenderer:
         self.tau = np.zeros((n, 3), np.float64)
         self.ld_sum = np.zeros((n, 3), np.float64)
         self.counters = {"skipped": 0, "visited": 0, "max_visited": 0, "max_cell": 0}
+        if getattr(self, "_view", None) is not None:
+            self._view.clear()
 
     @property
     def spp_done(self) -> int:
@@ -194,7 +203,8 @@ class SppmRenderer:
         prm["photons"] = (0, 0, self.photons_per_iteration, iteration)
         max_depth = self.settings.integrator.max_depth
         deposit_from = 2 if self.sppm.direct == "nee" else 1
-        prm["options"] = (deposit_from, 256 if max_depth < 0 else max_depth, int(self.record_emission), 0)
+        prm["options"] = (deposit_from, 256 if max_depth < 0 else max_depth, int(self.record_emission),
+                          int(self.photon_view))
         return prm
 
     def camera_pass(self, iteration: int) -> tuple[np.ndarray, np.ndarray]:
@@ -226,6 +236,7 @@ class SppmRenderer:
         prm["grid_size"] = (*grid.size, grid.table_size)
         prm["grid_lo"] = (*grid.lo, grid.cell)
         self._bind()
+        self._view.bind_to_storage_buffer(scene_layout.SSBO_SPLAT)
         first = 0
         while first < self.photons_per_iteration:
             if first > 0 and should_stop is not None and should_stop():
@@ -309,11 +320,24 @@ class SppmRenderer:
         return Film(mean=self.radiance().astype(np.float32), m2=np.zeros((h, w, 3), np.float32),
                     count=np.full((h, w), float(self.iterations), np.float32),
                     nonfinite=np.zeros((h, w), np.float32), spp=self.iterations,
-                    aovs={"radius": self.radius.reshape(h, w).astype(np.float32)},
+                    aovs=self.aovs(),
                     sampler=self.settings.sampler.kind)
 
     # the per-pixel state in float64, in this order (8 numbers per pixel)
     _STATE = (("radius", 1), ("n_photons", 1), ("tau", 3), ("ld_sum", 3))
+
+    def aovs(self) -> dict[str, np.ndarray]:
+        """SPPM's pictures: ``radius`` (H, W), each pixel's search radius in scene units,
+        and with ``photon_view=True`` ``photons`` (H, W, 3), the power of the photon hits
+        the camera sees in each pixel per emitted photon (not part of the checkpoint)."""
+        h, w = self.height, self.width
+        out = {"radius": self.radius.reshape(h, w).astype(np.float32)}
+        if self.photon_view:
+            words = np.frombuffer(self._view.read(), np.uint32).reshape(-1, 2).astype(np.uint64)
+            sums = ((words[:, 1] << np.uint64(32)) | words[:, 0]).view(np.int64).astype(np.float64)
+            photons = max(self.iterations, 1) * self.photons_per_iteration
+            out["photons"] = (sums / (SPLAT_SCALE * photons)).reshape(h, w, 3).astype(np.float32)
+        return out
 
     def state(self) -> dict[str, Any]:
         """The per-pixel SPPM state: what a checkpoint saves. The checkpoint format holds

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import DeviceError, UsageError
 
-AOV_NAMES = ("albedo", "normal", "depth", "variance")
+AOV_NAMES = ("albedo", "normal", "depth", "variance", "radius", "photons")   # the last two: sppm
 FIRST_HIT_AOVS = ("albedo", "normal", "depth")
 # sample indices are 32-bit on the device: the open-ended target of a time budget
 SPP_LIMIT = 1 << 31

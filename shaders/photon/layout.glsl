@@ -9,7 +9,8 @@ layout(std140, binding = 1) uniform PhotonParams {
     uvec4 grid_size;      // xyz: cells along each axis, w: hash table size (0: no grid)
     vec4 grid_lo;         // xyz: corner of cell (0, 0, 0), w: cell edge length
     uvec4 options;        // x: deposit from this photon segment on (2: skip direct light),
-                          // y: camera segments allowed (max depth), z: record emission (1), w: unused
+                          // y: camera segments allowed (max depth), z: record emission (1),
+                          // w: splat the photon-map view into storage block 7 (1)
 } u_photon;
 
 // ---- storage blocks (std430) ----------------------------------------------------------

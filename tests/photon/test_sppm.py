@@ -117,3 +117,29 @@ def test02_thin_wall_does_not_leak(gl_ctx):
 def test03_bad_parameters(kwargs, message):
     with pytest.raises(UsageError, match=message):
         SppmSettings(**kwargs)
+
+
+def test04_photon_view_and_radius_aovs(gl_ctx):
+    """The photon-map view of a plane under a point light: the photons' power that the
+    camera sees, per emitted photon, sums over the pixels to the power falling on the
+    visible part of the plane (closed form; the camera looks straight down, so every
+    pixel covers the same area). Direct photons count (direct="photons"). The radius
+    map starts at r0 and shrinks where photons arrived."""
+    light = m.Light("point", position=(0.0, 0.0, HEIGHT), intensity=(INTENSITY,) * 3)
+    scene = plane_scene(light, albedo=ALBEDO, width=32, height=32, max_depth=2)
+    r = SppmRenderer(scene, sppm=SppmSettings(photons_per_iteration=1 << 16, initial_radius=0.08,
+                                              direct="photons", photon_view=True), ctx=gl_ctx, seed=3)
+    try:
+        r.step(4)
+        aovs = r.film().aovs
+    finally:
+        r.release()
+    side = 2 * 20 * math.tan(math.radians(4.0))       # the view's width on the plane (fov 8 along x)
+    pts = plane_points(scene, supersample=4)
+    incident = (point_light_radiance(pts).mean(axis=-1) / (ALBEDO / math.pi)).sum() * (side / 32) ** 2
+    seen = aovs["photons"][..., 0].sum()
+    # each photon carries 4 pi I; about 2**18 * incident / (4 pi I) of them land in view:
+    # a relative error of 1/sqrt of that count (Poisson), 5 sigma
+    count = 4 * (1 << 16) * incident / (4 * math.pi * INTENSITY)
+    assert abs(seen / incident - 1) < 5 / math.sqrt(count), (seen, incident)
+    assert np.all(aovs["radius"] <= 0.08 * (1 + 1e-6)) and aovs["radius"].max() < 0.08
