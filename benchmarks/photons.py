@@ -85,15 +85,12 @@ def main() -> None:
     ap.add_argument("--scenes", default="caustic,cornell")
     ap.add_argument("--configs", default="sppm,path,bdpt,mitsuba")
     args = ap.parse_args()
-    tmp = Path(tempfile.mkdtemp(prefix="glrender-photon-bench-"))
-    table = scenes(tmp)
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                            cwd=ROOT).stdout.strip()
     rows, device = [], None
-    for name in args.scenes.split(","):
-        toml, xml, ref_path, _ = table[name]
-        ref = np.load(ref_path).astype(np.float64)[..., :3]
-        targets = TARGETS[name]
+    tmp = Path(tempfile.mkdtemp(prefix="glrender-photon-bench-"))
+    for name, (toml, xml, ref_path, _) in scenes(tmp).items():
+        if name not in args.scenes.split(","):
+            continue
+        ref, targets = np.load(ref_path).astype(np.float64)[..., :3], TARGETS[name]
         for config in args.configs.split(","):
             out = tmp / f"{name}-{config}.npy"
             if config == "mitsuba":
@@ -124,18 +121,32 @@ def main() -> None:
             print(f"[{name}] {label:28s} {done:7d} {'iterations' if config == 'sppm' else 'spp'} in "
                   f"{t_end:.1f} s  RMSE {mse ** 0.5:.4g} (window {mse_w ** 0.5:.4g})  time to targets "
                   f"{times}", flush=True)
-    write_results(rows, device, commit, args)
+    head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=ROOT)
+    write_results(rows, device, head.stdout.strip(), args)
+
+
+def replace_section(section: str) -> None:
+    """Put ``section`` in RESULTS.md in place of the block under MARKER (a level-2
+    heading up to the next one), or at the end."""
+    text = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n"
+    blocks = text.rstrip("\n").split("\n## ")
+    heads = [i for i, block in enumerate(blocks) if i and ("## " + block).startswith(MARKER)]
+    if heads:
+        blocks[heads[0]] = section.rstrip("\n")[3:] + "\n"
+    else:
+        blocks.append(section.rstrip("\n")[3:] + "\n")
+    RESULTS.write_text("\n## ".join(blocks).rstrip("\n") + "\n")
 
 
 def write_results(rows, device, commit, args) -> None:
     fmt = lambda t: "not reached" if t is None else f"{t:.1f} s"  # noqa: E731
-    lines = [f"{MARKER}: SPPM vs path tracing (time to a fixed RMSE)", "",
-             f"{datetime.date.today()}, commit `{commit}`, glrender on `{device}`, Mitsuba 3 `llvm_ad_rgb` "
-             f"on the same CPU ({os.cpu_count()} cores, shared with other work: timings are noisy). "
-             f"Each config renders up to {args.seconds:.0f} s after its warm-up, one run. Time to target: "
-             f"read off the error curve for SPPM (biased, consistent); t x MSE / target^2 for the "
-             f"unbiased path tracers. 'window' = the caustic window, rows 130-170 x columns 130-200. "
-             f"Rerun: `.venv/bin/python benchmarks/photons.py`.", "",
+    intro = (f"Measured {datetime.date.today()} at commit `{commit}`: glrender on `{device}` and Mitsuba 3 "
+             f"`llvm_ad_rgb` on the same {os.cpu_count()}-core CPU, which other work shares (noisy "
+             f"timings). Every config gets up to {args.seconds:.0f} s after warming up, in one run. "
+             "SPPM's time to a target is read off its error curve (it is consistent, not unbiased); "
+             "the path tracers' is t x MSE / target^2. The window is the caustic's, rows 130-170 x "
+             "columns 130-200. Rerun with `.venv/bin/python benchmarks/photons.py`.")
+    lines = [f"{MARKER}: SPPM vs path tracing (time to a fixed RMSE)", "", intro, "",
              "| scene | renderer | time | iterations / spp | RMSE | RMSE window | target RMSE (image / window) "
              "| time to image target | time to window target |",
              "|---|---|---|---|---|---|---|---|---|"]
@@ -145,14 +156,7 @@ def write_results(rows, device, commit, args) -> None:
                      f"{targets[0]:g} / {tw} | {fmt(times[0])} | "
                      f"{'—' if targets[1] is None else fmt(times[1])} |")
     section = "\n".join(lines) + "\n"
-    text = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n"
-    start = text.find("\n" + MARKER)
-    if start < 0:
-        text = text.rstrip("\n") + "\n\n" + section
-    else:
-        end = text.find("\n## ", start + 1)
-        text = text[:start + 1] + section + (text[end:] if end >= 0 else "")
-    RESULTS.write_text(text.rstrip("\n") + "\n")
+    replace_section(section)
     print(section)
 
 
