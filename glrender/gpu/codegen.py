@@ -44,6 +44,17 @@ def _v2(v) -> str:
     return f"vec2({_f(v[0])}, {_f(v[1])})"
 
 
+def _dpdu(q) -> np.ndarray:
+    """dp/du of a planar primitive p = corner + a e1 + b e2 whose uv = uv0 + a uv_a + b uv_b
+    (uv = (a, b) without a uv map); zero when the uv map is singular."""
+    if q.uv is None:
+        return np.asarray(q.e1, np.float64)
+    J = np.array([q.uv[1], q.uv[2]], np.float64).T          # d(u, v) / d(a, b)
+    if np.linalg.det(J) == 0:
+        return np.zeros(3)
+    return np.column_stack([q.e1, q.e2]) @ np.linalg.inv(J)[:, 0]
+
+
 def _aligned_axis(q) -> int | None:
     """The coordinate axis a parallelogram's plane is perpendicular to, if any (exactly)."""
     n = np.cross(q.e1, q.e2)
@@ -164,6 +175,7 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
         "    vec3 ng = vec3(0.0, 0.0, 1.0);",
         "    vec3 ns = ng;",
         "    vec2 uv = vec2(0.0);",
+        "    vec3 dpdu = vec3(0.0);",
         "    uint material = 0u;",
         "    uint light = 0u;",
         "    vec4 sphere = vec4(0.0);  // centre and signed radius of the nearest sphere hit",
@@ -180,7 +192,7 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
             uv = "ab"
         body += [
             f"    tq = {_planar_call(q, 't')};",
-            f"    if (tq < t) {{ t = tq; prim = {k}u; ng = {_v3(q.normal)}; uv = {uv}; "
+            f"    if (tq < t) {{ t = tq; prim = {k}u; ng = {_v3(q.normal)}; uv = {uv}; dpdu = {_v3(_dpdu(q))}; "
             f"plane = {_f(np.dot(q.normal, q.corner))}; "
             f"material = {q.material}u; light = {q.light}u; sphere.w = 0.0; }}",
         ]
@@ -205,7 +217,7 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
             f"{'bvh_intersect_closest_t(o, d, t, time, bh)' if moving else 'bvh_intersect_closest(o, d, t, bh)'}) {{",
             "        t = bh.t;",
             "        prim = kCompiledPrimitives + bh.prim;",
-            f"        {'mesh_surface_t(bh.prim, bh.bary, time, p, ng, ns, uv, material, light)' if moving else 'mesh_surface(bh.prim, bh.bary, p, ng, ns, uv, material, light)'};",
+            f"        {'mesh_surface_t(bh.prim, bh.bary, time, p, ng, ns, uv, material, light, dpdu)' if moving else 'mesh_surface(bh.prim, bh.bary, p, ng, ns, uv, material, light, dpdu)'};",
             "        sphere.w = 0.0;",
             "    }",
         ]
@@ -220,12 +232,13 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
         "            ng = local * sign(sphere.w);",
         "            float u = atan(local.y, local.x) * kInvTwoPi;",
         "            uv = vec2(u < 0.0 ? u + 1.0 : u, atan(length(local.xy), local.z) * kInvPi);",
+        "            dpdu = vec3(-local.y, local.x, 0.0);   // Mitsuba's, up to its length 2 pi r",
         "        } else {",
         "            p -= (dot(ng, p) - plane) * ng;   // back onto the plane",
         "        }",
         "        ns = ng;",
         "    }",
-        "    hit = SurfaceHit(t, p, ng, ns, uv, material, light, prim);",
+        "    hit = SurfaceHit(t, p, ng, ns, uv, material, light, prim, dpdu);",
         "    return true;",
         "}",
         "",

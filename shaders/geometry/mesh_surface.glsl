@@ -7,8 +7,9 @@
 #include "scene/layout.glsl"
 
 // p: the hit point from the barycentrics (rounding error relative to the vertices).
+// dpdu: from the triangle's uv as Mitsuba's meshes (zero for a triangle of zero uv area).
 void mesh_surface(uint tri, vec2 bary, out vec3 p, out vec3 ng, out vec3 ns, out vec2 uv,
-                  out uint material, out uint light) {
+                  out uint material, out uint light, out vec3 dpdu) {
     vec3 p0 = bvh_triangle_vertex(tri, 0u);
     vec3 p1 = bvh_triangle_vertex(tri, 1u);
     vec3 p2 = bvh_triangle_vertex(tri, 2u);
@@ -24,6 +25,9 @@ void mesh_surface(uint tri, vec2 bary, out vec3 p, out vec3 ng, out vec3 ns, out
     vec4 uv01 = texelFetch(u_tri_uvs, 2 * int(tri));
     vec2 uv2 = texelFetch(u_tri_uvs, 2 * int(tri) + 1).xy;
     uv = b0 * uv01.xy + bary.x * uv01.zw + bary.y * uv2;
+    vec2 duv1 = uv01.zw - uv01.xy, duv2 = uv2 - uv01.xy;
+    float det = duv1.x * duv2.y - duv1.y * duv2.x;
+    dpdu = det != 0.0 ? ((p1 - p0) * duv2.y - (p2 - p0) * duv1.y) / det : vec3(0.0);
     uvec4 info = texelFetch(u_tri_info, int(tri));
     material = info.x;
     light = info.y;

@@ -1,4 +1,5 @@
 // What a ray hit: the surface record every scene intersection routine returns.
+#include "common/frame.glsl"
 
 const uint kNoPrimitive = 0xffffffffu;
 
@@ -14,4 +15,16 @@ struct SurfaceHit {
     uint material;  // index into materials[]
     uint light;     // index + 1 into lights[] of the area light on this surface, 0 if none
     uint prim;      // primitive id (compiled primitives first, then BVH triangles)
+    vec3 dpdu;      // dp/du, the surface's tangent along u (not unit; zero where uv give none)
 };
+
+// The shading frame of a hit: z = the shading normal, x = dp/du made orthogonal to it, as
+// Mitsuba's SurfaceInteraction::initialize_sh_frame, so that anisotropic roughness (alpha_u
+// along x) follows the surface's u direction. Without a usable dp/du, any frame around z.
+Frame shading_frame(SurfaceHit hit) {
+    vec3 s = hit.dpdu - hit.ns * dot(hit.ns, hit.dpdu);
+    float len2 = dot(s, s);
+    if (!(len2 > 1e-10 * dot(hit.dpdu, hit.dpdu))) return frame_from_z(hit.ns);
+    vec3 x = s * inversesqrt(len2);
+    return Frame(x, cross(hit.ns, x), hit.ns);
+}

@@ -20,7 +20,7 @@ vec3 integrator_li(vec3 o, vec3 d, float t_max, float time, inout SamplerState s
 
     vec3 p = hit.p;
     Bsdf b = bsdf_from_material(hit.material, hit.uv);
-    Frame frame = frame_from_z(hit.ns);
+    Frame frame = shading_frame(hit);
     vec3 wo = frame_to_local(frame, -d);
     bool use_light = kStrategy != kStrategyBsdf;
     bool use_bsdf = kStrategy != kStrategyLight;

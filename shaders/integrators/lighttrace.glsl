@@ -48,7 +48,7 @@ void light_trace(inout SamplerState s) {
         vec2 u_bsdf = sampler_2d(s);
         float u_rr = sampler_1d(s);
         Bsdf b = bsdf_from_material(hit.material, hit.uv);
-        Frame frame = frame_from_z(hit.ns);
+        Frame frame = shading_frame(hit);
         vec3 wo = frame_to_local(frame, -d);
 
         // Connect the vertex to the lens

@@ -67,7 +67,7 @@ bool path_segment(inout PathState st, inout SamplerState s) {
     if (depth + 1 >= max_segments) return false;
 
     Bsdf b = bsdf_from_material(hit.material, hit.uv);
-    Frame frame = frame_from_z(hit.ns);
+    Frame frame = shading_frame(hit);
     vec3 wo = frame_to_local(frame, -st.d);
 
     // Next-event estimation (its numbers are drawn even when unused, so that later
