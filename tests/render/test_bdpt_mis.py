@@ -1,0 +1,129 @@
+"""BDPT's MIS weights sum to 1 over the strategies that can make a path.
+
+A test kernel builds real subpaths with bdpt.glsl's random walks (from the scene on the
+device, as the renderer binds it), joins the whole light subpath to the whole camera
+subpath into one path x_0 ... x_{k-1}, computes every vertex's densities in both
+directions, and re-splits the path at every s (s light vertices, t = k - s camera
+vertices) as that strategy would have stored it. bdpt_mis_weight(s, t) summed over the
+strategies that can make the path (no connection at a specular vertex or a delta
+light, s = 0 only on an area light, t >= 1, (1, 1) left out) must be 1 to float32
+precision, under the balance and the power heuristic, on scenes with glass, a
+roughplastic and a point light (paths with delta vertices included).
+"""
+import numpy as np
+import pytest
+
+from glrender.gl import shaders
+from glrender.gpu import codegen
+from glrender.render.params import STRATEGIES
+from glrender.render.renderer import Renderer, settings_from_scene
+
+from bidir_scenes import caustic, glossy, point_light
+
+KERNEL = """#version 450
+layout(local_size_x = 64) in;
+#include "common/params.glsl"
+#include "scene/layout.glsl"
+#include "integrators/bdpt.glsl"
+layout(std430, binding = 8) buffer Results { vec4 results[]; };
+
+Vertex g_path[2 * kBdptVertices];
+float g_p_light[2 * kBdptVertices];   // density of x_i generated from x_{i-1} (light side)
+float g_p_camera[2 * kBdptVertices];  // density of x_i generated from x_{i+1} (camera side)
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    uvec2 pixel = uvec2(i % u_params.image.x, (i / u_params.image.x) % u_params.image.y);
+    SamplerState s = pixel_sampler(sampler_pixel_hash(pixel, 77u), i / (u_params.image.x * u_params.image.y));
+    CameraSample c = camera_sample(pixel, s);
+    g_time = c.time;
+    vec3 axis = normalize(world_from_camera_at(c.time)[2].xyz);
+    vec3 lens = c.o - (u_params.camera_clip.x / max(dot(c.d, axis), 1e-6)) * c.d;
+    g_camera[0] = vertex_point(kVertexCamera, lens, vec3(0.0), vec3(1.0));
+    Aov aov = Aov(vec3(0.0), vec3(0.0), 0.0);
+    int n_camera = random_walk(false, 1, c.o, c.d, c.t_max, vec3(1.0), camera_pdf_dir(c.d, c.time),
+                               kBdptMaxSegments + 1, s, aov);
+    LightPathStart st = light_path_start(s);
+    results[i] = vec4(0.0);
+    if (!st.valid) return;
+    LightData l = scene_light(st.light);
+    g_light[0] = vertex_point(kVertexLight, st.e.p, light_is_area(l) ? st.e.n : vec3(0.0), vec3(1.0));
+    g_light[0].light = st.light + 1u;
+    int n_light = random_walk(true, 1, st.o, st.e.d, kInfinity, st.beta, st.e.pdf_dir,
+                              kBdptMaxSegments, s, aov);
+    // the whole path, if its two ends can be joined and it is not too long
+    int k = n_light + n_camera;
+    if (k - 1 > kBdptMaxSegments || k < 3) return;
+    if (!g_light[n_light - 1].connectible || !g_camera[n_camera - 1].connectible) return;
+    for (int j = 0; j < k; ++j) g_path[j] = j < n_light ? g_light[j] : g_camera[k - 1 - j];
+    g_path[n_light - 1].delta = false;   // the joined ends were not scattered toward each other
+    g_path[n_light].delta = false;
+    bool any_delta = false;
+    for (int j = 0; j < k; ++j) {
+        any_delta = any_delta || g_path[j].delta || !g_path[j].connectible;
+        if (j == 0) g_p_light[j] = vertex_pdf_light_origin(g_path[0]);
+        else if (j == 1) g_p_light[j] = vertex_pdf_light(g_path[0], g_path[1]);
+        else g_p_light[j] = g_path[j - 1].delta ? 0.0 : vertex_pdf(g_path[j - 1], g_path[j - 2], g_path[j]);
+        if (j == k - 1) g_p_camera[j] = 0.0;
+        else if (j == k - 2) g_p_camera[j] = vertex_pdf(g_path[k - 1], g_path[k - 1], g_path[j]);
+        else g_p_camera[j] = g_path[j + 1].delta ? 0.0 : vertex_pdf(g_path[j + 1], g_path[j + 2], g_path[j]);
+    }
+    bool delta_light = light_is_delta_position(g_path[0]);
+    float sum = 0.0;
+    int strategies = 0;
+    for (int sl = 0; sl < k; ++sl) {
+        int t = k - sl;
+        bool valid;
+        if (sl == 0) valid = !delta_light && g_path[0].light != 0u && light_is_area(l);
+        else valid = !(sl == 1 && t == 1) && !g_path[sl - 1].delta && !g_path[sl].delta &&
+                     g_path[sl - 1].connectible && g_path[sl].connectible &&
+                     !(t == 1 && sl < 2);
+        if (!valid) continue;
+        for (int j = 0; j < sl; ++j) {
+            g_light[j] = g_path[j];
+            g_light[j].pdf_fwd = g_p_light[j];
+            g_light[j].pdf_rev = g_p_camera[j];
+        }
+        for (int j = 0; j < t; ++j) {
+            g_camera[j] = g_path[k - 1 - j];
+            g_camera[j].pdf_fwd = g_p_camera[k - 1 - j];
+            g_camera[j].pdf_rev = g_p_light[k - 1 - j];
+        }
+        if (sl == 0) g_camera[t - 1].kind = kVertexSurface;   // the light's point, reached by the camera
+        sum += bdpt_mis_weight(sl, t);
+        strategies += 1;
+    }
+    results[i] = vec4(sum, float(strategies), float(k), any_delta ? 1.0 : 0.0);
+}
+"""
+
+
+def weight_sums(gl_ctx, scene, heuristic, n=1 << 14):
+    # the scene on the device as the renderer binds it (its own kernel: the cheap path tracer)
+    r = Renderer(scene, settings_from_scene(scene, integrator="path", spp=1, seed=1), ctx=gl_ctx)
+    library = shaders.ShaderLibrary().with_generated(
+        {codegen.GENERATED_PATH: codegen.generate(r.packed, has_bvh=r.packed.has_bvh, lights=r.lights_final)})
+    defines = {**r.defines, "GLRENDER_STRATEGY": STRATEGIES[heuristic]}
+    kernel = shaders.compile_compute(gl_ctx, source=KERNEL, name="<bdpt mis test>", defines=defines,
+                                     slots={"scene": codegen.GENERATED_PATH}, library=library)
+    out = gl_ctx.gl.buffer(reserve=16 * n)
+    r._bind()
+    r._params.write(r._param_block(0, 1).tobytes())
+    out.bind_to_storage_buffer(8)
+    kernel.run(group_x=n // 64)
+    res = np.frombuffer(out.read(), np.float32).reshape(n, 4).astype(np.float64)
+    out.release()
+    r.release()
+    return res
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("heuristic", ["mis-power", "mis-balance"])
+@pytest.mark.parametrize("make", [glossy, caustic, point_light])
+def test01_weights_sum_to_one(gl_ctx, make, heuristic):
+    res = weight_sums(gl_ctx, make(16), heuristic)
+    made = res[:, 1] > 0
+    assert made.sum() > 1000, made.sum()
+    np.testing.assert_allclose(res[made, 0], 1.0, atol=2e-4)
+    if make is caustic:   # paths through the glass: specular vertices among them
+        assert (res[made, 3] > 0).sum() > 50
