@@ -7,7 +7,7 @@ from typing import Any
 from ..errors import UsageError
 from .sppm import SppmSettings
 
-OPTIONS = ("iterations", "photons_per_iteration", "initial_radius", "alpha")
+OPTIONS = ("iterations", "photons_per_iteration", "initial_radius", "alpha", "kernel")
 AOVS = ("radius", "photons")   # SPPM's pictures: search radius, photon-map view
 
 
@@ -23,6 +23,8 @@ def add_arguments(parser: Any) -> None:
     g.add_argument("--initial-radius", type=float, default=None, metavar="R",
                    help="initial search radius in scene units (default: 2 pixel footprints at the "
                         "scene's centre)")
+    g.add_argument("--kernel", choices=("uniform", "cone", "epanechnikov"), default=None,
+                   help="density estimation kernel over each pixel's disk (default: uniform)")
     g.add_argument("--alpha", type=float, default=None, metavar="A",
                    help="fraction of new photons kept per iteration, in (0, 1) (default 0.7)")
 
@@ -46,5 +48,5 @@ def photon_settings(args: Any, settings: Any) -> tuple[Any, SppmSettings | None]
     sppm = SppmSettings(photons_per_iteration=getattr(args, "photons_per_iteration", None),
                         initial_radius=getattr(args, "initial_radius", None),
                         alpha=0.7 if getattr(args, "alpha", None) is None else args.alpha,
-                        photon_view="photons" in aovs)
+                        photon_view="photons" in aovs, kernel=getattr(args, "kernel", None) or "uniform")
     return settings, sppm

@@ -27,5 +27,9 @@ PHOTON_PARAMS = np.dtype([
     ("grid_size", "<u4", 4),   # cells xyz, hash table size
     ("grid_lo", "<f4", 4),     # corner xyz, cell edge
     ("options", "<u4", 4),     # deposit from segment, max segments, record emission, photon view
+    ("estimate", "<u4", 4),    # density kernel, -, -, -
 ])
-assert PHOTON_PARAMS.itemsize == 64
+assert PHOTON_PARAMS.itemsize == 80
+
+# density estimation kernels (kKernel* in shaders/photon/sppm_deposit.glsl)
+KERNELS = {"uniform": 0, "cone": 1, "epanechnikov": 2}

@@ -57,8 +57,11 @@ class SppmSettings:
     alpha: float = 0.7
     direct: str = "nee"    # direct light by next-event estimation, or "photons" (density estimation)
     photon_view: bool = False   # also render the photon-map view (the "photons" AOV)
+    kernel: str = "uniform"     # density estimation kernel: uniform, cone or epanechnikov
 
     def __post_init__(self) -> None:
+        if self.kernel not in pl.KERNELS:
+            raise UsageError(f"kernel: expected one of {', '.join(pl.KERNELS)}, got {self.kernel!r}")
         if self.direct not in ("nee", "photons"):
             raise UsageError(f"direct: expected nee or photons, got {self.direct!r}")
         p = self.photons_per_iteration
@@ -185,7 +188,7 @@ class SppmRenderer:
         h.update(self.base.fingerprint().encode())
         h.update(self._kernel_hash.encode())
         h.update(repr(("sppm", self.photons_per_iteration, self.initial_radius,
-                       float(self.sppm.alpha), self.sppm.direct)).encode())
+                       float(self.sppm.alpha), self.sppm.direct, self.sppm.kernel)).encode())
         return h.hexdigest()
 
     # -- rendering ---------------------------------------------------------------------------
@@ -203,6 +206,7 @@ class SppmRenderer:
         prm["photons"] = (0, 0, self.photons_per_iteration, iteration)
         max_depth = self.settings.integrator.max_depth
         deposit_from = 2 if self.sppm.direct == "nee" else 1
+        prm["estimate"][0] = pl.KERNELS[self.sppm.kernel]
         prm["options"] = (deposit_from, 256 if max_depth < 0 else max_depth, int(self.record_emission),
                           int(self.photon_view))
         return prm

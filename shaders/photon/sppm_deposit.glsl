@@ -2,7 +2,8 @@
 // point whose search disk holds it (Hachisuka & Jensen 2009; pbrt-v3 SPPMIntegrator).
 //
 // For visible point i with throughput beta_i, radius r_i, outgoing direction wo_i:
-//     Phi_i += beta_i f_i(wo_i, wi) beta_photon,   M_i += 1,
+//     Phi_i += K(d / r_i) beta_i f_i(wo_i, wi) beta_photon,   M_i += 1,
+// with K the density kernel (mean 1 over the disk; uniform in pbrt's SPPM),
 // where wi points back along the photon. The host turns Phi and M into the
 // progressive radiance estimate (glrender/photon/sppm.py). Only visible points whose
 // geometric normal agrees with the photon's surface count (kNormalAgreement): a
@@ -18,6 +19,19 @@
 #include "bsdf/material.glsl"
 
 const uint kMaxCellCandidates = 4096u;
+
+// Density estimation kernels over the disk of radius r, as functions of q = d / r,
+// normalized so that their mean over the disk is 1 (the estimate stays Phi / (pi r^2)):
+// uniform 1; cone (Jensen 2001, k = 1) 3 (1 - q); Epanechnikov 2 (1 - q^2).
+const uint kKernelUniform = 0u;
+const uint kKernelCone = 1u;
+const uint kKernelEpanechnikov = 2u;
+
+float density_kernel(uint kernel, float q2) {
+    if (kernel == kKernelCone) return 3.0 * (1.0 - sqrt(q2));
+    if (kernel == kKernelEpanechnikov) return 2.0 * (1.0 - q2);
+    return 1.0;
+}
 const uint kCandidateBudget = 16384u;
 const float kNormalAgreement = 0.5;   // cos 60 degrees
 
@@ -50,7 +64,8 @@ void sppm_deposit(vec3 p, vec3 ng, vec3 wi, vec3 beta, int segments, inout uint 
         // the photon arrives on the geometric side its shading direction claims
         if (!(abs(wi_l.z) > 0.0) || dot(wi, extra.xyz) * wi_l.z <= 0.0) continue;
         // bsdf_eval includes |cos theta_i|; the photon density already accounts for it
-        vec3 phi = vp_extra[2u * i + 1u].rgb * (bsdf_eval(b, wo_l, wi_l, false) / abs(wi_l.z)) * beta;
+        float w = density_kernel(u_photon.estimate.x, dot(dp, dp) / vp_radius2[i]);
+        vec3 phi = vp_extra[2u * i + 1u].rgb * (w * bsdf_eval(b, wo_l, wi_l, false) / abs(wi_l.z)) * beta;
         if (!is_finite(phi)) continue;
         atomicAdd(deposit_flux[4u * i], phi.r);
         atomicAdd(deposit_flux[4u * i + 1u], phi.g);

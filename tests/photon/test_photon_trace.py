@@ -62,9 +62,9 @@ def emitted(scene, gl_ctx):
 
 
 def test01_photon_params_layout():
-    assert pl.PHOTON_PARAMS.itemsize == 64
-    assert [pl.PHOTON_PARAMS.fields[k][1] for k in ("photons", "grid_size", "grid_lo", "options")] == \
-        [0, 16, 32, 48]
+    assert pl.PHOTON_PARAMS.itemsize == 80
+    assert [pl.PHOTON_PARAMS.fields[k][1] for k in ("photons", "grid_size", "grid_lo", "options", "estimate")] == \
+        [0, 16, 32, 48, 64]
 
 
 @pytest.mark.parametrize("kind", list(lights()))
