@@ -27,7 +27,7 @@ from .display import VIEWS, Display, DisplaySettings, fit_viewport
 from .keys import bindings, help_text
 from .progressive import Progressive
 
-INTEGRATOR_ORDER = tuple(m.INTEGRATORS)
+INTEGRATOR_ORDER = tuple(k for k in m.INTEGRATORS if k != "sppm")   # SPPM has its own driver
 STRATEGY_ORDER = tuple(STRATEGIES)
 DEPTH_STEPS_MAX = 16            # ] past this goes to unbounded (-1)
 EXPOSURE_STEP = 0.5             # stops per key press
