@@ -85,12 +85,15 @@ INTRO = """\
 Each experiment runs every technique it compares on the same problem from many
 independent seeds (each run a full randomization) and reports, per technique:
 the mean ± standard error of the estimate (from the spread of the runs) against the
-exact value, z = (mean − exact)/s.e., the **variance per sample** (samples × variance of
-one run's estimate, so correlated patterns are measured honestly), the **cost per
-sample** (device time measured with glFinish around the dispatches: the best of a few
-interleaved repeats on a shared machine), **efficiency = 1/(variance · cost)** and each
-ratio to the table's baseline (efficiency ratio > 1: better than the baseline).
-Deterministic cost units (uniforms drawn, light evaluations) appear where counted.
+exact value, z = (mean − exact)/s.e., the **variance per sample** (with independent
+samples the mean of the runs' own per-sample variances; for correlated patterns samples ×
+the variance of one run's estimate, so stratification is measured honestly), the **cost
+per sample** (device time measured with glFinish around the dispatches: the best of
+interleaved repeats), **efficiency = 1/(variance · cost)** and each ratio to the table's
+baseline (efficiency ratio > 1: better than the baseline). Deterministic cost units
+(uniforms drawn, light evaluations, rays) appear where counted. The machine that ran this
+is a shared 2-core one: variances and counts are exact records of the run, measured times
+can carry a busy spell of other work (a cost ratio far from its count ratio is one).
 """
 
 
