@@ -88,9 +88,9 @@ class SppmRenderer:
                  photon_view: bool = False, **overrides: Any) -> None:
         self.sppm = sppm or SppmSettings()
         settings = settings or settings_from_scene(scene, **overrides)
-        # the inner renderer packs, uploads and compiles the scene (its own kernel is the
-        # path tracer's, unused here)
-        inner = replace(settings, integrator=replace(settings.integrator, kind="path"))
+        # the inner renderer packs, uploads and compiles the scene (its own kernel, unused
+        # here, is ambient occlusion's: the quickest to compile)
+        inner = replace(settings, integrator=replace(settings.integrator, kind="ao"))
         t0 = time.perf_counter()
         self.base = Renderer(scene, inner, ctx=ctx, device=device)
         self.scene, self.settings = scene, settings
