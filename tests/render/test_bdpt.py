@@ -55,6 +55,23 @@ def test01_bdpt_matches_path(gl_ctx, all_tests, name, heuristic):
     assert c.detectable_bias < (0.04 if name == "caustic" else 0.02), c.summary()
 
 
+@pytest.mark.slow
+def test05_cornell_box_matches_mitsuba(gl_ctx):
+    """The full-size Cornell box against Mitsuba 3's reference (tests/data/refs, 49,152 spp),
+    as tests/render/test_cornell.py holds the path tracer to it: every block and channel,
+    the image mean and the MSE at Šidák alpha 0.01, the reference's own error included."""
+    import glrender
+    from bidir_scenes import ROOT
+    refs = ROOT / "tests" / "data" / "refs"
+    ref, ref_se = np.load(refs / "cornell-box-ref.npy"), np.load(refs / "cornell-box-ref-stderr.npy")
+    scene = glrender.load(ROOT / "scenes" / "cornell-box" / "scene.toml")
+    imgs = np.stack([glrender.render(scene, spp=8, seed=seed, integrator="bdpt", progress=False).mean
+                     for seed in (41, 42, 43, 44)])
+    c = compare_images(imgs, ref, ref_se, block=16)
+    assert c.passed, c.summary() + " " + "; ".join(c.messages)
+    assert c.detectable_bias < 0.005, c.summary()
+
+
 def test02_one_dispatch_or_many_bitwise(gl_ctx):
     scene = cornell(16)
     images = []
