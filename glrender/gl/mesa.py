@@ -68,9 +68,15 @@ def activate() -> str | None:
     except OSError:
         return None  # an incomplete bundle: keep the system's Mesa
     vendor = root / VENDOR_FILE
+    text = json.dumps({"file_format_version": "1.0.0",
+                       "ICD": {"library_path": str(libdir / "libEGL_mesa.so.0")}})
     try:
-        vendor.write_text(json.dumps({"file_format_version": "1.0.0",
-                                      "ICD": {"library_path": str(libdir / "libEGL_mesa.so.0")}}))
+        # processes start side by side (workers, tests): never let one read a half-written
+        # file (EGL would then find no Mesa): write only when it differs, and atomically
+        if not vendor.is_file() or vendor.read_text() != text:
+            tmp = vendor.with_name(f".{VENDOR_FILE}.{os.getpid()}")
+            tmp.write_text(text)
+            os.replace(tmp, vendor)
     except OSError:
         return None
     others = []

@@ -55,6 +55,32 @@ def _dpdu(q) -> np.ndarray:
     return np.column_stack([q.e1, q.e2]) @ np.linalg.inv(J)[:, 0]
 
 
+def has_normal_maps(packed: PackedScene) -> bool:
+    """Whether a material has a normal map (MaterialData.params.w: its texture + 1)."""
+    return bool(len(packed.materials) and (packed.materials["params"][:, 3] > 0).any())
+
+
+def has_alpha_cutouts(packed: PackedScene) -> bool:
+    """Whether a material has an opacity texture (MaterialData.color0.w: its texture + 1);
+    the renderer then compiles with GLRENDER_ALPHA_CUTOUTS, and BVH traversal asks
+    bvh_alpha_pass below about each triangle hit."""
+    return bool(len(packed.materials) and (packed.materials["color0"][:, 3] > 0).any())
+
+
+_ALPHA_PASS = [
+    "bool bvh_alpha_pass(uint tri, vec2 bary) {",
+    "    MaterialHeader m = scene_material(texelFetch(u_tri_info, int(tri)).x);",
+    "    uint tex = uint(m.color0.w);",
+    "    if (tex == 0u) return true;",
+    "    vec4 uv01 = texelFetch(u_tri_uvs, 2 * int(tri));",
+    "    vec2 uv2 = texelFetch(u_tri_uvs, 2 * int(tri) + 1).xy;",
+    "    vec2 uv = (1.0 - bary.x - bary.y) * uv01.xy + bary.x * uv01.zw + bary.y * uv2;",
+    "    return opacity_at(tex - 1u, uv) >= m.color1.w;",
+    "}",
+    "",
+]
+
+
 def _aligned_axis(q) -> int | None:
     """The coordinate axis a parallelogram's plane is perpendicular to, if any (exactly)."""
     n = np.cross(q.e1, q.e2)
@@ -239,10 +265,18 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
         "        ns = ng;",
         "    }",
         "    hit = SurfaceHit(t, p, ng, ns, uv, material, light, prim, dpdu);",
+    ]
+    if has_normal_maps(packed):
+        body += ["    apply_normal_map(hit, scene_material(material));"]
+    body += [
         "    return true;",
         "}",
         "",
     ]
+    if has_normal_maps(packed) or (has_bvh and has_alpha_cutouts(packed)):
+        lines += ['#include "bsdf/normal_map.glsl"']
+    if has_bvh and has_alpha_cutouts(packed):
+        lines += _ALPHA_PASS
     lines += body
 
     # -- any hit -------------------------------------------------------------------

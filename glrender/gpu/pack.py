@@ -233,6 +233,21 @@ def pack_material(mat: m.Material, textures: TextureTable | None = None) -> np.n
             out["color2"][1] = internal_reflectance(alpha[0], eta, ggx)
     out["params"] = (alpha[0], alpha[1], eta, 0.0)
     out["info"] = (layout.MATERIAL_KINDS[kind], flags, tex0, tex1)
+    for name in ("normal_map", "opacity"):
+        tex = getattr(mat, name)
+        if tex is not None and (textures is None or not isinstance(tex, m.Texture)):
+            raise SceneError(f"{what}.{name}: expected a texture")
+    if mat.normal_map is not None:
+        out["params"][3] = textures.index(mat.normal_map, f"{what}.normal_map")
+        if not np.isfinite(mat.normal_scale):
+            raise SceneError(f"{what}.normal_scale: expected a finite number")
+        out["color2"][3] = mat.normal_scale
+    if mat.opacity is not None:
+        if not 0.0 <= mat.alpha_cutoff <= 1.0:
+            raise SceneError(f"{what}.alpha_cutoff: expected a number in [0, 1], "
+                             f"got {mat.alpha_cutoff!r}")
+        out["color0"][3] = textures.index(mat.opacity, f"{what}.opacity")
+        out["color1"][3] = mat.alpha_cutoff
     return out
 
 
@@ -329,6 +344,19 @@ def pack_scene(scene: m.Scene) -> PackedScene:
         where = f"{scene.source}: shape {shape.name or index}"
         M = shape.world_from_object
         flip = shape.flip_normals != (np.linalg.det(M[:3, :3]) < 0)
+        if shape.kind != "mesh" and 0 <= shape.material < len(scene.materials) and \
+                scene.materials[shape.material].opacity is not None:
+            # cutouts are tested in the BVH traversal: a rectangle becomes its two triangles
+            # (Mitsuba's uv: u along +x, v along +y)
+            if shape.kind != "rectangle" or shape.emission is not None:
+                raise SceneError(f"{where}: opacity cutouts apply to meshes and rectangles that "
+                                 f"are not lights, not to a {shape.kind}"
+                                 f"{' light' if shape.emission is not None else ''}")
+            shape = dataclasses.replace(
+                shape, kind="mesh", vertices=np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0],
+                                                       [-1, 1, 0]], np.float64),
+                triangles=np.array([[0, 1, 2], [0, 2, 3]]), normals=None,
+                uvs=np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float64), face_normals=True)
         if shape.kind in ("rectangle", "cube"):
             if shape.moving:
                 raise SceneError(f"{where}: motion is supported for spheres and meshes; "
@@ -387,7 +415,11 @@ def pack_scene(scene: m.Scene) -> PackedScene:
                 continue
             grow(tri)
             flat = np.allclose(normals, ng[:, None, :], atol=1e-4)
-            if flat and len(tri) <= MAX_COMPILED_TRIANGLES_PER_MESH and len(tri) <= compiled_budget:
+            # opacity cutouts are tested in the BVH traversal: such meshes always go there
+            cutout = 0 <= shape.material < len(scene.materials) and \
+                scene.materials[shape.material].opacity is not None
+            if flat and not cutout and len(tri) <= MAX_COMPILED_TRIANGLES_PER_MESH and \
+                    len(tri) <= compiled_budget:
                 for k in range(len(tri)):
                     uv = np.array([uvs[k, 0], uvs[k, 1] - uvs[k, 0], uvs[k, 2] - uvs[k, 0]])
                     add_quad(Parallelogram(tri[k, 0], tri[k, 1] - tri[k, 0], tri[k, 2] - tri[k, 0],

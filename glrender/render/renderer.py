@@ -263,6 +263,8 @@ class Renderer:
             hide_emitters=integ.hide_emitters, light_selection=integ.light_selection,
             area_sampling=integ.area_sampling, filter=self.scene.film.filter, aovs=s.aovs,
             count_loops=s.count_loops, debug_nonfinite=s.debug_nonfinite)
+        if p.has_bvh and codegen.has_alpha_cutouts(p):
+            self.defines["GLRENDER_ALPHA_CUTOUTS"] = 1     # geometry/bvh.glsl asks the scene
         self._source_fingerprint = (geometry, sorted(self.defines.items()), INTEGRATOR_FILES[integ.kind])
         self.program: Any = shaders.compile_compute(
             self.ctx, "kernels/render.comp.glsl", defines=self.defines,

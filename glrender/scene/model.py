@@ -124,6 +124,11 @@ class Material:
     - plastic / roughplastic: ``reflectance`` (diffuse base), ``specular_reflectance``,
       ``int_ior`` / ``ext_ior``, ``alpha``, ``nonlinear``
     ``two_sided``: the BSDF answers on both sides of the surface (Mitsuba's twosided).
+    Any kind may also have a tangent-space ``normal_map`` (a raw bitmap: n = 2 c - 1 in
+    the frame x = dp/du, y = n x x, z = the shading normal, the glTF / OpenGL convention
+    of +Y up in the image; ``normal_scale`` scales its x and y) and an ``opacity`` bitmap
+    (its mean of RGB; BVH meshes only): where it is below ``alpha_cutoff`` the surface is
+    a hole for every ray, camera, path and shadow rays alike (glTF's MASK mode).
     """
 
     kind: str = "diffuse"
@@ -139,6 +144,10 @@ class Material:
     nonlinear: bool = False
     two_sided: bool = False
     name: str = ""
+    normal_map: Optional[Texture] = None
+    normal_scale: float = 1.0
+    opacity: Optional[Texture] = None
+    alpha_cutoff: float = 0.5
 
     def __post_init__(self) -> None:
         if self.kind not in MATERIAL_KINDS:

@@ -31,6 +31,12 @@
 const int kBvhMaxDepth = GLRENDER_BVH_MAX_DEPTH;
 const int kBvhStackSize = 3 * (kBvhMaxDepth + 1);
 const uint kBvhNoHit = 0xFFFFFFFFu;
+
+#ifdef GLRENDER_ALPHA_CUTOUTS
+// Whether the hit at barycentrics bary of triangle prim is solid (not cut out by its
+// material's opacity texture): defined by the scene code (glrender/gpu/codegen.py).
+bool bvh_alpha_pass(uint prim, vec2 bary);
+#endif
 const uint kBvhStackOverflow = 0xFFFFFFFEu;
 
 // A ray hit: distance t along d (in units of |d|), triangle in BVH order, and
@@ -107,10 +113,14 @@ bool bvh_traverse(uint root, vec3 o, vec3 d, float t_max, const bool any_hit, ou
             int base = int(leaf_first) * kBvhTexelsPerTriangle;
             float t;
             vec2 bary;
-            if (intersect_triangle_watertight(tri_ray, texelFetch(u_bvh_triangles, base).xyz,
-                                              texelFetch(u_bvh_triangles, base + 1).xyz,
-                                              texelFetch(u_bvh_triangles, base + 2).xyz,
-                                              hit.t, t, bary)) {
+            bool solid = intersect_triangle_watertight(tri_ray, texelFetch(u_bvh_triangles, base).xyz,
+                                                       texelFetch(u_bvh_triangles, base + 1).xyz,
+                                                       texelFetch(u_bvh_triangles, base + 2).xyz,
+                                                       hit.t, t, bary);
+#ifdef GLRENDER_ALPHA_CUTOUTS
+            solid = solid && bvh_alpha_pass(leaf_first, bary);
+#endif
+            if (solid) {
                 hit = BvhHit(t, leaf_first, bary);
                 found = true;
                 if (any_hit) {

@@ -224,20 +224,21 @@ class _Gltf:
         return MeshData(points, faces, normals, uvs)
 
     # -- materials and textures -------------------------------------------------------------
-    def texture(self, info, where: str, srgb: bool = True) -> m.Texture:
+    def texture(self, info, where: str, srgb: bool = True, alpha: bool = False) -> m.Texture:
         if not isinstance(info, dict):
             self.fail(where, f"expected a textureInfo object, got {info!r}")
         index = info.get("index")
         tex_def = self.item("textures", index, where)
         if info.get("texCoord", 0) != 0:
             self.notes.add("texture coordinate sets other than TEXCOORD_0 (set 0 used)")
-        if index not in self._textures:
+        key = (index, srgb, alpha)     # colour, raw data (normal maps) or alpha (opacity)
+        if key not in self._textures:
             source = tex_def.get("source")
             if source is None:
                 for ext in (tex_def.get("extensions") or {}):
                     self.notes.add(f"texture extension {ext}")
                 self.fail(f"textures[{index}]", "has no source image this loader can read")
-            image = self.image(source, f"textures[{index}]", srgb)
+            image = self.image(source, f"textures[{index}]", srgb, alpha)
             tex = m.Texture("bitmap", image=image, name=f"texture {index}")
             if "sampler" in tex_def:
                 sampler = self.item("samplers", tex_def["sampler"], f"textures[{index}]")
@@ -247,8 +248,8 @@ class _Gltf:
                     self.notes.add("different wrap modes along s and t (wrapS used)")
                 if sampler.get("magFilter") == 9728:
                     tex.filter = "nearest"
-            self._textures[index] = tex
-        tex = self._textures[index]
+            self._textures[key] = tex
+        tex = self._textures[key]
         transform = (info.get("extensions") or {}).get("KHR_texture_transform")
         if isinstance(transform, dict):
             from dataclasses import replace
@@ -256,7 +257,7 @@ class _Gltf:
             tex = replace(tex, uv_transform=_texture_transform(transform))
         return tex
 
-    def image(self, index, where: str, srgb: bool) -> np.ndarray:
+    def image(self, index, where: str, srgb: bool, alpha: bool = False) -> np.ndarray:
         img = self.item("images", index, where)
         if "uri" in img:
             data = self._uri_bytes(img["uri"], f"images[{index}]")
@@ -272,6 +273,9 @@ class _Gltf:
         try:
             with Image.open(io.BytesIO(data)) as im:
                 check_image_size(im.size[0], im.size[1], f"{self.path}: images[{index}]")
+                if alpha:       # the alpha channel (linear), as a grey image
+                    a = np.asarray(im.convert("RGBA"), np.float64)[..., 3] / 255.0
+                    return np.repeat(a[..., None], 3, axis=-1).astype(np.float32)
                 pixels = np.asarray(im.convert("RGB"), np.float64) / 255.0
         except SceneError:
             raise
@@ -296,11 +300,8 @@ class _Gltf:
         for e in ext:
             if e not in SUPPORTED_EXTENSIONS:
                 self.notes.add(f"material extension {e}")
-        for field in ("normalTexture", "occlusionTexture"):
-            if field in mdef:
-                self.notes.add(field)
-        if mdef.get("alphaMode", "OPAQUE") != "OPAQUE":
-            self.notes.add(f"alphaMode {mdef['alphaMode']}")
+        if "occlusionTexture" in mdef:
+            self.notes.add("occlusionTexture")
         pbr = mdef.get("pbrMetallicRoughness") or {}
         base = _floats(pbr.get("baseColorFactor", [1, 1, 1, 1]), 4, self, where)[:3]
         metallic = _floats([pbr.get("metallicFactor", 1.0)], 1, self, where)[0]
@@ -342,6 +343,32 @@ class _Gltf:
             kind = "plastic" if roughness < 0.03 else "roughplastic"
             mat = m.Material(kind, reflectance=color, int_ior=1.5, ext_ior=1.0, alpha=(alpha, alpha),
                              distribution="ggx", two_sided=two_sided, name=name)
+        if "normalTexture" in mdef:
+            info = mdef["normalTexture"]
+            mat.normal_map = self.texture(info, f"{where}.normalTexture", srgb=False)
+            if isinstance(info, dict) and "scale" in info:
+                mat.normal_scale = _floats([info["scale"]], 1, self, where)[0]
+        mode = mdef.get("alphaMode", "OPAQUE")
+        if mode in ("MASK", "BLEND"):
+            # a cutout where baseColorTexture.a * baseColorFactor.a < alphaCutoff (BLEND: at
+            # 1/2, no partial transparency)
+            factor = _floats(pbr.get("baseColorFactor", [1, 1, 1, 1]), 4, self, where)[3]
+            if mode == "BLEND":
+                self.notes.add("alphaMode BLEND (rendered as a cutout at alpha 0.5)")
+            if "baseColorTexture" in pbr:
+                tex = self.texture(pbr["baseColorTexture"], f"{where}.baseColorTexture",
+                                   srgb=False, alpha=True)
+                if factor != 1.0:
+                    from dataclasses import replace
+
+                    tex = replace(tex, image=tex.image * np.float32(factor))
+                mat.opacity = tex
+                mat.alpha_cutoff = 0.5 if mode == "BLEND" else \
+                    _floats([mdef.get("alphaCutoff", 0.5)], 1, self, where)[0]
+            elif factor < (0.5 if mode == "BLEND" else mdef.get("alphaCutoff", 0.5)):
+                self.notes.add("alphaMode with a constant alpha below the cutoff (left opaque)")
+        elif mode != "OPAQUE":
+            self.notes.add(f"alphaMode {mode}")
         emission = None
         emissive = _floats(mdef.get("emissiveFactor", [0, 0, 0]), 3, self, where)
         strength = _floats([(ext.get("KHR_materials_emissive_strength") or {}).get(

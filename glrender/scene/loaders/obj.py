@@ -46,6 +46,8 @@ class MtlMaterial:
     d: float = 1.0
     illum: int = 2
     map_Kd: m.Texture | None = None
+    map_d: m.Texture | None = None          # opacity (alpha cutout)
+    norm: m.Texture | None = None           # tangent-space normal map
 
 
 @dataclass
@@ -373,9 +375,25 @@ _MAP_OPTION_ARGS = {"-blendu": 1, "-blendv": 1, "-bm": 1, "-boost": 1, "-cc": 1,
                     "-imfchan": 1, "-mm": 2, "-texres": 1, "-type": 1}
 
 
-def _texture_map(parts, path: Path, lineno: int, files: SceneFiles) -> m.Texture:
-    """A ``map_Kd`` statement: options (``-s``, ``-o``, ``-clamp``; others ignored) and a
-    file name (which may contain spaces)."""
+def _read_data_image(image_path: Path, opacity: bool) -> np.ndarray:
+    """A data texture as stored (no sRGB decode): an opacity map's alpha channel where it
+    has one, else its grey level; a normal map's RGB."""
+    from PIL import Image
+
+    with Image.open(image_path) as im:
+        if opacity:
+            a = np.asarray(im.convert("RGBA") if "A" in im.getbands() else im.convert("L"),
+                           np.float64)
+            a = a[..., 3] if a.ndim == 3 else a
+            return np.repeat((a / 255.0)[..., None], 3, axis=-1).astype(np.float32)
+        return (np.asarray(im.convert("RGB"), np.float64) / 255.0).astype(np.float32)
+
+
+def _texture_map(parts, path: Path, lineno: int, files: SceneFiles,
+                 data: str | None = None) -> m.Texture:
+    """A ``map_Kd`` (or, with ``data`` "opacity" / "normal", ``map_d`` / ``norm``)
+    statement: options (``-s``, ``-o``, ``-clamp``; others ignored) and a file name (which
+    may contain spaces). Data maps are read as stored, without the sRGB decode."""
     scale, offset, clamp = [1.0, 1.0], [0.0, 0.0], False
     i = 1
     while i < len(parts) and parts[i].startswith("-") and len(parts) - i > 1:
@@ -403,6 +421,8 @@ def _texture_map(parts, path: Path, lineno: int, files: SceneFiles) -> m.Texture
     image_path = files.resolve(name, path, lineno, "texture")
     try:
         image = read_image_checked(image_path)
+        if data is not None and image_path.suffix.lower() not in (".exr", ".hdr", ".pfm", ".npy"):
+            image = _read_data_image(image_path, data == "opacity")
     except Exception as exc:
         raise SceneError(f"{path}:{lineno}: cannot read texture {name!r} ({exc})") from None
     # options act on OBJ's uv (v up); in the flipped convention v' = 1 - v they become
@@ -447,6 +467,10 @@ def read_mtl(path: Path, files: SceneFiles) -> dict[str, MtlMaterial]:
             cur.illum = int(_floats(parts, 1, 1, path, lineno, key)[0])
         elif key == "map_Kd":
             cur.map_Kd = _texture_map(parts, path, lineno, files)
+        elif key == "map_d":
+            cur.map_d = _texture_map(parts, path, lineno, files, data="opacity")
+        elif key == "norm":
+            cur.norm = _texture_map(parts, path, lineno, files, data="normal")
         elif key == "Ka":
             pass    # ambient colour: no meaning in a physically based renderer
         else:
@@ -481,6 +505,7 @@ def obj_material(mtl: MtlMaterial | None, name: str) -> tuple[m.Material, m.Emis
                          int_ior=ior, ext_ior=1.0, alpha=(phong_alpha(mtl.Ns),) * 2, name=name)
     else:
         mat = m.Material("diffuse", reflectance=reflectance, name=name)
+    mat.opacity, mat.normal_map = mtl.map_d, mtl.norm
     return mat, emission
 
 

@@ -284,7 +284,7 @@ def _texture(ctx, key: str, t) -> m.Texture:
 
 _MATERIAL_FIELDS = {"type", "reflectance", "specular_reflectance", "specular_transmittance", "eta",
                     "k", "int_ior", "ext_ior", "alpha", "distribution", "nonlinear", "two_sided",
-                    "material"}
+                    "material", "normal_map", "normal_scale", "opacity", "alpha_cutoff"}
 # Mitsuba's default interior IOR per kind ("bk7" for dielectrics, "polypropylene" for plastics)
 _DEFAULT_INT_IOR = {"plastic": "polypropylene", "roughplastic": "polypropylene"}
 
@@ -338,6 +338,17 @@ def _material(ctx, name: str, t) -> m.Material:
     mat.distribution = ctx.string(t.get("distribution", "beckmann"), f"{key}.distribution", ("ggx", "beckmann"))
     mat.nonlinear = ctx.boolean(t.get("nonlinear", False), f"{key}.nonlinear")
     mat.two_sided = ctx.boolean(t.get("two_sided", False), f"{key}.two_sided")
+    for field_name in ("normal_map", "opacity"):
+        if field_name in t:
+            value = t[field_name]
+            if not isinstance(value, (str, dict)):
+                ctx.fail(f"{key}.{field_name}", f"expected a texture (a [textures] name or a "
+                         f"table), got {_show(value)}")
+            setattr(mat, field_name, ctx.spectrum(value, f"{key}.{field_name}"))
+    if "normal_scale" in t:
+        mat.normal_scale = ctx.number(t["normal_scale"], f"{key}.normal_scale", -100, 100)
+    if "alpha_cutoff" in t:
+        mat.alpha_cutoff = ctx.number(t["alpha_cutoff"], f"{key}.alpha_cutoff", 0, 1)
     return mat
 
 
