@@ -1,0 +1,33 @@
+// Surface detail from textures: tangent-space normal maps and opacity cutouts.
+//
+// Normal maps follow glTF 2.0 (and OpenGL): a texel c holds n = 2 c - 1 in the frame
+// x = dp/du (made orthogonal to the shading normal), y = n x x, z = the shading normal
+// (geometry/surface.glsl shading_frame, Mitsuba's frame), so +Y points up the image
+// for uv maps that are not mirrored. The material's scale multiplies n.x and n.y
+// (glTF normalTexture.scale). The texture must be stored raw (no sRGB decode).
+//
+// Opacity is the mean of a texture's RGB; the BVH traversal treats a triangle hit
+// whose opacity falls below the material's cutoff as a hole (glTF alphaMode MASK).
+#include "bsdf/texture.glsl"
+#include "geometry/surface.glsl"
+#include "scene/layout.glsl"
+
+// Replaces hit.ns by the normal map's normal (MaterialHeader.params.w: texture + 1,
+// color2.w: scale); hits of materials without one are left alone. A map normal that
+// is not finite leaves the hit alone too.
+void apply_normal_map(inout SurfaceHit hit, MaterialHeader m) {
+    uint tex = uint(m.params.w);
+    if (tex == 0u) return;
+    vec3 c = texture_eval(tex - 1u, hit.uv) * 2.0 - 1.0;
+    c.xy *= m.color2.w;
+    Frame f = shading_frame(hit);
+    vec3 n = c.x * f.x + c.y * f.y + c.z * f.z;
+    float len = length(n);
+    if (len > 0.0 && !isinf(len)) hit.ns = n / len;
+}
+
+// The opacity of texture `index` at uv: the mean of its RGB.
+float opacity_at(uint index, vec2 uv) {
+    vec3 c = texture_eval(index, uv);
+    return (c.r + c.g + c.b) * (1.0 / 3.0);
+}
