@@ -49,7 +49,15 @@ def test02_planned_renders_are_unbiased(gl_ctx, scene):
     refs = np.stack([glrender.render(scene, spp=256, seed=100 + s, sampler="independent").mean
                      for s in range(4)])
     ref, ref_se = refs.mean(axis=0), refs.std(axis=0, ddof=1) / 2.0
-    c = compare_images(np.stack(runs), ref, ref_se, block=4, extra_tests=1)
+    # leave out the light's pixels grown by one: those straddling its edge are so heavy-tailed
+    # (per-sample variance 200x the image's) that 6 runs cannot estimate their error, and
+    # the check that the MSE is what the noise explains fails there for fixed-count renders too
+    light = ref.max(axis=-1) > 1.0
+    grown = light.copy()
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            grown |= np.roll(np.roll(light, dy, 0), dx, 1)
+    c = compare_images(np.stack(runs), ref, ref_se, block=4, extra_tests=1, mask=~grown)
     assert c.passed, c.summary() + " " + "; ".join(c.messages)
 
 
