@@ -96,6 +96,8 @@ def test_examples_and_pages(site):
     for page in ("getting-started.html", "scene-format.html", "scale-out.html"):
         assert (site / page).is_file()
     assert "./dev.sh render" in (site / "getting-started.html").read_text()
+    for report in (ROOT / "docs" / "lab").glob("*.md"):   # the lab's pages join the navigation
+        assert f'href="lab/{report.stem}.html"' in (site / "index.html").read_text()
 
 
 def find_chromium() -> str | None:
