@@ -18,8 +18,8 @@
 #include "integrators/splat.glsl"
 #include "integrators/bdpt_vertex.glsl"
 
-Vertex vertex_from_hit(SurfaceHit hit, Bsdf b, vec3 beta) {
-    return Vertex(hit.p, hit.ng, hit.ns, beta, hit.uv, kVertexSurface, hit.material, hit.light,
+Vertex vertex_from_hit(SurfaceHit hit, Frame frame, Bsdf b, vec3 beta) {
+    return Vertex(hit.p, hit.ng, frame.z, frame.x, beta, hit.uv, kVertexSurface, hit.material, hit.light,
                   false, !bsdf_is_delta(b), 0.0, 0.0);
 }
 
@@ -42,14 +42,14 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
         float u_rr = sampler_1d(s);
         Vertex prev = light_path ? g_light[n - 1] : g_camera[n - 1];
         Bsdf b = bsdf_from_material(hit.material, hit.uv);
-        Vertex v = vertex_from_hit(hit, b, beta);
+        Frame frame = shading_frame(hit);
+        Vertex v = vertex_from_hit(hit, frame, b, beta);
         v.pdf_fwd = solid_angle_to_area(pdf_sa, prev, v);
         if (!light_path && n == 1) record_aov(aov, hit);
         if (light_path) g_light[n] = v; else g_camera[n] = v;
         n += 1;
         if (n >= max_vertices) break;
 
-        Frame frame = frame_from_z(hit.ns);
         vec3 wo = frame_to_local(frame, -d);
         BsdfSample bs = bsdf_sample(b, wo, u_choice.x, u_bsdf, light_path);
         if (!bs.valid) break;
@@ -88,7 +88,7 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
 // f |cos| of a surface vertex v toward the world point `to`, reached from `from`
 // (importance transport with the shading-normal correction when adjoint).
 vec3 vertex_f(Vertex v, vec3 from, vec3 to, bool adjoint) {
-    Frame frame = frame_from_z(v.ns);
+    Frame frame = vertex_frame(v);
     vec3 wo_w = normalize(from - v.p), wi_w = normalize(to - v.p);
     vec3 wo = frame_to_local(frame, wo_w), wi = frame_to_local(frame, wi_w);
     vec3 f = bsdf_eval(bsdf_from_material(v.material, v.uv), wo, wi, adjoint);

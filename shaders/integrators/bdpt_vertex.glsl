@@ -30,6 +30,7 @@ struct Vertex {
     vec3 p;
     vec3 ng;        // geometric normal (0 for points off surfaces: pinhole, lens, point lights)
     vec3 ns;        // shading normal
+    vec3 tangent;   // x axis of the shading frame (geometry/surface.glsl's shading_frame)
     vec3 beta;      // subpath throughput up to and including this vertex's arrival
     vec2 uv;
     uint kind;      // kVertexCamera, kVertexLight, kVertexSurface
@@ -46,7 +47,12 @@ Vertex g_light[kBdptVertices];
 float g_time;   // the sample's shutter time
 
 Vertex vertex_point(uint kind, vec3 p, vec3 ng, vec3 beta) {
-    return Vertex(p, ng, ng, beta, vec2(0.0), kind, 0u, 0u, false, true, 0.0, 0.0);
+    return Vertex(p, ng, ng, vec3(0.0), beta, vec2(0.0), kind, 0u, 0u, false, true, 0.0, 0.0);
+}
+
+// The shading frame of a surface vertex, as its hit's shading_frame gave it.
+Frame vertex_frame(Vertex v) {
+    return Frame(v.tangent, cross(v.ns, v.tangent), v.ns);
 }
 
 bool vertex_on_surface(Vertex v) {
@@ -87,7 +93,7 @@ float vertex_pdf(Vertex v, Vertex prev, Vertex next) {
     if (v.kind == kVertexLight) return vertex_pdf_light(v, next);
     vec3 wn = normalize(next.p - v.p);
     if (v.kind == kVertexCamera) return solid_angle_to_area(camera_pdf_dir(wn, g_time), v, next);
-    Frame f = frame_from_z(v.ns);
+    Frame f = vertex_frame(v);
     float pdf = bsdf_pdf(bsdf_from_material(v.material, v.uv), frame_to_local(f, normalize(prev.p - v.p)),
                          frame_to_local(f, wn));
     return solid_angle_to_area(pdf, v, next);
