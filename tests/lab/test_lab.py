@@ -80,10 +80,12 @@ def test01_outputs_exist_and_every_figure_is_a_readable_png(lab):
     report = (out / "report.md").read_text()
     from glrender.lab import EXPERIMENTS
 
-    assert [s["name"] for s in results["experiments"]] == EXPERIMENTS
+    names = [s["name"] for s in results["experiments"]]
+    assert names == EXPERIMENTS + ["defaults"]   # the closing section: defaults vs measured
+    assert len(section(results, "defaults")["findings"]) == 4
     for s in results["experiments"]:
         assert f"## {s['title']}" in report
-        assert s["figures"], s["name"]
+        assert s["figures"] or s["name"] == "defaults", s["name"]
         for name in s["figures"]:
             assert f"]({name})" in report, name
             with Image.open(out / name) as im:
