@@ -84,6 +84,8 @@ class PreviewApp:
         self.out = out
         integ = scene.integrator
         self.integrator = options.integrator or integ.kind
+        if self.integrator not in INTEGRATOR_ORDER:     # sppm: not a progressive kernel here
+            self.integrator = "path"
         self.strategy = options.strategy or integ.strategy
         self.max_depth = options.max_depth if options.max_depth is not None else integ.max_depth
         self.view = options.display

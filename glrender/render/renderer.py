@@ -250,6 +250,10 @@ class Renderer:
         s = self.settings
         integ = s.integrator
         p = self.packed
+        if integ.kind not in INTEGRATOR_FILES:
+            raise UsageError(f"integrator {integ.kind!r} has its own driver, not a render kernel: "
+                             f"use glrender.photon.SppmRenderer (or glrender render --integrator "
+                             f"{integ.kind}); Renderer takes {', '.join(INTEGRATOR_FILES)}")
         infinite = sorted(p.light_kinds & {"directional", "constant", "envmap"})
         if integ.kind == "bdpt" and infinite:
             raise UsageError(f"bdpt: lights at infinity ({', '.join(infinite)}) are not supported "
