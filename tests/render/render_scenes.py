@@ -72,3 +72,15 @@ def plane_points(scene: m.Scene, supersample: int = 8) -> np.ndarray:
     t = -o[2] / d[..., 2]
     p = o + t[..., None] * d
     return p.reshape(h, s, w, s, 3).transpose(0, 2, 1, 3, 4).reshape(h, w, s * s, 3)
+
+
+def cornell_box(width: int, height: int) -> m.Scene:
+    """scenes/cornell-box at another film size."""
+    from dataclasses import replace
+    from pathlib import Path
+
+    import glrender
+
+    scene = glrender.load(Path(__file__).resolve().parents[2] / "scenes" / "cornell-box" / "scene.toml")
+    scene.film = replace(scene.film, width=width, height=height)
+    return scene

@@ -2,23 +2,17 @@
 clamp, so no pixel mean exceeds it; a clamp above every sample changes nothing, bitwise."""
 from __future__ import annotations
 
-from dataclasses import replace
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 import glrender
 from glrender.errors import UsageError
-
-CORNELL = Path(__file__).resolve().parents[2] / "scenes" / "cornell-box" / "scene.toml"
+from render_scenes import cornell_box
 
 
 @pytest.fixture(scope="module")
 def scene():
-    s = glrender.load(CORNELL)
-    s.film = replace(s.film, width=32, height=32)
-    return s
+    return cornell_box(32, 32)
 
 
 def test01_clamp_bounds_every_sample(gl_ctx, scene):

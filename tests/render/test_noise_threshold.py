@@ -2,9 +2,6 @@
 the threshold (as predicted) and its mean stays unbiased."""
 from __future__ import annotations
 
-from dataclasses import replace
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -13,15 +10,12 @@ from glrender.errors import UsageError
 from glrender.render.noise import mean_relative_stderr, pilot_seed, plan_spp
 from glrender.render.renderer import settings_from_scene
 from glrender.testing.images import compare_images
-
-CORNELL = Path(__file__).resolve().parents[2] / "scenes" / "cornell-box" / "scene.toml"
+from render_scenes import cornell_box
 
 
 @pytest.fixture(scope="module")
 def scene():
-    s = glrender.load(CORNELL)
-    s.film = replace(s.film, width=24, height=24)
-    return s
+    return cornell_box(24, 24)
 
 
 def test01_threshold_met_as_predicted(gl_ctx, scene):
