@@ -126,3 +126,33 @@ def test05_obj_with_dozens_of_textures_renders_each(write, tmp_path, gl_ctx):
         # a diffuse quad under a sky of radiance 1 reflects its albedo; 49 pixels x 64
         # samples of a cosine-weighted estimate: a few tenths of a percent of noise
         np.testing.assert_allclose(got, want, rtol=0.03, err_msg=f"quad {k}")
+
+
+def test06_mitsuba_normalmap_and_mask(write, tmp_path, caught):
+    images(tmp_path)
+    path = write("s.xml", """<scene version="3.0.0">
+  <shape type="rectangle">
+    <bsdf type="mask">
+      <texture name="opacity" type="bitmap">
+        <string name="filename" value="rgba.png"/><boolean name="raw" value="true"/>
+      </texture>
+      <bsdf type="normalmap">
+        <texture name="normalmap" type="bitmap">
+          <string name="filename" value="n.png"/><boolean name="raw" value="true"/>
+        </texture>
+        <bsdf type="roughplastic"/>
+      </bsdf>
+    </bsdf>
+  </shape>
+</scene>""")
+    with caught as messages:
+        scene = glrender.load(path)
+    mat = scene.materials[scene.shapes[0].material]
+    assert mat.kind == "roughplastic"
+    np.testing.assert_allclose(mat.normal_map.image, NORMAL / 255.0, atol=1e-6)
+    assert mat.opacity is not None and mat.alpha_cutoff == 0.5
+    assert any("mask (read as an opacity cutout at 0.5)" in w for w in messages)
+    bad = write("b.xml", '<scene version="3.0.0"><shape type="rectangle"><bsdf type="normalmap">'
+                         '<bsdf type="diffuse"/></bsdf></shape></scene>')
+    with pytest.raises(SceneError, match=r'b.xml:1: .*needs a <texture name="normalmap">'):
+        glrender.load(bad)

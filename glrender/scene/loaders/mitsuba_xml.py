@@ -491,7 +491,29 @@ class _Builder:
             if len(inner) > 1:
                 self.r.notes.add("twosided with two different BSDFs (the first is used)", node.line)
             return self.bsdf(inner[0], two_sided=True)
-        if t in ("bumpmap", "normalmap", "mask"):
+        if t in ("normalmap", "mask"):
+            # Mitsuba's normal map: n = 2 c - 1 in the shading frame along dp/du, as ours;
+            # its mask blends the BSDF with a null one by opacity: read as a cutout at 1/2
+            # (the same image where the opacity is 0 or 1)
+            inner = [obj for _, obj in self.objects(node, "bsdf")]
+            if not inner:
+                node.fail("needs a nested <bsdf>")
+            textures = {child: obj for child, obj in self.objects(node, "texture")}
+            key = "normalmap" if t == "normalmap" else "opacity"
+            mat = self.bsdf(inner[0], two_sided)
+            if key not in textures:
+                if t == "mask" and "opacity" in node.props:
+                    self.r.notes.add("mask with a constant opacity (the nested BSDF is used "
+                                     "alone)", node.line)
+                    return mat
+                node.fail(f"needs a <texture name=\"{key}\">")
+            from dataclasses import replace
+
+            if t == "normalmap":
+                return replace(mat, normal_map=self.texture(textures[key]))
+            self.r.notes.add("mask (read as an opacity cutout at 0.5)", node.line)
+            return replace(mat, opacity=self.texture(textures[key]))
+        if t == "bumpmap":
             self.r.notes.add(f"bsdf {t} (the nested BSDF is used alone)", node.line)
             inner = [obj for _, obj in self.objects(node, "bsdf")]
             if inner:
