@@ -53,15 +53,25 @@ def _frame(preview) -> np.ndarray:
     return capture(preview.display, preview.window).astype(np.float64)
 
 
+def _denoised_frame(preview, spp: int) -> np.ndarray:
+    """A capture of the denoised view made at ``spp``: the window redraws after its title
+    changes, so wait until two captures in a row are the same picture (the denoised view
+    holds still until the next one) while the title still names that spp."""
+    def settled():
+        a = _frame(preview)
+        b = _frame(preview)
+        same = np.array_equal(a, b) and re.search(rf"denoised at {spp} spp", preview.title())
+        return (a,) if same else None
+    return wait_for(settled, 60.0, what=f"a still denoised view at {spp} spp")[0]
+
+
 def test01_denoise_key_steadies_the_view(preview):
     preview.key("n", "r")
     preview.wait_line(r"denoising with Open Image Denoise", 60.0)
     first = _title_number(preview, r"denoised at (\d+) spp", 2)
-    on_a = _frame(preview)
+    on_a = _denoised_frame(preview, first)
     second = _title_number(preview, r"denoised at (\d+) spp", 2 * first)
-    on_b = _frame(preview)
-    # the same capture is made of the view whose title says it is the denoised one
-    assert re.search(rf"denoised at {second} spp", preview.title())
+    on_b = _denoised_frame(preview, second)
 
     # restart, then denoise off: a title without "denoised" is one made after the restart
     preview.key("r", "n")
