@@ -266,16 +266,17 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
         "    }",
         "    hit = SurfaceHit(t, p, ng, ns, uv, material, light, prim, dpdu);",
     ]
-    if has_normal_maps(packed):
+    normal_maps, cutouts = has_normal_maps(packed), has_bvh and has_alpha_cutouts(packed)
+    if normal_maps:
         body += ["    apply_normal_map(hit, scene_material(material));"]
     body += [
         "    return true;",
         "}",
         "",
     ]
-    if has_normal_maps(packed) or (has_bvh and has_alpha_cutouts(packed)):
+    if normal_maps or cutouts:
         lines += ['#include "bsdf/normal_map.glsl"']
-    if has_bvh and has_alpha_cutouts(packed):
+    if cutouts:
         lines += _ALPHA_PASS
     lines += body
 

@@ -75,9 +75,11 @@ def _check_options(args) -> None:
         parse_crop(args.crop)
 
 
-def parse_crop(text: str, width: int | None = None, height: int | None = None) -> list[int]:
-    """``X0,Y0,X1,Y1`` -> [x0, y0, x1, y1] (pixels, x1 and y1 excluded), inside the film
-    when its size is given."""
+def parse_crop(text, width: int | None = None, height: int | None = None) -> list[int]:
+    """``X0,Y0,X1,Y1`` (or the list a checkpoint saved) -> [x0, y0, x1, y1] (pixels, x1 and
+    y1 excluded), inside the film when its size is given."""
+    if isinstance(text, (list, tuple)):
+        text = ",".join(map(str, text))
     parts = [p.strip() for p in str(text).split(",")]
     if len(parts) != 4 or not all(p.lstrip("-").isdigit() for p in parts):
         raise UsageError(f"--crop {text}: expected X0,Y0,X1,Y1 in whole pixels")
@@ -282,8 +284,7 @@ def run_render(args, signals) -> int:
             raise DeviceError(f"{exc}; `glrender info` lists the devices (choose with --device "
                               f"or $GLRENDER_DEVICE)") from exc
     _check_memory(width, height, first_hit, ctx.is_llvmpipe)
-    crop = parse_crop(",".join(map(str, options["crop"])) if isinstance(options.get("crop"), list)
-                      else options["crop"], width, height) if options.get("crop") else None
+    crop = parse_crop(options["crop"], width, height) if options.get("crop") else None
     if crop is not None:
         options["crop"] = crop
         if settings.integrator.kind in SPLATTING:
@@ -315,10 +316,11 @@ def run_render(args, signals) -> int:
     if ckpt is not None:
         saved_crop = ckpt.meta.get("options", {}).get("crop")
         if saved_crop != crop:
-            raise UsageError(f"{ckpt_path}: the checkpoint holds "
-                             f"{'crop ' + ','.join(map(str, saved_crop)) if saved_crop else 'the whole film'}, "
-                             f"this render {'crop ' + ','.join(map(str, crop)) if crop else 'the whole film'}: "
-                             f"resume with the same --crop, or render without --resume")
+            def held(c):
+                return "crop " + ",".join(map(str, c)) if c else "the whole film"
+            raise UsageError(f"{ckpt_path}: the checkpoint holds {held(saved_crop)}, this render "
+                             f"{held(crop)}: resume with the same --crop, or render without "
+                             f"--resume")
         check_resumable(ckpt, renderer)
         renderer.restore(ckpt.state)
         if ckpt.meta.get("device") != ctx.renderer:

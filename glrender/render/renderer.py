@@ -505,13 +505,13 @@ class Renderer:
             self._bind()
         return True
 
-    def _slice_bytes_per_pixel(self) -> list[tuple[Any, int]]:
-        """The per-pixel accumulation buffers and their bytes per pixel."""
-        bufs = [(self._mean, 16), (self._m2, 16)]
+    def _slice_bytes_per_pixel(self) -> list[tuple[Any, int, int]]:
+        """The per-pixel accumulation buffers in use: (buffer, bytes per pixel, binding)."""
+        bufs = [(self._mean, 16, layout.SSBO_ACCUM_MEAN), (self._m2, 16, layout.SSBO_ACCUM_M2)]
         if self.settings.aovs:
-            bufs.append((self._aov, 32))
+            bufs.append((self._aov, 32, layout.SSBO_AOV))
         if self.settings.count_loops:
-            bufs.append((self._debug, 4))
+            bufs.append((self._debug, 4, layout.SSBO_DEBUG))
         return bufs
 
     def _slices(self) -> list[tuple[int, int]]:
@@ -520,14 +520,14 @@ class Renderer:
         more than 8.4M pixels, or 4.2M with AOVs, takes several), each starting at an
         offset the device can bind."""
         limit = self._binding_limit()
-        widest = max(bpp for _, bpp in self._slice_bytes_per_pixel())
+        widest = max(bpp for _, bpp, _ in self._slice_bytes_per_pixel())
         row_bytes = TILE * self.width * widest
         first, count = self.rows
         if row_bytes * count <= limit:
             return [(first, count)]
         align = max(1, int(self._ssbo_alignment()))
         # rows of a slice: a multiple of k, so that every buffer's offset stays aligned
-        smallest = min(bpp for _, bpp in self._slice_bytes_per_pixel())
+        smallest = min(bpp for _, bpp, _ in self._slice_bytes_per_pixel())
         k = align // math.gcd(align, TILE * self.width * smallest)
         per = (limit // row_bytes) // k * k
         if per < 1:
@@ -539,7 +539,7 @@ class Renderer:
         """Bytes of device memory per accumulated pixel: mean and M2, AOVs and loop counters
         when enabled, a whole-image splat image for light tracing and BDPT, and the copy that
         undoes a stopped pass."""
-        per = sum(bpp for _, bpp in self._slice_bytes_per_pixel())
+        per = sum(bpp for _, bpp, _ in self._slice_bytes_per_pixel())
         if self.settings.integrator.kind in SPLATTING:
             per += 24
         return 2 * per
@@ -556,10 +556,8 @@ class Renderer:
         """Bind the part of the per-pixel buffers that holds tile rows [first_row, +n_rows)."""
         top = TILE * (first_row - self.rows[0])
         rows = min(self.height, TILE * (first_row + n_rows)) - TILE * first_row
-        slots = {id(self._mean): layout.SSBO_ACCUM_MEAN, id(self._m2): layout.SSBO_ACCUM_M2,
-                 id(self._aov): layout.SSBO_AOV, id(self._debug): layout.SSBO_DEBUG}
-        for buf, bpp in self._slice_bytes_per_pixel():
-            buf.bind_to_storage_buffer(slots[id(buf)], offset=top * self.width * bpp,
+        for buf, bpp, slot in self._slice_bytes_per_pixel():
+            buf.bind_to_storage_buffer(slot, offset=top * self.width * bpp,
                                        size=rows * self.width * bpp)
 
     def _accumulators(self) -> tuple[Any, ...]:

@@ -380,7 +380,10 @@ def _read_data_image(image_path: Path, opacity: bool) -> np.ndarray:
     has one, else its grey level; a normal map's RGB."""
     from PIL import Image
 
+    from .diagnostics import check_image_size
+
     with Image.open(image_path) as im:
+        check_image_size(im.size[0], im.size[1], str(image_path))
         if opacity:
             a = np.asarray(im.convert("RGBA") if "A" in im.getbands() else im.convert("L"),
                            np.float64)
@@ -420,9 +423,10 @@ def _texture_map(parts, path: Path, lineno: int, files: SceneFiles,
     name = " ".join(parts[i:])
     image_path = files.resolve(name, path, lineno, "texture")
     try:
-        image = read_image_checked(image_path)
         if data is not None and image_path.suffix.lower() not in (".exr", ".hdr", ".pfm", ".npy"):
-            image = _read_data_image(image_path, data == "opacity")
+            image = _read_data_image(image_path, data == "opacity")     # stored values
+        else:
+            image = read_image_checked(image_path)
     except Exception as exc:
         raise SceneError(f"{path}:{lineno}: cannot read texture {name!r} ({exc})") from None
     # options act on OBJ's uv (v up); in the flipped convention v' = 1 - v they become
