@@ -2,10 +2,15 @@
 before and after, at 1, 4, 16 and 64 spp, on the Cornell box (Mitsuba 3's 49,152-spp
 reference) and the textured Cornell box of tests/denoise (glrender's 4,096-spp reference).
 
-MSE is over the whole linear image and over the pixels whose footprint does not reach
-the light (tests/denoise/denoise_scenes.away_from_light: the light's pixels, 18x brighter
-than any lit surface, and the ring of pixels it covers in part; 1.4% of the Cornell box). Times: OIDN on its CPU device
-with all cores, best of ``--repeats`` runs, the first (network set-up) excluded.
+The denoised image is ``glrender render --denoise``'s: OIDN filters the beauty minus its
+emission AOV and the seen-emission pass (glrender.denoise.render_seen_emission) is added
+back; "own emission" adds back the beauty's own emission AOV instead (no pass), for
+comparison. MSE is over the whole linear image and over the pixels whose footprint does
+not reach the light (tests/denoise/denoise_scenes.away_from_light: the light's pixels,
+18x brighter than any lit surface, and the ring of pixels it covers in part; 1.4% of the
+Cornell box). Times: OIDN on its CPU device with all cores and the emission pass (its
+renderer's set-up included), best of ``--repeats`` runs, the first (OIDN's network
+set-up, the pass's kernel compile) excluded; the render's own time for scale.
 The renderer's samples/s while OIDN runs in a background thread (the preview's set-up:
 one OIDN thread) against samples/s alone measure how much denoising takes from llvmpipe.
 Writes the "## Denoising" section of benchmarks/RESULTS.md (other sections are kept).
@@ -31,7 +36,7 @@ sys.path.insert(0, str(ROOT / "tests" / "denoise"))
 
 import glrender  # noqa: E402
 from denoise_scenes import REFS, away_from_light, cornell, reference, textured_cornell  # noqa: E402
-from glrender.denoise import Denoiser, aovs_are_clean  # noqa: E402
+from glrender.denoise import Denoiser, aovs_are_clean, render_seen_emission  # noqa: E402
 from glrender.render.renderer import Renderer, settings_from_scene  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "RESULTS.md"
@@ -73,16 +78,23 @@ def quality_rows(name, scene, ref, denoiser, repeats) -> list[str]:
     rows = []
     for spp in SPPS:
         film = glrender.render(scene, spp=spp, seed=SEED, aovs=True)
-        times = []
+        settings = settings_from_scene(scene, spp=spp, seed=SEED)
+        times, pass_times = [], []
         for _ in range(repeats + 1):
             t0 = time.perf_counter()
-            out = denoiser.denoise_film(film, clean_aux=clean)
-            times.append(time.perf_counter() - t0)
+            seen = render_seen_emission(scene, settings)
+            t1 = time.perf_counter()
+            out = denoiser.denoise_film(film, clean_aux=clean, seen_emission=seen.mean)
+            times.append(time.perf_counter() - t1)
+            pass_times.append(t1 - t0)
+        own = denoiser.denoise_film(film, clean_aux=clean)
         mpix = film.mean.shape[0] * film.mean.shape[1] / 1e6
         noisy, den = mse(film.mean, ref), mse(out, ref)
         noisy_lit, den_lit = mse(film.mean, ref, lit), mse(out, ref, lit)
-        rows.append(f"| {name} | {spp} | {min(times[1:]) / mpix:.2f} | {noisy:.3g} | {den:.3g} | "
-                    f"{noisy / den:.2f} | {noisy_lit:.3g} | {den_lit:.3g} | {noisy_lit / den_lit:.1f} |")
+        rows.append(f"| {name} | {spp} | {film.stats['seconds']['render']:.2f} | "
+                    f"{seen.spp} / {min(pass_times[1:]):.2f} | {min(times[1:]) / mpix:.2f} | "
+                    f"{noisy:.3g} | {den:.3g} | **{noisy / den:.1f}** | {noisy / mse(own, ref):.2f} | "
+                    f"{noisy_lit:.3g} | {den_lit:.3g} | {noisy_lit / den_lit:.1f} |")
         print(rows[-1], flush=True)
     return rows
 
@@ -154,11 +166,15 @@ def main() -> None:
         SECTION, "",
         f"`benchmarks/denoise.py`, {datetime.date.today()}, {gl}; {device}. "
         f"Seed {SEED}, Sobol'; cleanAux as `aovs_are_clean` decides (on for both scenes). "
-        "MSE in linear radiance against the reference; \"lit\" leaves out the pixels whose "
-        "footprint reaches the light (the light and a one-pixel ring).", "",
-        "| scene | spp | OIDN s/Mpixel | MSE noisy | MSE denoised | ratio | lit MSE noisy "
-        "| lit MSE denoised | lit ratio |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "MSE in linear radiance against the reference, over the whole image; ratio = noisy / "
+        "denoised; \"own emission\": the ratio when the beauty's own emission AOV is added "
+        "back instead of the emission pass; \"lit\" leaves out the pixels whose footprint "
+        "reaches the light (the light and a one-pixel ring). Render and pass times on the "
+        "shared machine are rough.", "",
+        "| scene | spp | render s | emission pass spp / s | OIDN s/Mpixel | MSE noisy "
+        "| MSE denoised | ratio | ratio, own emission | lit MSE noisy | lit MSE denoised "
+        "| lit ratio |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
         *rows, "",
         f"Renderer throughput (Cornell box, 8 spp passes) alone: {alone / 1e6:.2f} Msamples/s; "
         f"with one OIDN thread denoising back to back beside it: {shared / 1e6:.2f} Msamples/s "

@@ -49,8 +49,8 @@ def render(scene: Scene | str | os.PathLike[str], spp: int | None = None, *,
             2 = direct lighting, -1 = unbounded).
         strategy: direct-lighting weighting: ``"light"``, ``"bsdf"``, ``"mis-balance"``,
             ``"mis-power"``.
-        aovs: also record first-hit albedo, normal (world space) and depth (metres along
-            the ray), read with :meth:`Film.aov`.
+        aovs: also record first-hit albedo, normal (world space), depth (metres along
+            the ray) and the emission the camera sees, read with :meth:`Film.aov`.
         device: ``"auto"``, ``"cpu"`` (llvmpipe), ``"gpu"`` or an EGL device index.
         progress: True: a progress bar on standard error when it is a terminal; False:
             nothing; a callable: ``progress(spp_done, seconds)`` after every pass.

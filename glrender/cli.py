@@ -231,7 +231,7 @@ def _add_render(sub) -> None:
     g = p.add_argument_group("outputs")
     g.add_argument("--aov", default=None, metavar=",".join(AOV_NAMES),
                    help="also write these arbitrary output variables: first-hit albedo, "
-                        "normal and depth, and the per-sample variance")
+                        "normal and depth, the emission seen, and the per-sample variance")
     g.add_argument("--exposure", type=float, default=0.0, metavar="STOPS",
                    help="PNG/JPEG: scale by 2^STOPS before the tone curve (default 0)")
     g.add_argument("--tonemap", choices=TONE_CURVES, default="clamp",

@@ -3,7 +3,8 @@
 A :class:`Partial` holds one band's per-pixel Welford statistics in the renderer's
 layout (``Renderer.state()``): ``mean`` (N, 4) = mean RGB and the count of finite
 samples, ``m2`` (N, 4) = M2 RGB and the count of dropped non-finite samples,
-``aov`` (N, 2, 4) = running means of first-hit albedo and normal/depth (or None).
+``aov`` (N, AOV_VEC4S, 4) = running means of first-hit albedo, normal/depth and seen
+emission (or None).
 A unit's partial is float32, as the device accumulated it; merged partials are
 float64. :func:`merge` combines two partials of disjoint sample ranges with Chan,
 Golub and LeVeque's pairwise update (1979):
@@ -19,6 +20,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from ..gpu.layout import AOV_VEC4S, aov_images
 
 
 @dataclass
@@ -41,7 +44,7 @@ def from_state(state: dict, pixels: int, aovs: bool, samples, seconds: float = 0
     """A unit's partial from ``Renderer.state()``."""
     mean = state["mean"].reshape(pixels, 4)
     m2 = state["m2"].reshape(pixels, 4)
-    aov = state["aov"].reshape(pixels, 2, 4) if aovs else None
+    aov = state["aov"].reshape(pixels, AOV_VEC4S, 4) if aovs else None
     sums = None
     if splat:   # two 32-bit words (low, high) per pixel and channel, as the device adds them
         words = np.asarray(state["splat"], np.uint32).reshape(-1, 2).astype(np.uint64)
@@ -86,7 +89,7 @@ class FrameImage:
         self.width, self.height, self.aovs = width, height, aovs
         self.mean = np.zeros((height, width, 4), np.float32)
         self.m2 = np.zeros((height, width, 4), np.float32)
-        self.aov = np.zeros((height, width, 2, 4), np.float32) if aovs else None
+        self.aov = np.zeros((height, width, AOV_VEC4S, 4), np.float32) if aovs else None
         self.splat = None      # fixed-point splat sums of the whole film (whole-frame bands)
         self.bands_done: set[int] = set()
 
@@ -98,7 +101,7 @@ class FrameImage:
         self.mean[y0:y0 + h] = partial.mean.reshape(h, self.width, 4)
         self.m2[y0:y0 + h] = partial.m2.reshape(h, self.width, 4)
         if self.aov is not None:
-            self.aov[y0:y0 + h] = partial.aov.reshape(h, self.width, 2, 4)
+            self.aov[y0:y0 + h] = partial.aov.reshape(h, self.width, AOV_VEC4S, 4)
         if partial.splat is not None:
             self.splat = partial.splat if self.splat is None else self.splat + partial.splat
         self.bands_done.add(band)
@@ -106,10 +109,7 @@ class FrameImage:
     def film(self, spp: int, sampler: str):
         from ..film import Film
 
-        aovs = {}
-        if self.aov is not None:
-            aovs = {"albedo": self.aov[:, :, 0, :3].copy(), "normal": self.aov[:, :, 1, :3].copy(),
-                    "depth": self.aov[:, :, 1, 3].copy()}
+        aovs = aov_images(self.aov, self.height, self.width) if self.aov is not None else {}
         mean = self.mean
         if self.splat is not None:
             # as Renderer.film and splat_image: the sums over the light paths (one per

@@ -19,7 +19,7 @@ Integrators that splat light paths onto the whole film (light tracing, BDPT) ren
 whole frames (``whole_frame``: one band) split into sample ranges: their splats are
 64-bit fixed-point sums, which add exactly in any order.
 
-A unit's transfer is its band's accumulation: 32 bytes per pixel (64 with AOVs),
+A unit's transfer is its band's accumulation: 32 bytes per pixel (80 with AOVs),
 ``width x 8 x rows`` pixels, e.g. 1 MB for one tile row of a 3840-pixel-wide image.
 """
 from __future__ import annotations

@@ -65,14 +65,17 @@ class Film:
     def aov(self, name: str) -> np.ndarray:
         """An arbitrary output by name: ``"variance"`` (always), and with ``aovs=True``
         ``"albedo"`` (H, W, 3, first-hit reflectance), ``"normal"`` (H, W, 3, world-space
-        unit shading normal) and ``"depth"`` (H, W, distance along the camera ray in scene
-        units). Raises :class:`UsageError` naming the available ones otherwise."""
+        unit shading normal), ``"depth"`` (H, W, distance along the camera ray in scene
+        units) and ``"emission"`` (H, W, 3, the part of ``mean`` emitted by the lights and
+        environment the camera sees: directly, and for the path tracer in mirrors and
+        through glass; ``mean - emission`` is the light surfaces reflect). Raises
+        :class:`UsageError` naming the available ones otherwise."""
         if name == "variance":
             return self.variance
         if name not in self.aovs:
             have = ", ".join(["variance", *self.aovs]) or "variance"
             raise UsageError(f"AOV {name!r} was not rendered (available: {have}; "
-                             f"render with aovs=True for albedo, normal, depth)")
+                             f"render with aovs=True for albedo, normal, depth, emission)")
         return self.aovs[name]
 
     def crop(self, x0: int, y0: int, x1: int, y1: int) -> "Film":

@@ -18,6 +18,9 @@ SSBO_MATERIALS = 2
 SSBO_LIGHTS = 3
 SSBO_DISTRIBUTIONS = 4
 SSBO_AOV = 5
+# vec4s per pixel in SSBO_AOV (kAovVec4s): albedo (rgb, -), normal (xyz, depth), emission (rgb, -)
+AOV_VEC4S = 3
+AOV_BYTES = 16 * AOV_VEC4S
 SSBO_DEBUG = 6
 SSBO_SPLAT = 7
 
@@ -97,6 +100,14 @@ LIGHT_KINDS = {
     "directional": 6, "constant": 7, "envmap": 8,
 }
 LIGHT_FLAG_TWO_SIDED = 1
+
+
+def aov_images(aov: np.ndarray, height: int, width: int) -> dict[str, np.ndarray]:
+    """The first-hit AOV images of an SSBO_AOV accumulation (float32, AOV_VEC4S vec4s a
+    pixel, rows top to bottom): albedo, normal, emission (H, W, 3) and depth (H, W)."""
+    a = np.asarray(aov, np.float32).reshape(height, width, AOV_VEC4S, 4)
+    return {"albedo": a[:, :, 0, :3].copy(), "normal": a[:, :, 1, :3].copy(),
+            "depth": a[:, :, 1, 3].copy(), "emission": a[:, :, 2, :3].copy()}
 
 
 def zeros(dtype: np.dtype, count: int = 1) -> np.ndarray:

@@ -1,13 +1,16 @@
 """The preview's denoised view: Open Image Denoise in a background thread.
 
-The frame loop hands the accumulation (mean, albedo, normal, read back on the thread that
-owns the GL context) to :class:`DenoisedView` when a new denoised image is worth making:
+The frame loop hands the accumulation (mean, albedo, normal, emission, read back on the
+thread that owns the GL context) to :class:`DenoisedView` when a new denoised image is
+worth making:
 the first one as soon as an accumulation has samples, then each time its samples per
 pixel have doubled (each halves the noise variance again), and never while a denoise is
 still running, so the window keeps drawing at its frame rate whatever OIDN takes. OIDN
 runs with one thread fewer than the cores (at least one), unpinned, so llvmpipe's
 threads keep rendering beside it, at OIDN's "balanced" quality; ``cleanAux`` as for
-``glrender render --denoise``.
+``glrender render --denoise``. As there, the emission the camera sees (the emission AOV)
+is kept out of the filter and added back; the preview adds back the accumulation's own
+(no separate pass: the light's edges converge with the accumulation).
 """
 from __future__ import annotations
 
@@ -71,14 +74,16 @@ class DenoisedView:
         """Denoise ``film`` (a :class:`Film` read back now) in the background."""
         import time
 
+        from ..denoise import film_aux
+
         self._busy.set()
         self._last_request = (generation, film.spp)
-        color, albedo, normal = film.mean, film.aovs.get("albedo"), film.aovs.get("normal")
+        color, aux = film.mean, film_aux(film)
 
         def work():
             try:
                 t0 = time.perf_counter()
-                image = self.denoiser.denoise(color, albedo, normal, clean_aux=self.clean_aux)
+                image = self.denoiser.denoise(color, *aux, clean_aux=self.clean_aux)
                 seconds = time.perf_counter() - t0
                 self.latest = Denoised(image, film.spp, generation, seconds)
                 self.runs += 1

@@ -18,9 +18,10 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import DeviceError, UsageError
+from ..gpu.layout import AOV_BYTES
 
-AOV_NAMES = ("albedo", "normal", "depth", "variance", "radius", "photons")   # the last two: sppm
-FIRST_HIT_AOVS = ("albedo", "normal", "depth")
+AOV_NAMES = ("albedo", "normal", "depth", "emission", "variance", "radius", "photons")   # the last two: sppm
+FIRST_HIT_AOVS = ("albedo", "normal", "depth", "emission")
 # sample indices are 32-bit on the device: the open-ended target of a time budget
 SPP_LIMIT = 1 << 31
 # the options a checkpoint remembers; --resume takes those not given again
@@ -116,7 +117,7 @@ def _available_memory() -> int | None:
 def _check_memory(width: int, height: int, aovs: bool, on_host_device: bool) -> None:
     """Refuse images whose buffers cannot fit, before allocating them."""
     pixels = width * height
-    device = pixels * (16 + 16 + (32 if aovs else 0)) * 2   # accumulators and the undo copy
+    device = pixels * (16 + 16 + (AOV_BYTES if aovs else 0)) * 2   # accumulators and the undo copy
     host = pixels * (32 + 76 + 24)                         # read-back, Film arrays, encoding
     need = host + (device if on_host_device else 0)
     have = _available_memory()
@@ -173,20 +174,34 @@ def _write_outputs(film, output: Path, aov_names: list[str], args,
     return written
 
 
-def _denoise(film, scene, say) -> tuple[np.ndarray, dict]:
-    """The film's mean denoised (--denoise), and what the statistics record about it."""
-    from ..denoise import Denoiser, aovs_are_clean
+def _denoise(film, scene, settings, ctx, crop, say) -> tuple[np.ndarray, dict]:
+    """The film's mean denoised (--denoise), and what the statistics record about it: the
+    seen emission kept out of the filter and rendered again by its own pass (at the
+    film's samples per pixel, which a time budget or a resume may change)."""
+    from ..denoise import Denoiser, aovs_are_clean, render_seen_emission
+    from .noise import crop_band, crop_rows
 
     clean = aovs_are_clean(scene)
     t0 = time.perf_counter()
+    settings = replace(settings, sampler=replace(settings.sampler, spp=film.spp))
+    rows = crop_rows(crop) if crop is not None else None
+    seen = render_seen_emission(scene, settings, ctx=ctx, rows=rows)
+    pass_spp = None if seen is None else seen.spp
+    if seen is not None and crop is not None:
+        seen = crop_band(seen, crop, rows)
+    t1 = time.perf_counter()
     with Denoiser() as denoiser:
-        image = denoiser.denoise_film(film, clean_aux=clean)
+        image = denoiser.denoise_film(film, clean_aux=clean,
+                                      seen_emission=None if seen is None else seen.mean)
         info = {"library": "Open Image Denoise", "device": denoiser.device_name,
                 "threads": denoiser.threads, "quality": denoiser.quality, "clean_aux": clean,
-                "aux": [n for n in ("albedo", "normal") if n in film.aovs]}
+                "aux": [n for n in ("albedo", "normal") if n in film.aovs],
+                "emission_kept": "emission" in film.aovs, "emission_pass_spp": pass_spp,
+                "emission_pass_seconds": t1 - t0}
     info["seconds"] = time.perf_counter() - t0
     say(f"glrender: denoised in {info['seconds']:.2f} s (Open Image Denoise, "
-        f"{denoiser.device_name}, albedo and normal{', cleanAux' if clean else ''})")
+        f"{denoiser.device_name}, albedo and normal{', cleanAux' if clean else ''}"
+        f"{f'; the seen emission apart, {pass_spp} spp' if pass_spp else ''})")
     return image, info
 
 
@@ -375,7 +390,7 @@ def run_render(args, signals) -> int:
     if film.spp > 0:
         if getattr(args, "denoise", False):
             with timer("denoise"):
-                denoised, denoise_info = _denoise(film, scene, say)
+                denoised, denoise_info = _denoise(film, scene, settings, ctx, crop, say)
         with timer("write"):
             written = _write_outputs(film, output, aov_names, args, denoised)
         if interrupted or keep_checkpoint:

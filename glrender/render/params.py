@@ -25,7 +25,8 @@ def shader_defines(*, sampler: str = "independent", material_kinds=("diffuse",),
                    strategy: str = "mis-power", emitter_samples: int = 1, bsdf_samples: int = 1,
                    hide_emitters: bool = False, light_selection: str = "power",
                    area_sampling: str = "solid-angle", filter: str = "box", aovs: bool = False,
-                   count_loops: bool = False, debug_nonfinite: int = 0) -> dict[str, object]:
+                   count_loops: bool = False, debug_nonfinite: int = 0,
+                   emission_only: bool = False) -> dict[str, object]:
     """The full define set for params.glsl (defaults suit unit tests of shader code)."""
     return {
         "GLRENDER_SAMPLER": SAMPLERS[sampler],
@@ -43,4 +44,5 @@ def shader_defines(*, sampler: str = "independent", material_kinds=("diffuse",),
         "GLRENDER_AOVS": bool(aovs),
         "GLRENDER_COUNT_LOOPS": bool(count_loops),
         "GLRENDER_DEBUG_NONFINITE": int(debug_nonfinite),
+        "GLRENDER_EMISSION_ONLY": bool(emission_only),
     }

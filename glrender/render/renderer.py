@@ -49,6 +49,9 @@ class RenderSettings:
     time_target: float = 0.1              # seconds per dispatch
     clamp: float | None = None            # a sample's largest RGB component is scaled down to
                                           # this (biased: off by default)
+    emission_only: bool = False           # path tracer: the emission the camera sees, alone
+                                          # (directly and through delta surfaces: the
+                                          # emission AOV; glrender.denoise renders it apart)
 
 
 def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: int | None = None,
@@ -58,10 +61,13 @@ def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: i
                         area_sampling: str | None = None, hide_emitters: bool | None = None,
                         aovs: bool = False, count_loops: bool = False,
                         samples_per_pass: int | None = None, time_target: float = 0.1,
-                        clamp: float | None = None) -> RenderSettings:
+                        clamp: float | None = None, emission_only: bool = False) -> RenderSettings:
     """The scene's settings with the given overrides (None keeps the scene's value).
     ``clamp``: scale each camera sample whose largest RGB component exceeds it down to
-    it (removes fireflies at the price of bias; None: off)."""
+    it (removes fireflies at the price of bias; None: off). ``emission_only`` (path
+    tracer): the image is the emission the camera sees, directly or through mirrors,
+    glass and null surfaces (the ``emission`` AOV's quantity): paths end at the first
+    surface that is not a delta one, without next-event estimation."""
     integ = scene.integrator
     overrides: dict[str, Any] = {k: v for k, v in dict(kind=integrator, max_depth=max_depth, rr_depth=rr_depth,
                                        strategy=strategy, light_selection=light_selection,
@@ -77,9 +83,12 @@ def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: i
                                   and clamp > 0):
         raise UsageError(f"clamp: expected a positive number (the largest RGB component a "
                          f"sample keeps), got {clamp!r}")
+    if emission_only and integ.kind != "path":
+        raise UsageError(f"emission_only: only with the path integrator, not {integ.kind}")
     return RenderSettings(integ, samp, aovs=aovs, count_loops=count_loops,
                           samples_per_pass=samples_per_pass, time_target=time_target,
-                          clamp=None if clamp is None else float(clamp))
+                          clamp=None if clamp is None else float(clamp),
+                          emission_only=bool(emission_only))
 
 
 def camera_tangents(camera: m.Camera, width: int, height: int) -> tuple[float, float]:
@@ -266,7 +275,8 @@ class Renderer:
             emitter_samples=integ.emitter_samples, bsdf_samples=integ.bsdf_samples,
             hide_emitters=integ.hide_emitters, light_selection=integ.light_selection,
             area_sampling=integ.area_sampling, filter=self.scene.film.filter, aovs=s.aovs,
-            count_loops=s.count_loops, debug_nonfinite=s.debug_nonfinite)
+            count_loops=s.count_loops, debug_nonfinite=s.debug_nonfinite,
+            emission_only=s.emission_only)
         if p.has_bvh and codegen.has_alpha_cutouts(p):
             self.defines["GLRENDER_ALPHA_CUTOUTS"] = 1     # geometry/bvh.glsl asks the scene
         self._source_fingerprint = (geometry, sorted(self.defines.items()), INTEGRATOR_FILES[integ.kind])
@@ -384,7 +394,7 @@ class Renderer:
         self._release_snapshot()
         self._mean = self.gl.buffer(reserve=16 * n)
         self._m2 = self.gl.buffer(reserve=16 * n)
-        self._aov = self.gl.buffer(reserve=32 * n if self.settings.aovs else 16)
+        self._aov = self.gl.buffer(reserve=layout.AOV_BYTES * n if self.settings.aovs else 16)
         self._debug = self.gl.buffer(reserve=4 * n if self.settings.count_loops else 16)
         # splats land anywhere on the film: the whole image, two words per pixel and channel
         if getattr(self, "_splat", None) is not None:
@@ -509,7 +519,7 @@ class Renderer:
         """The per-pixel accumulation buffers in use: (buffer, bytes per pixel, binding)."""
         bufs = [(self._mean, 16, layout.SSBO_ACCUM_MEAN), (self._m2, 16, layout.SSBO_ACCUM_M2)]
         if self.settings.aovs:
-            bufs.append((self._aov, 32, layout.SSBO_AOV))
+            bufs.append((self._aov, layout.AOV_BYTES, layout.SSBO_AOV))
         if self.settings.count_loops:
             bufs.append((self._debug, 4, layout.SSBO_DEBUG))
         return bufs
@@ -517,7 +527,7 @@ class Renderer:
     def _slices(self) -> list[tuple[int, int]]:
         """The accumulation's tile rows in slices (first row, rows) whose part of every
         per-pixel buffer fits one storage-buffer binding (llvmpipe: 128 MiB, so a film of
-        more than 8.4M pixels, or 4.2M with AOVs, takes several), each starting at an
+        more than 8.4M pixels, or 2.8M with AOVs, takes several), each starting at an
         offset the device can bind."""
         limit = self._binding_limit()
         widest = max(bpp for _, bpp, _ in self._slice_bytes_per_pixel())
@@ -616,9 +626,7 @@ class Renderer:
         m2 = np.frombuffer(self._m2.read(), np.float32).reshape(h, self.width, 4)
         aovs = {}
         if self.settings.aovs:
-            a = np.frombuffer(self._aov.read(), np.float32).reshape(h, self.width, 2, 4)
-            aovs = {"albedo": a[:, :, 0, :3].copy(), "normal": a[:, :, 1, :3].copy(),
-                    "depth": a[:, :, 1, 3].copy()}
+            aovs = layout.aov_images(np.frombuffer(self._aov.read(), np.float32), h, self.width)
         if self.settings.integrator.kind in SPLATTING:
             first = TILE * self.rows[0]
             mean = mean.copy()

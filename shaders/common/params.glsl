@@ -10,7 +10,7 @@
     !defined(GLRENDER_HIDE_EMITTERS) || !defined(GLRENDER_LIGHT_SELECTION) || \
     !defined(GLRENDER_AREA_SAMPLING) || !defined(GLRENDER_FILTER) || \
     !defined(GLRENDER_AOVS) || !defined(GLRENDER_COUNT_LOOPS) || \
-    !defined(GLRENDER_DEBUG_NONFINITE)
+    !defined(GLRENDER_DEBUG_NONFINITE) || !defined(GLRENDER_EMISSION_ONLY)
 #error "common/params.glsl: a host define is missing (see glrender/render/params.py)"
 #endif
 
@@ -50,8 +50,11 @@ const int kFilterGaussian = 2;
 const int kFilterMitchell = 3;
 const int kFilter = GLRENDER_FILTER;
 
-// First-hit AOVs (albedo, normal, depth) accumulated beside the image.
+// First-hit AOVs (albedo, normal, depth, seen emission) accumulated beside the image.
 const bool kAovs = GLRENDER_AOVS != 0;
+// The path tracer renders the seen emission alone (the emission AOV's quantity: paths
+// end at the first non-delta surface, no next-event estimation).
+const bool kEmissionOnly = GLRENDER_EMISSION_ONLY != 0;
 // Debug: count loop iterations per invocation (common/loop_counter.glsl).
 const bool kCountLoops = GLRENDER_COUNT_LOOPS != 0;
 // Debug: every sample whose index is kDebugNonFinite - 1 modulo 7 returns NaN, to test that

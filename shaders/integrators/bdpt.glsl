@@ -11,6 +11,7 @@
 // counts the segments of a path (s + t - 1), at most kBdptDepthCap; the subpaths do
 // not use Russian roulette (the vertex storage bounds them). Lights at infinity
 // (directional, environment) are not supported (the renderer refuses them).
+// The emission AOV is the s = 0, t = 2 term: the area light the camera ray finds.
 #include "integrators/integrator_common.glsl"
 #include "integrators/shading.glsl"
 #include "integrators/pixel.glsl"
@@ -189,7 +190,7 @@ vec3 bdpt_sample(uvec2 pixel, inout SamplerState s, inout Aov aov) {
         g_light[0] = vertex_point(kVertexLight, st.e.p, n, st.e.Le / (st.pmf * st.e.pdf_pos));
         g_light[0].light = st.light + 1u;
         g_light[0].pdf_fwd = st.pmf * st.e.pdf_pos;
-        Aov unused = Aov(vec3(0.0), vec3(0.0), 0.0);
+        Aov unused = kNoAov;
         n_light = random_walk(true, 1, st.o, st.e.d, kInfinity, st.beta, st.e.pdf_dir,
                               kBdptMaxSegments, s, unused);
     }
@@ -200,7 +201,9 @@ vec3 bdpt_sample(uvec2 pixel, inout SamplerState s, inout Aov aov) {
     vec3 L = vec3(0.0);
     for (int t = 2; t <= n_camera; ++t) {
         LOOP_TICK();
-        L += strategy_emission(t);
+        vec3 Le = strategy_emission(t);
+        L += Le;
+        if (kAovs && t == 2) aov.emission = Le;     // the light the camera ray finds
     }
     int n_light_sample = u_params.counts.x > 0u ? min(n_camera, kBdptMaxSegments) : 0;
     for (int t = 2; t <= n_light_sample; ++t) {
@@ -225,7 +228,7 @@ void integrator_pixel(uvec2 pixel, uint pixel_hash, uint first, uint count, inou
     for (uint k = 0u; k < count; ++k) {
         LOOP_TICK();
         SamplerState s = pixel_sampler(pixel_hash, first + k);
-        Aov aov = Aov(vec3(0.0), vec3(0.0), 0.0);
+        Aov aov = kNoAov;
         vec3 L = bdpt_sample(pixel, s, aov);
         accumulate(acc, L, aov, first + k);
     }

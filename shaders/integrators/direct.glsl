@@ -5,17 +5,22 @@
 // weighted with the sample counts in the heuristic (Veach 1997, eq. 9.13 / 9.15).
 // `light` uses light samples only (point lights work; glossy highlights of large
 // lights are noisy), `bsdf` uses BSDF samples only (point lights stay black).
+// The emission AOV is the first hit's emitted radiance (or the environment's on a miss).
 #include "integrators/integrator_common.glsl"
 #include "integrators/shading.glsl"
 #include "integrators/pixel_loop.glsl"
 
 vec3 integrator_li(vec3 o, vec3 d, float t_max, float time, inout SamplerState s, inout Aov aov) {
     SurfaceHit hit;
-    if (!scene_intersect(o, d, t_max, time, hit))
-        return environment_contribution(d, 0, o, 0.0, true);
+    if (!scene_intersect(o, d, t_max, time, hit)) {
+        vec3 Le = environment_contribution(d, 0, o, 0.0, true);
+        if (kAovs) aov.emission = Le;
+        return Le;
+    }
     record_aov(aov, hit);
     vec3 L = vec3(0.0);
     if (hit.light != 0u) L += emitter_hit_contribution(hit, d, 0, o, 0.0, true);
+    if (kAovs) aov.emission = L;
     if (kMaxDepth == 1) return L;
 
     vec3 p = hit.p;

@@ -18,11 +18,24 @@
 const int kUnboundedDepthCap = 256;
 
 // First-hit arbitrary outputs, averaged over the pixel's samples by the kernel.
+// `emission` is the part of the sample's radiance emitted by what the camera ray
+// sees (an area light or the environment, through delta surfaces for the path
+// tracer), by the same weights as the radiance: the beauty minus it is the light
+// reflected by surfaces (what a denoiser is given).
 struct Aov {
     vec3 albedo;
     vec3 normal;
     float depth;
+    vec3 emission;
 };
+
+const Aov kNoAov = Aov(vec3(0.0), vec3(0.0), 0.0, vec3(0.0));
+
+// The AOVs of a sample whose radiance the kernel scales by `weight` (the pixel filter's).
+Aov aov_scaled(Aov aov, float weight) {
+    aov.emission *= weight;
+    return aov;
+}
 
 // MIS weight of a technique with pdf pdf_a against one with pdf pdf_b, one sample each,
 // by the configured heuristic (balance or power; the single-strategy settings never

@@ -10,6 +10,7 @@
 // light paths, make the image (Renderer.film). max_depth counts the segments of the
 // whole path, the one to the lens included; Russian roulette on the adjoint BSDF
 // throughput from kRrDepth segments on (importance needs no eta^2 rescaling).
+// The emission AOV stays 0 (lights seen directly arrive as splats, s = 1).
 #include "integrators/integrator_common.glsl"
 #include "integrators/shading.glsl"
 #include "integrators/pixel.glsl"
@@ -88,7 +89,7 @@ void light_trace(inout SamplerState s) {
 
 // Samples [first, first + count) of a pixel: one light path each.
 void integrator_pixel(uvec2 pixel, uint pixel_hash, uint first, uint count, inout Accumulator acc) {
-    Aov none = Aov(vec3(0.0), vec3(0.0), 0.0);
+    Aov none = kNoAov;
     for (uint k = 0u; k < count; ++k) {
         LOOP_TICK();
         SamplerState s = pixel_sampler(pixel_hash, first + k);

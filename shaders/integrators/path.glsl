@@ -9,7 +9,9 @@
 // (Mitsuba's rule; eta^2 keeps paths alive inside refractive media) and divide by q.
 // The albedo and normal AOVs are those of the first non-delta hit: through mirrors,
 // glass and null surfaces the path is followed to the surface seen in them
-// (record_aov_through in shading.glsl); depth is the first hit's.
+// (record_aov_through in shading.glsl); depth is the first hit's. The emission AOV
+// takes the emitters found along the same delta chain: the light seen directly, in a
+// mirror or through glass, with the weights the radiance gives it.
 //
 // Path regeneration: llvmpipe runs 8 pixels in lock step, so a loop over whole paths
 // waits for the longest of the 8 each time (measured: 72% of lane work useful on the
@@ -40,7 +42,7 @@ struct PathState {
 
 PathState path_start(vec3 o, vec3 d, float t_max, float time) {
     return PathState(o, d, t_max, time, vec3(0.0), vec3(1.0), 1.0, 0.0, true, o, 0,
-                     Aov(vec3(0.0), vec3(0.0), 0.0), true, vec3(1.0));
+                     kNoAov, true, vec3(1.0));
 }
 
 // Traces one segment of the path and shades its end; false when the path has ended.
@@ -50,23 +52,34 @@ bool path_segment(inout PathState st, inout SamplerState s) {
     st.depth += 1;
     SurfaceHit hit;
     if (!scene_intersect(st.o, st.d, st.t_max, st.time, hit)) {
-        st.L += st.beta * environment_contribution(st.d, depth, st.prev_p, st.prev_pdf, st.prev_delta);
+        vec3 Le = environment_contribution(st.d, depth, st.prev_p, st.prev_pdf, st.prev_delta);
+        st.L += st.beta * Le;
         // seen through a delta surface, the environment is what a camera ray that misses
-        // records: no albedo, no normal
-        if (kAovs && st.aov_open) st.aov = Aov(vec3(0.0), vec3(0.0), st.aov.depth);
+        // records: no albedo, no normal, its radiance as emission
+        if (kAovs && st.aov_open) {
+            st.aov.albedo = vec3(0.0);
+            st.aov.normal = vec3(0.0);
+            st.aov.emission += st.beta * Le;
+        }
         return false;
     }
     vec3 p = hit.p;
+    bool seen = st.aov_open;     // the camera sees this surface, directly or through delta ones
     if (kAovs && st.aov_open) st.aov_open = record_aov_through(st.aov, hit, depth, st.aov_weight);
 
     // Emission of an area light found by the camera ray or by BSDF sampling
-    if (hit.light != 0u)
-        st.L += st.beta * emitter_hit_contribution(hit, st.d, depth, st.prev_p, st.prev_pdf, st.prev_delta);
+    if (hit.light != 0u) {
+        vec3 Le = emitter_hit_contribution(hit, st.d, depth, st.prev_p, st.prev_pdf, st.prev_delta);
+        st.L += st.beta * Le;
+        if (kAovs && seen) st.aov.emission += st.beta * Le;
+    }
 
     // Possibly stop: the next segment would exceed the maximum depth
     if (depth + 1 >= max_segments) return false;
 
     Bsdf b = bsdf_from_material(hit.material, hit.uv);
+    // only the emission seen directly or through delta surfaces
+    if (kEmissionOnly && !bsdf_is_delta(b)) return false;
     Frame frame = shading_frame(hit);
     vec3 wo = frame_to_local(frame, -st.d);
 
@@ -126,7 +139,7 @@ void integrator_pixel(uvec2 pixel, uint pixel_hash, uint first, uint count, inou
     while (true) {
         LOOP_TICK();
         if (!path_segment(st, s)) {
-            accumulate(acc, c.weight * st.L, st.aov, first + k);
+            accumulate(acc, c.weight * st.L, aov_scaled(st.aov, c.weight), first + k);
             k += 1u;
             if (k >= count) break;
             s = pixel_sampler(pixel_hash, first + k);

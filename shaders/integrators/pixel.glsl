@@ -20,6 +20,7 @@ struct Accumulator {
     vec4 m2;
     vec4 albedo;
     vec4 normal;   // xyz normal, w depth
+    vec4 emission; // rgb seen emission, w unused
 };
 
 // A camera ray for sample `index` of the pixel: pixel filter, lens and shutter time,
@@ -51,7 +52,10 @@ void accumulate(inout Accumulator acc, vec3 L, Aov aov, uint index) {
     if (kDebugNonFinite != 0u && (index % 7u) == kDebugNonFinite - 1u) L = vec3(uintBitsToFloat(0x7fc00000u));
     float clamp_to = u_params.misc.z;
     float largest = max(L.r, max(L.g, L.b));
-    if (clamp_to > 0.0 && largest > clamp_to) L *= clamp_to / largest;
+    if (clamp_to > 0.0 && largest > clamp_to) {
+        L *= clamp_to / largest;
+        aov.emission *= clamp_to / largest;
+    }
     if (is_finite(L)) {
         acc.mean.w += 1.0;
         vec3 delta = L - acc.mean.rgb;
@@ -60,6 +64,7 @@ void accumulate(inout Accumulator acc, vec3 L, Aov aov, uint index) {
         if (kAovs) {
             acc.albedo += (vec4(aov.albedo, 0.0) - acc.albedo) / acc.mean.w;
             acc.normal += (vec4(aov.normal, aov.depth) - acc.normal) / acc.mean.w;
+            acc.emission += (vec4(aov.emission, 0.0) - acc.emission) / acc.mean.w;
         }
     } else {
         acc.m2.w += 1.0;

@@ -10,8 +10,8 @@ void integrator_pixel(uvec2 pixel, uint pixel_hash, uint first, uint count, inou
         LOOP_TICK();
         SamplerState s = pixel_sampler(pixel_hash, first + k);
         CameraSample c = camera_sample(pixel, s);
-        Aov aov = Aov(vec3(0.0), vec3(0.0), 0.0);
+        Aov aov = kNoAov;
         vec3 L = c.weight * integrator_li(c.o, c.d, c.t_max, c.time, s, aov);
-        accumulate(acc, L, aov, first + k);
+        accumulate(acc, L, aov_scaled(aov, c.weight), first + k);
     }
 }

@@ -45,8 +45,8 @@ vec3 accumulation_color(uint idx, vec4 mean) {
         return display_encode(variance, u_scale, u_curve, u_srgb);
     }
     if (!u_has_aovs) return vec3(0.0);
-    if (u_view == kViewAlbedo) return display_encode(accum_aov[2u * idx].rgb, 1.0, kToneCurveClamp, u_srgb);
-    return clamp(0.5 * accum_aov[2u * idx + 1u].xyz + 0.5, 0.0, 1.0);
+    if (u_view == kViewAlbedo) return display_encode(accum_aov[kAovVec4s * idx].rgb, 1.0, kToneCurveClamp, u_srgb);
+    return clamp(0.5 * accum_aov[kAovVec4s * idx + 1u].xyz + 0.5, 0.0, 1.0);
 }
 
 void main() {

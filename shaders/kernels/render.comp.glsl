@@ -27,17 +27,19 @@ void main() {
     uint idx = (pixel.y - 8u * first_row) * u_params.image.x + pixel.x;
     uint pixel_hash = sampler_pixel_hash(pixel, u_params.dispatch.z);
 
-    Accumulator acc = Accumulator(accum_mean[idx], accum_m2[idx], vec4(0.0), vec4(0.0));
+    Accumulator acc = Accumulator(accum_mean[idx], accum_m2[idx], vec4(0.0), vec4(0.0), vec4(0.0));
     if (kAovs) {
-        acc.albedo = accum_aov[2u * idx];
-        acc.normal = accum_aov[2u * idx + 1u];
+        acc.albedo = accum_aov[kAovVec4s * idx];
+        acc.normal = accum_aov[kAovVec4s * idx + 1u];
+        acc.emission = accum_aov[kAovVec4s * idx + 2u];
     }
     integrator_pixel(pixel, pixel_hash, u_params.samples.x, u_params.samples.y, acc);
     accum_mean[idx] = acc.mean;
     accum_m2[idx] = acc.m2;
     if (kAovs) {
-        accum_aov[2u * idx] = acc.albedo;
-        accum_aov[2u * idx + 1u] = acc.normal;
+        accum_aov[kAovVec4s * idx] = acc.albedo;
+        accum_aov[kAovVec4s * idx + 1u] = acc.normal;
+        accum_aov[kAovVec4s * idx + 2u] = acc.emission;
     }
     if (kCountLoops) debug_counters[idx] = max(debug_counters[idx], g_loop_count);
 }

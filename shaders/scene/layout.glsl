@@ -66,8 +66,10 @@ layout(std430, binding = 3) readonly buffer Lights { LightData lights[]; };
 // 4: packed distributions (light selection alias table, environment map 2D distribution).
 layout(std430, binding = 4) readonly buffer Distributions { float distribution_data[]; };
 
-// 5: first-hit AOVs per pixel, running means: albedo (rgb, -), shading normal (xyz, depth).
+// 5: first-hit AOVs per pixel, running means: albedo (rgb, -), shading normal (xyz, depth),
+// seen emission (rgb, -); kAovVec4s vec4s a pixel (glrender/gpu/layout.py AOV_VEC4S).
 layout(std430, binding = 5) buffer AccumAov { vec4 accum_aov[]; };
+const uint kAovVec4s = 3u;
 
 // 6: debug counters per pixel (loop iterations of the worst sample) when enabled.
 layout(std430, binding = 6) buffer DebugCounters { uint debug_counters[]; };

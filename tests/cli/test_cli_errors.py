@@ -28,7 +28,7 @@ def case(tmp, name):
                                ["--integrator", "invalid choice: 'photon'", "--help"]),
         "unknown tone curve": (["render", CORNELL, "--tonemap", "reinhard"], ["--tonemap", "reinhard"]),
         "unknown aov": (["render", CORNELL, "-o", out, "--aov", "albedo,motion"],
-                        ["unknown AOV motion", "albedo,normal,depth,variance"]),
+                        ["unknown AOV motion", "albedo,normal,depth,emission,variance"]),
         "bad spp": (["render", CORNELL, "-o", out, "--spp", "0"], ["--spp 0", "positive"]),
         "bad time": (["render", CORNELL, "-o", out, "--time", "-1"], ["--time -1", "positive"]),
         "bad max depth": (["render", CORNELL, "-o", out, "--max-depth", "0"], ["--max-depth 0", "-1"]),

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from glrender.film.tonemap import TONE_CURVES, tonemap
+from glrender.gpu.layout import AOV_VEC4S
 from glrender.preview.display import VIEWS, Display, DisplaySettings, fit_viewport
 
 W, H = 61, 37     # odd sizes: rows and columns cannot be swapped unnoticed
@@ -31,7 +32,7 @@ def _accumulation(gl_ctx, seed=0):
     mean[:, 3] = rng.integers(0, 10, n)
     m2 = np.zeros((n, 4), np.float32)
     m2[:, :3] = 10.0 ** rng.uniform(-4, 3, (n, 3))
-    aov = np.zeros((n, 2, 4), np.float32)
+    aov = np.zeros((n, AOV_VEC4S, 4), np.float32)
     aov[:, 0, :3] = rng.uniform(0, 1, (n, 3))
     normal = rng.normal(size=(n, 3))
     aov[:, 1, :3] = normal / np.linalg.norm(normal, axis=1, keepdims=True)
@@ -40,7 +41,7 @@ def _accumulation(gl_ctx, seed=0):
                              _mean=gl.buffer(mean.tobytes()), _m2=gl.buffer(m2.tobytes()),
                              _aov=gl.buffer(aov.tobytes()))
     arrays = SimpleNamespace(mean=mean.reshape(H, W, 4), m2=m2.reshape(H, W, 4),
-                             aov=aov.reshape(H, W, 2, 4))
+                             aov=aov.reshape(H, W, AOV_VEC4S, 4))
     return source, arrays
 
 

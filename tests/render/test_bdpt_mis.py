@@ -40,7 +40,7 @@ void main() {
     vec3 axis = normalize(world_from_camera_at(c.time)[2].xyz);
     vec3 lens = c.o - (u_params.camera_clip.x / max(dot(c.d, axis), 1e-6)) * c.d;
     g_camera[0] = vertex_point(kVertexCamera, lens, vec3(0.0), vec3(1.0));
-    Aov aov = Aov(vec3(0.0), vec3(0.0), 0.0);
+    Aov aov = kNoAov;
     int n_camera = random_walk(false, 1, c.o, c.d, c.t_max, vec3(1.0), camera_pdf_dir(c.d, c.time),
                                kBdptMaxSegments + 1, s, aov);
     LightPathStart st = light_path_start(s);

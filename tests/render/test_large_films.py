@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import glrender
+from glrender.gpu.layout import AOV_BYTES
 from glrender.render.renderer import Renderer, settings_from_scene
 
 CORNELL = Path(__file__).resolve().parents[2] / "scenes" / "cornell-box" / "scene.toml"
@@ -30,7 +31,7 @@ def test01_slices_equal_one_binding(gl_ctx, monkeypatch, aovs, count_loops):
         whole.step(4)
         expected = whole.film()
     # a binding of 2 tile rows of the widest buffer: 3 slices
-    monkeypatch.setattr(Renderer, "_binding_limit", lambda self: 2 * 8 * 52 * (32 if aovs else 16))
+    monkeypatch.setattr(Renderer, "_binding_limit", lambda self: 2 * 8 * 52 * (AOV_BYTES if aovs else 16))
     with Renderer(scene, settings, ctx=gl_ctx) as sliced:
         slices = sliced._slices()
         assert len(slices) == 3 and sum(n for _, n in slices) == 6
