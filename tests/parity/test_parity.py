@@ -2,7 +2,8 @@
 
 Each scene ``scenes/NAME.xml`` is loaded with glrender's Mitsuba loader and rendered with
 ``seeds`` independent seeds of ``spp`` samples per pixel; the spread between them gives each
-pixel's error. The sampler is the independent one: with Sobol' the coverage of a pixel by a
+pixel's error. A case with ``integrator`` renders with that glrender integrator (light
+tracing, BDPT) the scene and reference of the case named by ``scene``: Mitsuba's path tracer. The sampler is the independent one: with Sobol' the coverage of a pixel by a
 straight emitter edge takes one of two values and 4 seeds often agree exactly, so the spread
 says "no error" where there is one (seen on the focal-length scene's light). The reference
 ``refs/NAME.npy`` (Mitsuba 3, rendered by tools/make_parity_refs.py in independent passes;
@@ -49,17 +50,24 @@ MAX_BLOCK_BIAS = 0.05         # detectable bias of the median bright block, rela
 BRIGHT = 0.25                 # bright block-channels: reference >= BRIGHT x image mean
 
 
+def source(name: str) -> str:
+    """The scene file and reference a case uses: its own, or those of the scene it names
+    (an integrator checked against Mitsuba's path tracer on another case's scene)."""
+    return SCENES[name].get("scene", name)
+
+
 def reference(name: str) -> tuple[np.ndarray, np.ndarray]:
+    name = source(name)
     return np.load(HERE / "refs" / f"{name}.npy"), np.load(HERE / "refs" / f"{name}-stderr.npy")
 
 
 def comparisons(name: str) -> int:
     """The number of tests compare_images makes for a scene: block-channels, mean, MSE."""
-    path = HERE / "refs" / f"{name}.npy"
+    path = HERE / "refs" / f"{source(name)}.npy"
     if path.exists():
         h, w, c = np.load(path, mmap_mode="r").shape
     else:                        # that scene's test fails; the others keep their threshold
-        film = glrender.load(HERE / "scenes" / f"{name}.xml").film
+        film = glrender.load(HERE / "scenes" / f"{source(name)}.xml").film
         h, w, c = film.height, film.width, 3
     b = SCENES[name]["block"]
     return (h // b) * (w // b) * c + 2
@@ -121,8 +129,9 @@ def test_parity(gl_ctx, parity_dir, name):
     entry = SCENES[name]
     feature = entry["feature"]
     ref, ref_stderr = reference(name)
-    scene = glrender.load(HERE / "scenes" / f"{name}.xml")
-    renders = np.stack([glrender.render(scene, spp=entry["spp"], seed=FIRST_SEED + i, sampler="independent").mean
+    scene = glrender.load(HERE / "scenes" / f"{source(name)}.xml")
+    renders = np.stack([glrender.render(scene, spp=entry["spp"], seed=FIRST_SEED + i, sampler="independent",
+                                        integrator=entry.get("integrator")).mean
                         for i in range(entry["seeds"])]).astype(np.float64)
     assert renders.shape[1:] == ref.shape, f"{feature}: image {renders.shape[1:]} vs reference {ref.shape}"
 
