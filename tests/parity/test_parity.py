@@ -12,10 +12,12 @@ mean, with sigma combining both images' errors, at one Šidák-corrected thresho
 scenes' comparisons together: a correct renderer fails the whole suite with probability 0.01.
 
 Power: every scene states and asserts the smallest bias it can detect: at most 2% of the
-image mean, and at most 5% on the typical block that carries the image (the median over the
-block-channels whose reference is at least a quarter of the image mean). The worst such block
-is printed too: blocks of caustics seen through glass stay noisier than 5% at this budget, and
-there the image-mean and (one-sided) MSE tests bound what a bias can hide.
+image mean, and at most 5% on every block that carries the image (the block-channels whose
+reference is at least a quarter of the image mean: the worst of them is asserted). Where a
+scene's worst blocks are caustics (light reached only by BSDF sampling through or off smooth
+surfaces, a heavy-tailed estimate) 5% would take 10-400x the samples; the catalog states that
+scene's bound (``block_power``) and why (``block_power_why``), the test prints and asserts it,
+and the image-mean and (one-sided) MSE tests bound what a bias there can hide.
 
 Where glrender deliberately differs (catalog keys ``difference``, where it is documented, and
 ``tolerance``, the documented size), the test says so and checks that difference instead: every
@@ -46,7 +48,8 @@ SCENES = {name: {**CATALOG["defaults"], **entry} for name, entry in CATALOG["sce
 FIRST_SEED = 7
 ALPHA = 0.01
 MAX_MEAN_BIAS = 0.02          # detectable bias of the image mean, relative
-MAX_BLOCK_BIAS = 0.05         # detectable bias of the median bright block, relative
+MAX_BLOCK_BIAS = 0.05         # detectable bias of every bright block, relative, unless the
+                              # scene states more (catalog: block_power, with block_power_why)
 BRIGHT = 0.25                 # bright block-channels: reference >= BRIGHT x image mean
 
 
@@ -160,8 +163,10 @@ def test_parity(gl_ctx, parity_dir, name):
     median_block_bias, p90, worst = np.percentile(block_bias[bright], [50, 90, 100])
     if difference:
         feature += f"; documented difference, checked within {tolerance:.1%}: {difference}"
+    block_power = entry.get("block_power", MAX_BLOCK_BIAS)
+    stated = f" (stated {block_power:.0%}: {entry['block_power_why']})" if "block_power" in entry else ""
     report = (f"{name} ({feature}): {c.summary()}; detectable bias of bright blocks: median "
-              f"{median_block_bias * 100:.2f}%, 90% {p90 * 100:.2f}%, worst {worst * 100:.2f}%")
+              f"{median_block_bias * 100:.2f}%, 90% {p90 * 100:.2f}%, worst {worst * 100:.2f}%{stated}")
     print(report)
     if not c.passed:
         sigma = np.sqrt(renders.var(axis=0, ddof=1) / len(renders) + ref_stderr.astype(np.float64) ** 2)
@@ -170,4 +175,4 @@ def test_parity(gl_ctx, parity_dir, name):
         f" (heat map: {parity_dir / (name + '.png')})"
     # power: the test could see a bias this small
     assert c.detectable_bias <= MAX_MEAN_BIAS, f"{feature}: too noisy to detect a 2% bias of the mean ({report})"
-    assert median_block_bias <= MAX_BLOCK_BIAS, f"{feature}: too noisy to detect a 5% bias per block ({report})"
+    assert worst <= block_power, f"{feature}: too noisy to detect a {block_power:.0%} bias per block ({report})"
