@@ -156,3 +156,31 @@ def test06_mitsuba_normalmap_and_mask(write, tmp_path, caught):
                          '<bsdf type="diffuse"/></bsdf></shape></scene>')
     with pytest.raises(SceneError, match=r'b.xml:1: .*needs a <texture name="normalmap">'):
         glrender.load(bad)
+
+
+@pytest.mark.parametrize("flags, noted", [
+    ("", "use_shadowing_function and flip_invalid_normals"),
+    ('<boolean name="use_shadowing_function" value="false"/>', "flip_invalid_normals"),
+    ('<boolean name="use_shadowing_function" value="false"/>'
+     '<boolean name="flip_invalid_normals" value="false"/>', None),
+])
+def test07_mitsuba_normalmap_terminator_options(write, tmp_path, caught, flags, noted):
+    """Mitsuba 3.7.1 on multiplies a normal map by a shadowing term and mirrors normals that
+    face away from wi, both by default; glrender applies neither and says so unless both are
+    off (the parity scene bsdf-normalmap turns them off and matches Mitsuba)."""
+    images(tmp_path)
+    path = write("s.xml", f"""<scene version="3.0.0"><shape type="rectangle">
+      <bsdf type="normalmap">{flags}
+        <texture name="normalmap" type="bitmap">
+          <string name="filename" value="n.png"/><boolean name="raw" value="true"/>
+        </texture>
+        <bsdf type="diffuse"/>
+      </bsdf></shape></scene>""")
+    with caught as messages:
+        scene = glrender.load(path)
+    assert scene.materials[scene.shapes[0].material].normal_map is not None
+    found = [w for w in messages if "normalmap" in w and "not applied" in w]
+    if noted is None:
+        assert not found, found
+    else:
+        assert any(f"normalmap {noted} (not applied" in w for w in found), messages

@@ -510,6 +510,13 @@ class _Builder:
             from dataclasses import replace
 
             if t == "normalmap":
+                # Mitsuba 3.7.1 on also multiplies by a shadowing term (Conty Estevez et al.
+                # 2019) and mirrors a normal that faces away from wi: both on by default
+                extras = [k for k in ("use_shadowing_function", "flip_invalid_normals")
+                          if self.prop(node, k, "bool", True)]
+                if extras:
+                    self.r.notes.add(f"normalmap {' and '.join(extras)} (not applied: glrender's "
+                                     f"normal map is the plain perturbed frame)", node.line)
                 return replace(mat, normal_map=self.texture(textures[key]))
             self.r.notes.add("mask (read as an opacity cutout at 0.5)", node.line)
             return replace(mat, opacity=self.texture(textures[key]))
