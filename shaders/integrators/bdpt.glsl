@@ -7,9 +7,10 @@
 // connected to the lens and splatted onto the film (integrators/splat.glsl); s, t >= 2,
 // a visibility ray between the two subpaths' ends. (s, t) = (1, 1), the lens connected
 // to a sampled light point, is left out: s = 0, t = 2 sees the lights. Each is
-// weighted by bdpt_mis_weight (balance or power heuristic, kStrategy). max_depth
-// counts the segments of a path (s + t - 1), at most kBdptDepthCap; the subpaths do
-// not use Russian roulette (the vertex storage bounds them). Lights at infinity
+// weighted by bdpt_mis_weight (balance or power heuristic, kStrategy); kernels built
+// for strategy images also keep each one's own image (integrators/strategy_images.glsl).
+// max_depth counts the segments of a path (s + t - 1), at most kBdptDepthCap (the
+// vertex storage bounds the subpaths; Russian roulette may end them sooner). Lights at infinity
 // (directional, environment) are not supported (the renderer refuses them).
 #include "integrators/integrator_common.glsl"
 #include "integrators/shading.glsl"
@@ -17,6 +18,7 @@
 #include "integrators/light_path.glsl"
 #include "integrators/splat.glsl"
 #include "integrators/bdpt_vertex.glsl"
+#include "integrators/strategy_images.glsl"
 
 Vertex vertex_from_hit(SurfaceHit hit, Frame frame, Bsdf b, vec3 beta) {
     return Vertex(hit.p, hit.ng, frame.z, frame.x, beta, hit.uv, kVertexSurface, hit.material, hit.light,
@@ -112,7 +114,9 @@ vec3 strategy_emission(int t) {
     LightData l = scene_light(pt.light - 1u);
     vec3 L = pt.beta * area_light_radiance(l, pt.ng, normalize(g_camera[t - 2].p - pt.p));
     if (max_component(L) <= 0.0) return vec3(0.0);
-    return L * bdpt_mis_weight(0, t);
+    float w = bdpt_mis_weight(0, t);
+    strategy_record(0, t, L, w);
+    return L * w;
 }
 
 // s = 1: next-event estimation from camera vertex t - 1, a light point sampled afresh.
@@ -139,6 +143,7 @@ vec3 strategy_light_sample(int t, inout SamplerState smp) {
     g_light[0] = light;
     float w = bdpt_mis_weight(1, t);
     g_light[0] = saved;
+    strategy_record(1, t, L, w);
     return L * w;
 }
 
@@ -156,6 +161,7 @@ void strategy_lens(int s, inout SamplerState smp) {
     g_camera[0] = lens;
     float w = bdpt_mis_weight(s, 1);
     g_camera[0] = saved;
+    strategy_splat(s, c.film, L, w);
     splat_film(c.film, L * w);
 }
 
@@ -167,13 +173,16 @@ vec3 strategy_connect(int s, int t) {
     vec3 L = qs.beta * vertex_f(qs, g_light[s - 2].p, pt.p, true) *
              vertex_f(pt, g_camera[t - 2].p, qs.p, false) * pt.beta / dot(d, d);
     if (max_component(L) <= 0.0 || !segment_visible(qs, pt, kNoPrimitive)) return vec3(0.0);
-    return L * bdpt_mis_weight(s, t);
+    float w = bdpt_mis_weight(s, t);
+    strategy_record(s, t, L, w);
+    return L * w;
 }
 
 // One sample: both subpaths, then every strategy; returns the camera-side radiance.
 vec3 bdpt_sample(uvec2 pixel, inout SamplerState s, inout Aov aov) {
     CameraSample c = camera_sample(pixel, s);
     g_time = c.time;
+    strategy_begin(pixel);
     // the lens point: the ray starts at the near clip plane
     vec3 axis = normalize(world_from_camera_at(c.time)[2].xyz);
     vec3 lens = c.o - (u_params.camera_clip.x / max(dot(c.d, axis), 1e-6)) * c.d;
