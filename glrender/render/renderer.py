@@ -260,10 +260,6 @@ class Renderer:
             raise UsageError(f"integrator {integ.kind!r} has its own driver, not a render kernel: "
                              f"use glrender.photon.SppmRenderer (or glrender render --integrator "
                              f"{integ.kind}); Renderer takes {', '.join(INTEGRATOR_FILES)}")
-        infinite = sorted(p.light_kinds & {"directional", "constant", "envmap"})
-        if integ.kind == "bdpt" and infinite:
-            raise UsageError(f"bdpt: lights at infinity ({', '.join(infinite)}) are not supported "
-                             f"yet; render with path or lighttrace")
         geometry = codegen.generate(p, has_bvh=p.has_bvh, lights=self.lights_final)
         library = shaders.ShaderLibrary().with_generated({codegen.GENERATED_PATH: geometry})
         self.defines = shader_defines(

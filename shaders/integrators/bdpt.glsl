@@ -10,8 +10,10 @@
 // weighted by bdpt_mis_weight (balance or power heuristic, kStrategy); kernels built
 // for strategy images also keep each one's own image (integrators/strategy_images.glsl).
 // max_depth counts the segments of a path (s + t - 1), at most kBdptDepthCap (the
-// vertex storage bounds the subpaths; Russian roulette may end them sooner). Lights at infinity
-// (directional, environment) are not supported (the renderer refuses them).
+// vertex storage bounds the subpaths; Russian roulette may end them sooner). Lights
+// at infinity (directional, constant and image environments) start light subpaths on a
+// disk of the scene's bounding radius facing their direction, and a camera subpath that
+// leaves the scene ends on a vertex at infinity (bdpt_vertex.glsl, kVertexInfinite).
 #include "integrators/integrator_common.glsl"
 #include "integrators/shading.glsl"
 #include "integrators/pixel.glsl"
@@ -38,7 +40,21 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
     while (n < max_vertices) {
         LOOP_TICK();
         SurfaceHit hit;
-        if (!scene_intersect(o, d, t_max, g_time, hit)) break;
+        if (!scene_intersect(o, d, t_max, g_time, hit)) {
+            // a camera subpath that leaves the scene ends on the environment (s = 0)
+            if (!light_path && u_params.counts.z != 0u) {
+                Vertex prev = g_camera[n - 1];
+                Vertex v = vertex_point(kVertexInfinite,
+                                        prev.p + kInfiniteVertexDistance * u_params.scene_sphere.w * d,
+                                        vec3(0.0), beta);
+                v.light = u_params.counts.z;
+                v.connectible = false;
+                v.pdf_fwd = pdf_sa;
+                g_camera[n] = v;
+                n += 1;
+            }
+            break;
+        }
         vec2 u_choice = sampler_2d(s);
         vec2 u_bsdf = sampler_2d(s);
         float u_rr = sampler_1d(s);
@@ -107,12 +123,15 @@ bool segment_visible(Vertex a, Vertex b, uint ignore) {
     return !scene_occluded(o, d, dist * (1.0 - kShadowEpsilon), g_time, ignore);
 }
 
-// s = 0: the camera subpath's vertex t - 1 lies on an area light.
+// s = 0: the camera subpath's vertex t - 1 lies on an area light or at infinity.
 vec3 strategy_emission(int t) {
     Vertex pt = g_camera[t - 1];
     if (pt.light == 0u || (t == 2 && kHideEmitters)) return vec3(0.0);
     LightData l = scene_light(pt.light - 1u);
-    vec3 L = pt.beta * area_light_radiance(l, pt.ng, normalize(g_camera[t - 2].p - pt.p));
+    vec3 wo = normalize(g_camera[t - 2].p - pt.p);
+    float unused;
+    vec3 L = pt.beta * (pt.kind == kVertexInfinite ? environment_radiance(l, -wo, unused)
+                                                   : area_light_radiance(l, pt.ng, wo));
     if (max_component(L) <= 0.0) return vec3(0.0);
     float w = bdpt_mis_weight(0, t);
     strategy_record(0, t, L, w);
@@ -129,16 +148,17 @@ vec3 strategy_light_sample(int t, inout SamplerState smp) {
     LightData l = scene_light(choice.index);
     LightSample ls = sample_light(l, pt.p, u_light);
     if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return vec3(0.0);
-    vec3 q = pt.p + ls.dist * ls.wi;
+    bool infinite = light_is_infinite(l);
+    vec3 q = pt.p + (infinite ? kInfiniteVertexDistance * u_params.scene_sphere.w : ls.dist) * ls.wi;
     vec3 L = pt.beta * vertex_f(pt, g_camera[t - 2].p, q, false) * ls.Le / (choice.pmf * ls.pdf);
     if (max_component(L) <= 0.0) return vec3(0.0);
     vec3 o = offset_ray_origin(pt.p, pt.ng, ls.wi);
     if (scene_occluded(o, ls.wi, ls.dist * (1.0 - kShadowEpsilon), g_time, l.info.z)) return vec3(0.0);
     vec3 n = vec3(0.0);
     if (light_is_area(l)) n = l.info.x == kLightSphere ? normalize(q - l.p.xyz) : l.n.xyz;
-    Vertex light = vertex_point(kVertexLight, q, n, vec3(1.0));
+    Vertex light = vertex_point(infinite ? kVertexInfinite : kVertexLight, q, n, vec3(1.0));
     light.light = choice.index + 1u;
-    light.pdf_fwd = vertex_pdf_light_origin(light);
+    light.pdf_fwd = vertex_pdf_light_origin(light, pt);
     Vertex saved = g_light[0];
     g_light[0] = light;
     float w = bdpt_mis_weight(1, t);
@@ -198,9 +218,17 @@ vec3 bdpt_sample(uvec2 pixel, inout SamplerState s, inout Aov aov) {
         g_light[0] = vertex_point(kVertexLight, st.e.p, n, st.e.Le / (st.pmf * st.e.pdf_pos));
         g_light[0].light = st.light + 1u;
         g_light[0].pdf_fwd = st.pmf * st.e.pdf_pos;
+        bool infinite = light_is_infinite(l);
+        if (infinite) g_light[0].kind = kVertexInfinite;
         Aov unused = Aov(vec3(0.0), vec3(0.0), 0.0);
         n_light = random_walk(true, 1, st.o, st.e.d, kInfinity, st.beta, st.e.pdf_dir,
                               kBdptMaxSegments, s, unused);
+        if (infinite) {
+            // densities of a light at infinity (pbrt-v3's BDPT): its direction per solid
+            // angle, the first hit per unit area through the emission disk
+            g_light[0].pdf_fwd = infinite_light_density(-st.e.d);
+            if (n_light > 1) g_light[1].pdf_fwd = st.e.pdf_pos * abs(dot(g_light[1].ng, st.e.d));
+        }
     }
 
     // Every strategy, one kind per loop (a loop body runs the same code on every SIMD
