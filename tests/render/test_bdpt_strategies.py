@@ -168,3 +168,21 @@ def test06_command_line(tmp_path):
         r = run("-o", tmp_path / "z.png", *args)
         assert r.returncode == 2 and message in r.stderr and len(r.stderr.strip().splitlines()) == 1, \
             r.stderr
+
+
+def test07_resumed_render_keeps_the_strategy_images_bitwise(gl_ctx):
+    scene = cornell(16)
+    settings = settings_from_scene(scene, integrator="bdpt", spp=8, seed=9, max_depth=3,
+                                   strategy_depth=3)
+    whole = Renderer(scene, settings, ctx=gl_ctx)
+    whole.step(8)
+    first = Renderer(scene, settings, ctx=gl_ctx)
+    first.step(4)
+    second = Renderer(scene, settings, ctx=gl_ctx)
+    second.restore(first.state())
+    second.step(4)
+    a, b = whole.strategy_images(), second.strategy_images()
+    for r in (whole, first, second):
+        r.release()
+    assert all(np.array_equal(a[st][i], b[st][i]) for st in a for i in (0, 1))
+    assert a[(1, 2)][0].max() > 0
