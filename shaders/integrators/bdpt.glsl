@@ -21,6 +21,13 @@
 #include "integrators/splat.glsl"
 #include "integrators/bdpt_vertex.glsl"
 #include "integrators/strategy_images.glsl"
+// The strategies weigh with the densities of their own BSDF evaluations; tests define
+// BDPT_GENERIC_WEIGHTS to evaluate every density afresh instead (the same bits).
+#ifdef BDPT_GENERIC_WEIGHTS
+#define STRATEGY_WEIGHT(s, t, cp) bdpt_mis_weight(s, t)
+#else
+#define STRATEGY_WEIGHT(s, t, cp) bdpt_mis_weight_pdfs(s, t, cp)
+#endif
 
 Vertex vertex_from_hit(SurfaceHit hit, Frame frame, Bsdf b, vec3 beta) {
     return Vertex(hit.p, hit.ng, frame.z, frame.x, beta, hit.uv, kVertexSurface, hit.material, hit.light,
@@ -104,12 +111,17 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
 }
 
 // f |cos| of a surface vertex v toward the world point `to`, reached from `from`
-// (importance transport with the shading-normal correction when adjoint).
-vec3 vertex_f(Vertex v, vec3 from, vec3 to, bool adjoint) {
+// (importance transport with the shading-normal correction when adjoint), and the
+// solid-angle densities with which v samples `to` coming from `from` (pdf_to) and
+// `from` coming from `to` (pdf_from): the MIS densities of the connection, from the
+// same BSDF (vertex_pdf would look the material up again for each).
+vec3 vertex_f(Vertex v, vec3 from, vec3 to, bool adjoint, out float pdf_to, out float pdf_from) {
     Frame frame = vertex_frame(v);
     vec3 wo_w = normalize(from - v.p), wi_w = normalize(to - v.p);
     vec3 wo = frame_to_local(frame, wo_w), wi = frame_to_local(frame, wi_w);
-    vec3 f = bsdf_eval(bsdf_from_material(v.material, v.uv), wo, wi, adjoint);
+    Bsdf b = bsdf_from_material(v.material, v.uv);
+    vec3 f = bsdf_eval_pdf(b, wo, wi, adjoint, pdf_to);
+    pdf_from = bsdf_pdf(b, wi, wo);
     if (adjoint) f *= shading_normal_correction(wo_w, wi_w, v.ns, v.ng);
     return f;
 }
@@ -150,7 +162,9 @@ vec3 strategy_light_sample(int t, inout SamplerState smp) {
     if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return vec3(0.0);
     bool infinite = light_is_infinite(l);
     vec3 q = pt.p + (infinite ? kInfiniteVertexDistance * u_params.scene_sphere.w : ls.dist) * ls.wi;
-    vec3 L = pt.beta * vertex_f(pt, g_camera[t - 2].p, q, false) * ls.Le / (choice.pmf * ls.pdf);
+    Vertex pt_minus = g_camera[t - 2];
+    float pdf_light, pdf_back;
+    vec3 L = pt.beta * vertex_f(pt, pt_minus.p, q, false, pdf_light, pdf_back) * ls.Le / (choice.pmf * ls.pdf);
     if (max_component(L) <= 0.0) return vec3(0.0);
     vec3 o = offset_ray_origin(pt.p, pt.ng, ls.wi);
     if (scene_occluded(o, ls.wi, ls.dist * (1.0 - kShadowEpsilon), g_time, l.info.z)) return vec3(0.0);
@@ -159,9 +173,11 @@ vec3 strategy_light_sample(int t, inout SamplerState smp) {
     Vertex light = vertex_point(infinite ? kVertexInfinite : kVertexLight, q, n, vec3(1.0));
     light.light = choice.index + 1u;
     light.pdf_fwd = vertex_pdf_light_origin(light, pt);
+    ConnectionPdfs cp = ConnectionPdfs(vertex_pdf_light(light, pt), solid_angle_to_area(pdf_back, pt, pt_minus),
+                                       solid_angle_to_area(pdf_light, pt, light), 0.0);
     Vertex saved = g_light[0];
     g_light[0] = light;
-    float w = bdpt_mis_weight(1, t);
+    float w = STRATEGY_WEIGHT(1, t, cp);
     g_light[0] = saved;
     strategy_record(1, t, L, w);
     return L * w;
@@ -174,12 +190,16 @@ void strategy_lens(int s, inout SamplerState smp) {
     if (!qs.connectible) return;
     CameraConnection c = camera_connect(qs.p, u_lens, g_time);
     if (!c.valid) return;
-    vec3 L = qs.beta * vertex_f(qs, g_light[s - 2].p, c.p, true) * c.importance;
+    Vertex qs_minus = g_light[s - 2];
+    float pdf_lens, pdf_back;
+    vec3 L = qs.beta * vertex_f(qs, qs_minus.p, c.p, true, pdf_lens, pdf_back) * c.importance;
     Vertex lens = vertex_point(kVertexCamera, c.p, vec3(0.0), vec3(1.0));
     if (max_component(L) <= 0.0 || !segment_visible(qs, lens, kNoPrimitive)) return;
+    ConnectionPdfs cp = ConnectionPdfs(solid_angle_to_area(pdf_lens, qs, lens), 0.0, vertex_pdf(lens, lens, qs),
+                                       solid_angle_to_area(pdf_back, qs, qs_minus));
     Vertex saved = g_camera[0];
     g_camera[0] = lens;
-    float w = bdpt_mis_weight(s, 1);
+    float w = STRATEGY_WEIGHT(s, 1, cp);
     g_camera[0] = saved;
     strategy_splat(s, c.film, L, w);
     splat_film(c.film, L * w);
@@ -189,11 +209,17 @@ void strategy_lens(int s, inout SamplerState smp) {
 vec3 strategy_connect(int s, int t) {
     Vertex qs = g_light[s - 1], pt = g_camera[t - 1];
     if (!qs.connectible || !pt.connectible) return vec3(0.0);
+    Vertex qs_minus = g_light[s - 2], pt_minus = g_camera[t - 2];
     vec3 d = pt.p - qs.p;
-    vec3 L = qs.beta * vertex_f(qs, g_light[s - 2].p, pt.p, true) *
-             vertex_f(pt, g_camera[t - 2].p, qs.p, false) * pt.beta / dot(d, d);
+    float qs_to_pt, qs_to_minus, pt_to_qs, pt_to_minus;
+    vec3 L = qs.beta * vertex_f(qs, qs_minus.p, pt.p, true, qs_to_pt, qs_to_minus) *
+             vertex_f(pt, pt_minus.p, qs.p, false, pt_to_qs, pt_to_minus) * pt.beta / dot(d, d);
     if (max_component(L) <= 0.0 || !segment_visible(qs, pt, kNoPrimitive)) return vec3(0.0);
-    float w = bdpt_mis_weight(s, t);
+    ConnectionPdfs cp = ConnectionPdfs(solid_angle_to_area(qs_to_pt, qs, pt),
+                                       solid_angle_to_area(pt_to_minus, pt, pt_minus),
+                                       solid_angle_to_area(pt_to_qs, pt, qs),
+                                       solid_angle_to_area(qs_to_minus, qs, qs_minus));
+    float w = STRATEGY_WEIGHT(s, t, cp);
     strategy_record(s, t, L, w);
     return L * w;
 }

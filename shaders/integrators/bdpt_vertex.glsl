@@ -137,28 +137,26 @@ float mis_ratio(float pdf_rev, float pdf_fwd) {
     return kStrategy == kStrategyMisBalance ? r : r * r;
 }
 
-// MIS weight of strategy (s, t) for the path g_light[0, s) + g_camera[0, t) (for s = 1
-// or t = 1 the caller has put the sampled light or lens vertex at index 0).
-float bdpt_mis_weight(int s, int t) {
-    if (s + t == 2) return 1.0;
-    // the densities the connection changes (restored below)
-    Vertex pt = g_camera[t - 1];
-    bool has_pt_minus = t > 1, has_qs = s > 0, has_qs_minus = s > 1;
-    Vertex pt_minus = g_camera[max(t - 2, 0)];
-    Vertex qs = g_light[max(s - 1, 0)];
-    Vertex qs_minus = g_light[max(s - 2, 0)];
-    float pt_rev = has_qs ? vertex_pdf(qs, qs_minus, pt) : vertex_pdf_light_origin(pt, pt_minus);
-    float pt_minus_rev = !has_pt_minus ? 0.0
-                       : (has_qs ? vertex_pdf(pt, qs, pt_minus) : vertex_pdf_light(pt, pt_minus));
-    float qs_rev = has_qs ? vertex_pdf(pt, pt_minus, qs) : 0.0;
-    float qs_minus_rev = has_qs_minus ? vertex_pdf(qs, pt, qs_minus) : 0.0;
+// The densities a connection changes: of pt = g_camera[t - 1] and qs = g_light[s - 1]
+// from the other subpath's side, and of the vertices before them (pt_minus, qs_minus)
+// from the connection's side; per unit area (solid angle toward a vertex at infinity).
+struct ConnectionPdfs {
+    float pt_rev;
+    float pt_minus_rev;
+    float qs_rev;
+    float qs_minus_rev;
+};
 
+// MIS weight of strategy (s, t) given the densities its connection changes (the
+// strategies get them from their own BSDF evaluations).
+float bdpt_mis_weight_pdfs(int s, int t, ConnectionPdfs c) {
+    if (s + t == 2) return 1.0;
     float sum = 0.0;
     // strategies with fewer camera vertices: walk the camera subpath back from the connection
     float r = 1.0;
     for (int i = t - 1; i > 0; --i) {
         LOOP_TICK();
-        float rev = i == t - 1 ? pt_rev : (i == t - 2 ? pt_minus_rev : g_camera[i].pdf_rev);
+        float rev = i == t - 1 ? c.pt_rev : (i == t - 2 ? c.pt_minus_rev : g_camera[i].pdf_rev);
         r *= mis_ratio(rev, g_camera[i].pdf_fwd);
         bool delta_i = i == t - 1 ? false : g_camera[i].delta;
         if (!delta_i && !g_camera[i - 1].delta) sum += r;
@@ -167,7 +165,7 @@ float bdpt_mis_weight(int s, int t) {
     r = 1.0;
     for (int i = s - 1; i >= 0; --i) {
         LOOP_TICK();
-        float rev = i == s - 1 ? qs_rev : (i == s - 2 ? qs_minus_rev : g_light[i].pdf_rev);
+        float rev = i == s - 1 ? c.qs_rev : (i == s - 2 ? c.qs_minus_rev : g_light[i].pdf_rev);
         r *= mis_ratio(rev, g_light[i].pdf_fwd);
         bool delta_i = i == s - 1 ? false : g_light[i].delta;
         // a delta light's own point cannot be found by the camera subpath
@@ -175,4 +173,23 @@ float bdpt_mis_weight(int s, int t) {
         if (!delta_i && !delta_before) sum += r;
     }
     return 1.0 / (1.0 + sum);
+}
+
+// MIS weight of strategy (s, t) for the path g_light[0, s) + g_camera[0, t) (for s = 1
+// or t = 1 the caller has put the sampled light or lens vertex at index 0), every
+// density evaluated afresh.
+float bdpt_mis_weight(int s, int t) {
+    if (s + t == 2) return 1.0;
+    Vertex pt = g_camera[t - 1];
+    bool has_pt_minus = t > 1, has_qs = s > 0, has_qs_minus = s > 1;
+    Vertex pt_minus = g_camera[max(t - 2, 0)];
+    Vertex qs = g_light[max(s - 1, 0)];
+    Vertex qs_minus = g_light[max(s - 2, 0)];
+    ConnectionPdfs c;
+    c.pt_rev = has_qs ? vertex_pdf(qs, qs_minus, pt) : vertex_pdf_light_origin(pt, pt_minus);
+    c.pt_minus_rev = !has_pt_minus ? 0.0
+                   : (has_qs ? vertex_pdf(pt, qs, pt_minus) : vertex_pdf_light(pt, pt_minus));
+    c.qs_rev = has_qs ? vertex_pdf(pt, pt_minus, qs) : 0.0;
+    c.qs_minus_rev = has_qs_minus ? vertex_pdf(qs, pt, qs_minus) : 0.0;
+    return bdpt_mis_weight_pdfs(s, t, c);
 }
