@@ -1,7 +1,7 @@
 """BDPT strategy images (Renderer(strategy_depth=...), --strategy-images).
 
-- The weighted images partition the render: at strategy depth = max depth they add up
-  to the film, exactly for the splatted t = 1 part (the same fixed-point integers) and up
+- The weighted images partition the render (an area light, an image environment, a
+  directional light): at strategy depth = max depth they add up to the film, exactly for the splatted t = 1 part (the same fixed-point integers) and up
   to float32 summation order for the camera side (a bound from the sample count).
 - The strategy images of one path length k sum to that length's contribution of the full
   render: statistically, against the path tracer's own length-k part (max depth k minus
@@ -18,7 +18,7 @@ from glrender.render import strategies
 from glrender.render.renderer import SPLAT_SCALE, Renderer, settings_from_scene
 from glrender.testing.images import compare_images
 
-from bidir_scenes import cornell, renders
+from bidir_scenes import cornell, directional, environment, renders
 
 DEPTH = 3
 SEEDS_BDPT, SEEDS_PATH = (61, 62, 63, 64), (71, 72, 73, 74)
@@ -33,8 +33,9 @@ def strategy_render(scene, spp, seed, depth, max_depth, ctx, **options):
     return r
 
 
-def test01_weighted_images_partition_the_render(gl_ctx):
-    scene = cornell(SIZE)
+@pytest.mark.parametrize("make", [cornell, environment, directional])
+def test01_weighted_images_partition_the_render(gl_ctx, make):
+    scene = make(SIZE)
     spp = 8
     r = strategy_render(scene, spp, 5, 4, 4, gl_ctx)
     film, splat = r.film(), r.splat_image()
