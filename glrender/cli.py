@@ -243,6 +243,13 @@ def _add_render(sub) -> None:
                    help="also write OUT.denoised.EXT denoised by Open Image Denoise (and a "
                         "denoised layer in an EXR); the image itself stays unbiased "
                         "(extra: glrender[denoise])")
+    g.add_argument("--strategy-images", default=None, metavar="DIR",
+                   help="bdpt: also write the weighted and unweighted image of every strategy "
+                        "(s, t) of path lengths up to --strategy-depth as labelled pyramids "
+                        "(DIR/weighted.png, DIR/unweighted.png) and floats (DIR/strategies.npz)")
+    g.add_argument("--strategy-depth", type=int, default=None, metavar="N",
+                   help="the longest path length (segments) of --strategy-images (default 5, "
+                        "or the max depth if smaller)")
     g.add_argument("--stats", default=None, metavar="FILE.json",
                    help="write statistics: device, scene hash, seed, spp, times, samples/s, "
                         "non-finite samples, mean relative standard error")

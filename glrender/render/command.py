@@ -26,7 +26,7 @@ FIRST_HIT_AOVS = ("albedo", "normal", "depth", "emission")
 SPP_LIMIT = 1 << 31
 # the options a checkpoint remembers; --resume takes those not given again
 RESUMABLE = ("spp", "seed", "sampler", "integrator", "strategy", "max_depth", "width", "height",
-             "clamp", "crop")
+             "clamp", "crop", "strategy_images", "strategy_depth")
 
 
 def parse_defines(items: list[str]) -> dict[str, str]:
@@ -220,6 +220,30 @@ def _write_stats(path: Path, stats: dict) -> None:
     atomic_write(path, write)
 
 
+def _strategy_depth(options: dict, scene) -> int:
+    """--strategy-images' path length (0 without it): --strategy-depth, else 5 or the max
+    depth if smaller."""
+    from .strategies import DEFAULT_DEPTH
+
+    depth = options.get("strategy_depth")
+    folder = options.get("strategy_images")
+    if folder is None:
+        if depth is not None:
+            raise UsageError(f"--strategy-depth {depth}: only with --strategy-images DIR")
+        return 0
+    if Path(folder).exists() and not Path(folder).is_dir():
+        raise UsageError(f"--strategy-images {folder}: is a file, expected a folder (created if "
+                         f"missing)")
+    integrator = options.get("integrator") or scene.integrator.kind
+    if integrator != "bdpt":
+        raise UsageError(f"--strategy-images: only the bdpt integrator has strategies (s, t), "
+                         f"not {integrator} (add --integrator bdpt)")
+    if depth is None:
+        max_depth = options.get("max_depth", scene.integrator.max_depth)
+        depth = DEFAULT_DEPTH if max_depth < 0 else min(DEFAULT_DEPTH, max_depth)
+    return int(depth)
+
+
 def run_render(args, signals) -> int:
     """Run ``glrender render`` with parsed ``args``; ``signals`` is the command's
     :class:`~glrender.cli.StopSignals`. Returns the exit code."""
@@ -237,6 +261,9 @@ def run_render(args, signals) -> int:
     from ..distributed.command import run_distributed, uses_cluster
 
     if uses_cluster(args):          # --workers, --scheduler, --frames: on a Dask cluster
+        if getattr(args, "strategy_images", None):
+            raise UsageError("--strategy-images: not available on a cluster (render on one "
+                             "machine)")
         return run_distributed(args, signals)
     say = (lambda *a: None) if args.quiet else (lambda text: print(text, file=sys.stderr))
     timer = _Timer()
@@ -283,7 +310,8 @@ def run_render(args, signals) -> int:
                                    sampler=options.get("sampler"),
                                    max_depth=options.get("max_depth"),
                                    strategy=options.get("strategy"), aovs=first_hit,
-                                   clamp=options.get("clamp"))
+                                   clamp=options.get("clamp"),
+                                   strategy_depth=_strategy_depth(options, scene))
     from ..photon.command import photon_settings
 
     settings, sppm = photon_settings(args, settings)   # --integrator sppm: iterations as spp
@@ -393,6 +421,13 @@ def run_render(args, signals) -> int:
                 denoised, denoise_info = _denoise(film, scene, settings, ctx, crop, say)
         with timer("write"):
             written = _write_outputs(film, output, aov_names, args, denoised)
+            if settings.strategy_depth:
+                from . import strategies
+
+                written += strategies.write(Path(options["strategy_images"]),
+                                            renderer.strategy_images(), settings.strategy_depth,
+                                            exposure=args.exposure, curve=args.tonemap,
+                                            srgb=args.srgb)
         if interrupted or keep_checkpoint:
             write_checkpoint()
             ckpt_written = str(ckpt_path)
