@@ -40,4 +40,5 @@ void main() {
         accum_aov[2u * idx + 1u] = acc.normal;
     }
     if (kCountLoops) debug_counters[idx] = max(debug_counters[idx], g_loop_count);
+    if (kCountRays) debug_counters[idx] += g_ray_count;
 }
