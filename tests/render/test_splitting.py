@@ -104,3 +104,17 @@ def test05_bad_settings_name_the_field(gl_ctx):
             r.rays()
         finally:
             r.release()
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--rr", "fixed:1.5"], "--rr fixed:1.5: expected throughput, off or fixed:<q> with q in (0, 1]"),
+    (["--split", "0"], "--split 0: expected an integer in 1..16"),
+    (["--light-samples", "99"], "--light-samples 99: expected an integer in 1..16"),
+    (["--rr-depth", "0"], "--rr-depth 0: expected a number of path segments >= 1")])
+def test06_bad_options_are_one_line_errors(tmp_path, capsys, args, message):
+    from glrender.cli import main
+
+    scene = ROOT / "scenes" / "cornell-box" / "scene.toml"
+    assert main(["render", str(scene), "-o", str(tmp_path / "x.png"), *args]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"glrender: error: {message}"
