@@ -109,7 +109,8 @@ def run(lab) -> Section:
         f"sampling; {among} even black under BSDF sampling and MIS (balance) but lit under MIS "
         f"(power): no leak, but rare samples of the Gaussian filter's tails (at the full size, "
         f"rows 229–231 see the floor in the shadow under plate 4, which a box filter renders "
-        f"black for every strategy); results.json has every combination")
+        f"black for every strategy; the dark red blocks along the bottom of the efficiency "
+        f"map); results.json has every combination")
     whole = section.tables[0]
     best_single = max(whole.row("light").efficiency, whole.row("bsdf").efficiency)
     for s in ("mis-balance", "mis-power"):
