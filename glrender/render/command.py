@@ -17,8 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import DeviceError, UsageError
+from ..errors import DeviceError, SceneError, UsageError
 from ..gpu.layout import AOV_BYTES
+from ..scene.model import SPLIT_LIMIT, parse_rr
 
 AOV_NAMES = ("albedo", "normal", "depth", "emission", "variance", "radius", "photons")   # the last two: sppm
 FIRST_HIT_AOVS = ("albedo", "normal", "depth", "emission")
@@ -26,7 +27,8 @@ FIRST_HIT_AOVS = ("albedo", "normal", "depth", "emission")
 SPP_LIMIT = 1 << 31
 # the options a checkpoint remembers; --resume takes those not given again
 RESUMABLE = ("spp", "seed", "sampler", "integrator", "strategy", "max_depth", "width", "height",
-             "clamp", "crop", "strategy_images", "strategy_depth")
+             "clamp", "crop", "strategy_images", "strategy_depth", "rr", "rr_depth",
+             "light_samples", "split")
 
 
 def parse_defines(items: list[str]) -> dict[str, str]:
@@ -68,6 +70,15 @@ def _check_options(args) -> None:
     need("--seed", args.seed, lambda v: 0 <= v < 1 << 32, "an integer in 0..2^32-1")
     need("--max-depth", args.max_depth, lambda v: v == -1 or v >= 1,
          "-1 (unbounded) or a number of path segments >= 1")
+    need("--rr-depth", args.rr_depth, lambda v: 1 <= v <= 1 << 20, "a number of path segments >= 1")
+    for name, value in (("--light-samples", args.light_samples), ("--split", args.split)):
+        need(name, value, lambda v: 1 <= v <= SPLIT_LIMIT, f"an integer in 1..{SPLIT_LIMIT}")
+    if args.rr is not None:
+        try:
+            parse_rr(args.rr)
+        except SceneError as exc:
+            want = str(exc).split("expected ", 1)[1].rsplit(", got", 1)[0]
+            raise UsageError(f"--rr {args.rr}: expected {want}") from None
     need("--clamp", args.clamp, lambda v: math.isfinite(v) and v > 0,
          "a positive number (the largest RGB component a sample keeps)")
     need("--noise-threshold", args.noise_threshold, lambda v: 0 < v < 1,
@@ -309,6 +320,9 @@ def run_render(args, signals) -> int:
                                    spp=options.get("spp"), seed=options.get("seed"),
                                    sampler=options.get("sampler"),
                                    max_depth=options.get("max_depth"),
+                                   rr=options.get("rr"), rr_depth=options.get("rr_depth"),
+                                   light_samples=options.get("light_samples"),
+                                   split=options.get("split"),
                                    strategy=options.get("strategy"), aovs=first_hit,
                                    clamp=options.get("clamp"),
                                    strategy_depth=_strategy_depth(options, scene))

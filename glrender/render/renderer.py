@@ -46,6 +46,7 @@ class RenderSettings:
     sampler: m.Sampler
     aovs: bool = False
     count_loops: bool = False
+    count_rays: bool = False              # count the rays traced per pixel (Renderer.rays)
     debug_nonfinite: int = 0              # tests: make sample index % 7 == value - 1 NaN
     samples_per_pass: int | None = None   # None: chosen from the scene
     time_target: float = 0.1              # seconds per dispatch
@@ -61,9 +62,11 @@ class RenderSettings:
 def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: int | None = None,
                         sampler: str | None = None, seed: int | None = None,
                         max_depth: int | None = None, rr_depth: int | None = None,
+                        rr: str | None = None, light_samples: int | None = None,
+                        split: int | None = None,
                         strategy: str | None = None, light_selection: str | None = None,
                         area_sampling: str | None = None, hide_emitters: bool | None = None,
-                        aovs: bool = False, count_loops: bool = False,
+                        aovs: bool = False, count_loops: bool = False, count_rays: bool = False,
                         samples_per_pass: int | None = None, time_target: float = 0.1,
                         clamp: float | None = None, emission_only: bool = False,
                         strategy_depth: int = 0) -> RenderSettings:
@@ -76,6 +79,7 @@ def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: i
     bdpt keeps the image of every strategy (s, t) of path lengths up to it (0: off)."""
     integ = scene.integrator
     overrides: dict[str, Any] = {k: v for k, v in dict(kind=integrator, max_depth=max_depth, rr_depth=rr_depth,
+                                       rr=rr, light_samples=light_samples, split=split,
                                        strategy=strategy, light_selection=light_selection,
                                        area_sampling=area_sampling,
                                        hide_emitters=hide_emitters).items() if v is not None}
@@ -91,7 +95,9 @@ def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: i
                          f"sample keeps), got {clamp!r}")
     if emission_only and integ.kind != "path":
         raise UsageError(f"emission_only: only with the path integrator, not {integ.kind}")
-    return RenderSettings(integ, samp, aovs=aovs, count_loops=count_loops,
+    if count_loops and count_rays:
+        raise UsageError("count_loops and count_rays share one debug counter: ask for one")
+    return RenderSettings(integ, samp, aovs=aovs, count_loops=count_loops, count_rays=count_rays,
                           samples_per_pass=samples_per_pass, time_target=time_target,
                           clamp=None if clamp is None else float(clamp),
                           emission_only=bool(emission_only),
@@ -274,11 +280,13 @@ class Renderer:
         library = shaders.ShaderLibrary().with_generated({codegen.GENERATED_PATH: geometry})
         self.defines = shader_defines(
             sampler=s.sampler.kind, material_kinds=p.material_kinds, light_kinds=p.light_kinds,
-            max_depth=integ.max_depth, rr_depth=integ.rr_depth, strategy=integ.strategy,
+            max_depth=integ.max_depth, rr_depth=integ.rr_depth, rr=integ.rr,
+            light_samples=integ.light_samples if integ.kind == "path" else 1,
+            split=integ.split if integ.kind == "path" else 1, strategy=integ.strategy,
             emitter_samples=integ.emitter_samples, bsdf_samples=integ.bsdf_samples,
             hide_emitters=integ.hide_emitters, light_selection=integ.light_selection,
             area_sampling=integ.area_sampling, filter=self.scene.film.filter, aovs=s.aovs,
-            count_loops=s.count_loops, debug_nonfinite=s.debug_nonfinite,
+            count_loops=s.count_loops, count_rays=s.count_rays, debug_nonfinite=s.debug_nonfinite,
             emission_only=s.emission_only)
         if p.has_bvh and codegen.has_alpha_cutouts(p):
             self.defines["GLRENDER_ALPHA_CUTOUTS"] = 1     # geometry/bvh.glsl asks the scene
@@ -302,8 +310,11 @@ class Renderer:
             # samples per invocation and pass: measured loop counts stay in the hundreds per
             # sample (tests/render/test_determinism.py checks the worst scenes), far below
             # llvmpipe's cap; more samples per dispatch amortise its fixed cost and give path
-            # regeneration more to fill idle lanes with (8 measured best with and without a BVH)
-            self.samples_per_pass = 8
+            # regeneration more to fill idle lanes with (8 measured best with and without a BVH).
+            # Splitting multiplies a sample's work: fewer samples per invocation keep the
+            # product bounded (tests/render/test_splitting.py checks the largest settings).
+            work = integ.split * integ.light_samples if integ.kind == "path" else 1
+            self.samples_per_pass = max(1, 8 // work)
 
     def _check_strategy_images(self) -> None:
         s = self.settings
@@ -433,7 +444,8 @@ class Renderer:
         self._mean = self.gl.buffer(reserve=16 * n)
         self._m2 = self.gl.buffer(reserve=16 * n)
         self._aov = self.gl.buffer(reserve=layout.AOV_BYTES * n if self.settings.aovs else 16)
-        self._debug = self.gl.buffer(reserve=4 * n if self.settings.count_loops else 16)
+        counting = self.settings.count_loops or self.settings.count_rays
+        self._debug = self.gl.buffer(reserve=4 * n if counting else 16)
         # splats land anywhere on the film: the whole image, two words per pixel and channel
         if getattr(self, "_splat", None) is not None:
             self._splat.release()
@@ -565,7 +577,7 @@ class Renderer:
         bufs = [(self._mean, 16, layout.SSBO_ACCUM_MEAN), (self._m2, 16, layout.SSBO_ACCUM_M2)]
         if self.settings.aovs:
             bufs.append((self._aov, layout.AOV_BYTES, layout.SSBO_AOV))
-        if self.settings.count_loops:
+        if self.settings.count_loops or self.settings.count_rays:
             bufs.append((self._debug, 4, layout.SSBO_DEBUG))
         return bufs
 
@@ -684,6 +696,13 @@ class Renderer:
         return Film(mean=mean[..., :3].copy(), m2=m2[..., :3].copy(), count=mean[..., 3].copy(),
                     nonfinite=m2[..., 3].copy(), spp=self.spp_done, aovs=aovs, loop_counts=debug,
                     sampler=self.settings.sampler.kind)
+
+    def rays(self) -> int:
+        """Rays traced since the last reset (camera, continuation and shadow rays, summed
+        over the pixels; path integrator, settings with count_rays=True)."""
+        if not self.settings.count_rays:
+            raise UsageError("Renderer.rays: render with count_rays=True to count rays")
+        return int(np.frombuffer(self._debug.read(), np.uint32).astype(np.int64).sum())
 
     def splat_image(self) -> np.ndarray:
         """The splatted part of the image (light tracing, BDPT's t = 1 strategies), (H, W, 3)

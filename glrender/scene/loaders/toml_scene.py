@@ -202,13 +202,22 @@ def _integrator(ctx, t) -> m.Integrator:
     t = ctx.table(t, "integrator")
     _check_keys(ctx, t, "integrator", {"type", "max_depth", "rr_depth", "strategy", "emitter_samples",
                                        "bsdf_samples", "light_selection", "area_sampling",
-                                       "hide_emitters", "ao_distance"})
+                                       "hide_emitters", "ao_distance", "rr", "light_samples",
+                                       "split"})
     i = m.Integrator()
     i.kind = ctx.string(t.get("type", i.kind), "integrator.type", m.INTEGRATORS)
     i.max_depth = ctx.number(t.get("max_depth", i.max_depth), "integrator.max_depth", -1, 1 << 20, integer=True)
     if i.max_depth == 0:
         ctx.fail("integrator.max_depth", "expected -1 (unbounded) or an integer >= 1, got 0")
     i.rr_depth = ctx.number(t.get("rr_depth", i.rr_depth), "integrator.rr_depth", 1, 1 << 20, integer=True)
+    i.rr = ctx.string(t.get("rr", i.rr), "integrator.rr")
+    try:
+        m.parse_rr(i.rr)
+    except m.SceneError as exc:
+        ctx.fail("integrator.rr", str(exc).split(": ", 1)[1])
+    i.light_samples = ctx.number(t.get("light_samples", 1), "integrator.light_samples", 1,
+                                 m.SPLIT_LIMIT, integer=True)
+    i.split = ctx.number(t.get("split", 1), "integrator.split", 1, m.SPLIT_LIMIT, integer=True)
     i.strategy = ctx.string(t.get("strategy", i.strategy), "integrator.strategy", m.STRATEGIES)
     i.emitter_samples = ctx.number(t.get("emitter_samples", 1), "integrator.emitter_samples", 0, 64, integer=True)
     i.bsdf_samples = ctx.number(t.get("bsdf_samples", 1), "integrator.bsdf_samples", 0, 64, integer=True)
