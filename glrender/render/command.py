@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import DeviceError, UsageError
 
-AOV_NAMES = ("albedo", "normal", "depth", "variance", "radius", "photons")   # the last two: sppm
+AOV_NAMES = ("albedo", "normal", "depth", "variance", "radius", "photons")   # the last two: photon, sppm
 FIRST_HIT_AOVS = ("albedo", "normal", "depth")
 # sample indices are 32-bit on the device: the open-ended target of a time budget
 SPP_LIMIT = 1 << 31
@@ -246,10 +246,13 @@ def run_render(args, signals) -> int:
                 raise UsageError(f"{path}: is a folder, expected a file name for the {what}")
     keep_checkpoint = bool(args.checkpoint or args.checkpoint_every or args.resume)
     ckpt = load_checkpoint(ckpt_path) if args.resume else None
-    options = {k: getattr(args, k) for k in RESUMABLE if getattr(args, k) is not None}
+    from ..photon.command import OPTIONS as PHOTON_OPTIONS
+
+    resumable = RESUMABLE + PHOTON_OPTIONS
+    options = {k: getattr(args, k) for k in resumable if getattr(args, k, None) is not None}
     if ckpt is not None:
         saved = ckpt.meta.get("options", {})
-        options = {**{k: v for k, v in saved.items() if k in RESUMABLE}, **options}
+        options = {**{k: v for k, v in saved.items() if k in resumable}, **options}
         if not args.define:
             params = dict(ckpt.meta.get("params", {}))
         if args.aov is None:
@@ -271,7 +274,11 @@ def run_render(args, signals) -> int:
                                    clamp=options.get("clamp"))
     from ..photon.command import photon_settings
 
-    settings, sppm = photon_settings(args, settings)   # --integrator sppm: iterations as spp
+    for name in PHOTON_OPTIONS:       # a checkpoint's photon options, unless given again
+        if getattr(args, name, None) is None and name in options:
+            setattr(args, name, options[name])
+    settings, photon = photon_settings(args, settings)   # --integrator sppm: iterations as spp
+    sppm = photon if settings.integrator.kind == "sppm" else None
     if "spp" in options or args.time is None or sppm is not None:
         target = settings.sampler.spp
     else:
@@ -305,6 +312,10 @@ def run_render(args, signals) -> int:
             from ..photon import SppmRenderer
 
             renderer = SppmRenderer(scene, settings, sppm, ctx=ctx)
+        elif photon is not None:
+            from ..photon import PhotonRenderer
+
+            renderer = PhotonRenderer(scene, settings, photon, ctx=ctx)
         else:
             renderer = Renderer(scene, settings, ctx=ctx)
     except moderngl.Error as exc:

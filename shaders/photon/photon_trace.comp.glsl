@@ -16,15 +16,7 @@ layout(local_size_x = 64) in;
 #include "photon/layout.glsl"
 #include "photon/photon_tracer.glsl"
 #include "photon/sppm_deposit.glsl"
-#include "integrators/splat.glsl"
-
-// The photon-map view (options.w = 1): every photon hit at a non-delta surface seen by
-// the camera adds the photon's power to the pixel it projects to (the splat image,
-// storage block 7), so the picture shows where the photons are, coloured by power.
-void splat_photon_view(SurfaceHit hit, Photon ph, vec2 u_lens) {
-    CameraConnection c = camera_connect(hit.p, u_lens, ph.time);
-    if (c.valid && camera_visible(hit.p, hit.ng, c, ph.time, kNoPrimitive)) splat_film(c.film, ph.beta);
-}
+#include "photon/photon_view.glsl"
 
 void main() {
     uint j = u_photon.photons.x + gl_GlobalInvocationID.x;
