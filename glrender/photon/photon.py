@@ -205,6 +205,9 @@ class PhotonRenderer(Renderer):
             if stored:
                 data = self._maps[which].read(pl.BYTES_PER_PHOTON * stored)
                 records = np.frombuffer(data, np.float32).reshape(stored, 12)
+                # atomics store photons in any order: a canonical one (by position, then
+                # power) makes the radius estimate and the grid, hence the image, repeatable
+                records = records[np.lexsort(records[:, [10, 9, 8, 2, 1, 0]].T)]
             self._radii[which] = self._estimate_radius(records[:, :3])
             grid = build_point_grid(records[:, :3], self._radii[which])
             self.grids.append(grid)
