@@ -13,7 +13,7 @@ Renderer's; the maps depend on the scene and seed only, so they are traced again
 same photons) when a render resumes.
 
 The estimate is biased (consistent only as photons grow and the radius shrinks): the
-sources are listed in docs/photon-mapping.md.
+sources are listed in README.md ("Photon mapping").
 """
 from __future__ import annotations
 

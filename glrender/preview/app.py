@@ -28,6 +28,7 @@ from .keys import bindings, help_text
 from .progressive import Progressive
 
 INTEGRATOR_ORDER = tuple(k for k in m.INTEGRATORS if k != "sppm")   # SPPM has its own driver
+PREVIEW_PHOTONS = 1 << 17       # the photon integrator's global and caustic maps in the preview
 STRATEGY_ORDER = tuple(STRATEGIES)
 DEPTH_STEPS_MAX = 16            # ] past this goes to unbounded (-1)
 EXPOSURE_STEP = 0.5             # stops per key press
@@ -142,7 +143,13 @@ class PreviewApp:
         if old is not None:
             self.display.hold(old, self.view)   # on screen until the new kernel's samples land
             old.release()
-        self.renderer = Renderer(self.scene, settings, ctx=self.ctx)
+        if self.integrator == "photon":    # a Renderer whose photon maps are traced first
+            from ..photon import PhotonRenderer, PhotonSettings
+
+            self.renderer = PhotonRenderer(self.scene, settings, PhotonSettings(photons=PREVIEW_PHOTONS),
+                                           ctx=self.ctx)
+        else:
+            self.renderer = Renderer(self.scene, settings, ctx=self.ctx)
         self.progressive = Progressive(self.renderer, self.options.spp)
         self._generation += 1
         seconds = time.perf_counter() - t0
