@@ -232,3 +232,29 @@ def test05_cornell_converges_toward_the_reference(gl_ctx, final_gather):
     assert rmse[0] > rmse[1] > rmse[2]
     assert abs(means[0]) > abs(means[1]) > abs(means[2])   # the bias shrinks with the radius
     assert abs(means[-1]) < 0.03
+
+
+def test06_photon_view_aov(gl_ctx):
+    """The photon-map view of the global map (photon_view=True) on a plane under a point
+    light: the photons' power the camera sees, per emitted photon, sums over the pixels
+    to the power falling on the visible part of the plane (closed form, as SPPM's
+    tests/photon/test_sppm.py test04; Poisson error of the photons in view, 5 sigma).
+    Rendering more samples does not change it (the maps are traced once)."""
+    light = m.Light("point", position=(0.0, 0.0, HEIGHT), intensity=(INTENSITY,) * 3)
+    scene = plane_scene(light, albedo=ALBEDO, width=32, height=32, max_depth=2)
+    photons = 1 << 18
+    r = PhotonRenderer(scene, photon=PhotonSettings(photons=photons, radius=0.08, photon_view=True),
+                       ctx=gl_ctx, seed=3)
+    try:
+        r.step(1)
+        first = r.film().aovs["photons"]
+        r.step(3)
+        view = r.film().aovs["photons"]
+    finally:
+        r.release()
+    np.testing.assert_array_equal(first, view)
+    side = 2 * 20 * math.tan(math.radians(4.0))       # the view's width on the plane (fov 8 along x)
+    pts = plane_points(scene, supersample=4)
+    incident = (point_light_radiance(pts).mean(axis=-1) / (ALBEDO / math.pi)).sum() * (side / 32) ** 2
+    count = photons * incident / (4 * math.pi * INTENSITY)
+    assert abs(view[..., 0].sum() / incident - 1) < 5 / math.sqrt(count), (view[..., 0].sum(), incident)

@@ -92,3 +92,15 @@ def test06_resume_keeps_the_photon_options(tmp_path, integrator, options):
     a, b = read_exr(tmp_path / "a.exr"), read_exr(tmp_path / "b.exr")
     np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-6)
     assert a.mean() > 0.1
+
+
+def test07_photon_integrator_writes_the_photon_view(tmp_path):
+    """--integrator photon --aov photons: the image and the photon-map view, both lit."""
+    out = tmp_path / "p.exr"
+    run = glrender("render", CORNELL, "-o", out, "--integrator", "photon", "--photons", 20000,
+                   "--spp", 2, "--aov", "photons", *SMALL)
+    assert run.returncode == 0, run.stderr
+    from glrender.film.io import read_exr_layers
+
+    layers = read_exr_layers(out)
+    assert layers["RGB"].mean() > 0.1 and layers["photons"].mean() > 0
