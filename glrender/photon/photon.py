@@ -263,6 +263,18 @@ class PhotonRenderer(Renderer):
             film.aovs["photons"] = view[first:first + self.band_height].astype(np.float32)
         return film
 
+    def photon_stats(self) -> dict[str, Any]:
+        """What --stats reports of the photon maps: photons emitted and stored per map,
+        lookup radii (the kNN search's largest), the settings, the lookups' candidate
+        counts, memory and the seconds spent tracing and sorting the maps."""
+        p = self.photon
+        return {"photons_emitted": list(self.photons), "photons_stored": list(self.counters["stored"]),
+                "radius": [self.lookup_radius(0), self.lookup_radius(1)], "knn": p.knn,
+                "kernel": p.kernel, "final_gather": p.final_gather,
+                "largest_cell": [g.max_cell_entries for g in self.grids],
+                "lookups": self.lookup_counters(), "memory": self.memory(),
+                "seconds": self.timings.get("photons", 0.0)}
+
     def memory(self) -> dict[str, int]:
         """Device bytes per photon stored, photons stored per map and the maps' bytes."""
         stored = self.counters["stored"]

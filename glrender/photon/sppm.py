@@ -426,6 +426,14 @@ class SppmRenderer:
         """SPPM binds its per-pixel buffers whole: one slice."""
         return [self.rows]
 
+    def photon_stats(self) -> dict[str, Any]:
+        """What --stats reports of SPPM: photons per iteration, alpha, kernel, the radii
+        now (min, mean, max), the gathers' candidate counts and memory."""
+        return {"photons_per_iteration": self.photons_per_iteration, "alpha": float(self.sppm.alpha),
+                "kernel": self.sppm.kernel, "initial_radius": self.initial_radius,
+                "radius": [float(self.radius.min()), float(self.radius.mean()), float(self.radius.max())],
+                "gathers": dict(self.counters), "memory": self.memory()}
+
     def memory(self) -> dict[str, int]:
         """Device bytes per pixel and per photon (photons are not stored: deposited at once)."""
         return {"bytes_per_pixel": pl.BYTES_PER_PIXEL,

@@ -431,6 +431,9 @@ def run_render(args, signals) -> int:
         "stderr_is_upper_bound": settings.sampler.kind != "independent",
         "mean": [float(v) for v in film.mean.reshape(-1, 3).mean(0)],
     }
+    if hasattr(renderer, "photon_stats"):     # photon, sppm: maps, radii, lookups, memory
+        stats["photon"] = renderer.photon_stats()
+        stats["biased"] = True
     if args.stats:
         _write_stats(Path(args.stats), stats)
     renderer.release()

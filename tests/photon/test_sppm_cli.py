@@ -95,11 +95,19 @@ def test06_resume_keeps_the_photon_options(tmp_path, integrator, options):
 
 
 def test07_photon_integrator_writes_the_photon_view(tmp_path):
-    """--integrator photon --aov photons: the image and the photon-map view, both lit."""
+    """--integrator photon --aov photons: the image and the photon-map view, both lit;
+    --stats names the maps (photons emitted and stored, radii, lookups, bytes)."""
+    import json
+
     out = tmp_path / "p.exr"
     run = glrender("render", CORNELL, "-o", out, "--integrator", "photon", "--photons", 20000,
-                   "--spp", 2, "--aov", "photons", *SMALL)
+                   "--spp", 2, "--aov", "photons", "--stats", tmp_path / "s.json", *SMALL)
     assert run.returncode == 0, run.stderr
+    stats = json.loads((tmp_path / "s.json").read_text())
+    ph = stats["photon"]
+    assert stats["biased"] and ph["photons_emitted"] == [20000, 20000]
+    assert ph["photons_stored"][0] > 20000 and ph["radius"][0] > 0 and ph["lookups"]["visited"] > 0
+    assert ph["memory"]["bytes_per_photon"] == 48
     from glrender.film.io import read_exr_layers
 
     layers = read_exr_layers(out)
