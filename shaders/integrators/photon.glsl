@@ -14,6 +14,7 @@
 #include "integrators/integrator_common.glsl"
 #include "integrators/shading.glsl"
 #include "photon/photon_gather.glsl"
+#include "photon/camera_path.glsl"
 #include "integrators/pixel_loop.glsl"
 
 GatherPoint gather_point(SurfaceHit hit, Bsdf b, vec3 d) {
@@ -44,14 +45,7 @@ vec3 final_gather(GatherPoint g, SurfaceHit hit, float time, int segments, int m
         Frame frame = shading_frame(h);
         vec2 u_l = sampler_2d(s);
         vec2 u_d = sampler_2d(s);
-        BsdfSample ds = bsdf_sample(b, frame_to_local(frame, -d), u_l.x, u_d, false);
-        if (!ds.valid) break;
-        vec3 wi = frame_from_local(frame, ds.wi);
-        if (dot(wi, h.ng) * ds.wi.z <= 0.0) break;
-        beta *= ds.weight;
-        if (!(max_component(beta) > 0.0)) break;
-        o = offset_ray_origin(h.p, h.ng, wi);
-        d = wi;
+        if (!continue_camera_path(h, b, frame, frame_to_local(frame, -d), u_l.x, u_d, beta, o, d)) break;
     }
     return vec3(0.0);
 }
@@ -87,14 +81,7 @@ vec3 integrator_li(vec3 o, vec3 d, float t_max, float time, inout SamplerState s
             if (gather) L += beta * final_gather(g, hit, time, segments, max_segments, s);
             break;
         }
-        BsdfSample bs = bsdf_sample(b, g.wo_l, u_choice.y, u_bsdf, false);
-        if (!bs.valid) break;
-        vec3 wi = frame_from_local(g.frame, bs.wi);
-        if (dot(wi, hit.ng) * bs.wi.z <= 0.0) break;
-        beta *= bs.weight;
-        if (!(max_component(beta) > 0.0)) break;
-        o = offset_ray_origin(hit.p, hit.ng, wi);
-        d = wi;
+        if (!continue_camera_path(hit, b, g.frame, g.wo_l, u_choice.y, u_bsdf, beta, o, d)) break;
         t_max = kInfinity;
     }
     return L;

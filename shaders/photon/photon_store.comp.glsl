@@ -38,24 +38,19 @@ void main() {
     bool delta_only = true;
     for (int segments = 1; segments <= max_segments && ph.alive; ++segments) {
         LOOP_TICK();
-        SurfaceHit hit;
-        if (!scene_intersect(ph.o, ph.d, kInfinity, ph.time, hit)) break;
-        vec2 u_choice = sampler_2d(s);
-        vec2 u_bsdf = sampler_2d(s);
-        float u_rr = sampler_1d(s);
-        vec2 u_lens = sampler_2d(s);
-        Bsdf b = bsdf_from_material(hit.material, hit.uv);
-        if (!bsdf_is_delta(b)) {
+        PhotonHit h;
+        if (!photon_next_hit(ph, s, h)) break;
+        if (!bsdf_is_delta(h.b)) {
             uint type = segments == 1 ? kPhotonDirect : (delta_only ? kPhotonCaustic : kPhotonIndirect);
             if (!caustic_map || type == kPhotonCaustic) {
-                store_photon(hit, ph, type, segments);
-                if (u_map.store.z != 0u) splat_photon_view(hit, ph, u_lens);
+                store_photon(h.hit, ph, type, segments);
+                if (u_map.store.z != 0u) splat_photon_view(h.hit, ph, h.u_lens);
             }
             if (caustic_map) break;
             delta_only = false;
         }
         if (segments + 1 > max_segments) break;
-        photon_scatter(ph, hit, b, u_choice.y, u_bsdf, u_rr);
+        photon_scatter(ph, h.hit, h.b, h.u_choice.y, h.u_bsdf, h.u_rr);
     }
     if (kCountLoops) atomicMax(debug_counters[0], g_loop_count);
 }
