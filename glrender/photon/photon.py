@@ -102,8 +102,10 @@ class PhotonRenderer(Renderer):
     # -- setup -------------------------------------------------------------------------------
     def _compile(self) -> None:
         super()._compile()
-        # fixed radius: two lookups of at most 4096 candidates per sample; kNN: 1024 each
-        # with the heap's steps (photon/photon_gather.glsl): far below llvmpipe's cap
+        # a sample makes two lookups (caustic map, and the global map or a gather ray's) of
+        # at most 4096 candidates, or 2048 with the kNN heap's up to 6 steps each
+        # (photon/photon_gather.glsl): 2 samples ~16k, 1 kNN sample ~29k loop iterations
+        # at worst, below llvmpipe's silent 65,535 (tests/photon/test_photon.py test04)
         if self.settings.samples_per_pass is None:
             self.samples_per_pass = 2 if self.photon.knn is None else 1
         p = self.packed
@@ -205,9 +207,11 @@ class PhotonRenderer(Renderer):
             if stored:
                 data = self._maps[which].read(pl.BYTES_PER_PHOTON * stored)
                 records = np.frombuffer(data, np.float32).reshape(stored, 12)
-                # atomics store photons in any order: a canonical one (by position, then
-                # power) makes the radius estimate and the grid, hence the image, repeatable
-                records = records[np.lexsort(records[:, [10, 9, 8, 2, 1, 0]].T)]
+                # atomics store photons in any order: a canonical one (by the bits of x and
+                # y; photons at the same x and y are as good as never) makes the radius
+                # estimate and the grid, hence the image, repeatable
+                bits = records[:, :2].copy().view(np.uint32).astype(np.uint64)
+                records = records[np.argsort((bits[:, 0] << np.uint64(32)) | bits[:, 1])]
             self._radii[which] = self._estimate_radius(records[:, :3])
             grid = build_point_grid(records[:, :3], self._radii[which])
             self.grids.append(grid)
