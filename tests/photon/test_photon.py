@@ -258,3 +258,28 @@ def test06_photon_view_aov(gl_ctx):
     incident = (point_light_radiance(pts).mean(axis=-1) / (ALBEDO / math.pi)).sum() * (side / 32) ** 2
     count = photons * incident / (4 * math.pi * INTENSITY)
     assert abs(view[..., 0].sum() / incident - 1) < 5 / math.sqrt(count), (view[..., 0].sum(), incident)
+
+
+def test07_stored_direct_photons_carry_the_light_power(gl_ctx):
+    """A point light inside a closed diffuse sphere: every photon reaches the sphere, so
+    the global map's direct photons (their first hits) hold the light's power 4 pi I,
+    each photon's power over the photons emitted (the same photons for every light
+    type: tests/photon/test_photon_trace.py; float32 sums, 1e-4)."""
+    scene = m.Scene(film=m.Film(width=8, height=8, filter="box"), integrator=m.Integrator(max_depth=4),
+                    source="<lit sphere>")
+    scene.camera = m.Camera(world_from_camera=m.look_at((0, 0, 0.5), (0, 0, 0), (0, 1, 0)), fov=40)
+    white = scene.add_material(m.Material("diffuse", reflectance=(0.5,) * 3))
+    scene.shapes.append(m.Shape("sphere", material=white, radius=2.0))
+    scene.lights.append(m.Light("point", position=(0.3, -0.2, 0.1), intensity=(3.0, 2.0, 1.0)))
+    photons = 1 << 16
+    r = PhotonRenderer(scene, photon=PhotonSettings(photons=photons, radius=0.1), ctx=gl_ctx, seed=2)
+    try:
+        stored = r.counters["stored"][0]
+        records = np.frombuffer(r._maps[0].read(48 * stored), np.float32).reshape(stored, 12)
+    finally:
+        r.release()
+    direct = records[:, 3].view(np.uint32) == 0
+    assert direct.sum() == photons      # one first hit each (seen from inside, the sphere
+                                        # is the back of a one-sided diffuse: no bounces)
+    power = records[direct, 8:11].astype(np.float64).sum(axis=0) / photons
+    np.testing.assert_allclose(power, 4 * math.pi * np.array([3.0, 2.0, 1.0]), rtol=1e-4)
