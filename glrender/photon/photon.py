@@ -94,7 +94,7 @@ class PhotonRenderer(Renderer):
             overrides.setdefault("integrator", "photon")
         super().__init__(scene, settings, ctx=ctx, device=device, **overrides)
         t0 = time.perf_counter()
-        self.counters = {"stored": [0, 0], "traced_twice": [False, False]}
+        self.counters: dict[str, list[Any]] = {"stored": [0, 0], "traced_twice": [False, False]}
         self.grids: list[PointGrid] = []
         self._trace_maps()
         self.timings["photons"] = time.perf_counter() - t0

@@ -133,7 +133,7 @@ class SppmProgressive:
         self.renderer = renderer
         self.target_spp = target_spp
         self.samples_added = 0     # pixel samples (camera samples) since the last reset
-        self._stage = None         # (radiance, photon parameter block, next photon) mid-iteration
+        self._stage: tuple | None = None   # (radiance, photon parameter block, next photon) mid-iteration
         self._show()
 
     def reset(self) -> None:
