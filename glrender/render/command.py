@@ -21,7 +21,7 @@ from ..errors import DeviceError, SceneError, UsageError
 from ..gpu.layout import AOV_BYTES
 from ..scene.model import SPLIT_LIMIT, parse_rr
 
-AOV_NAMES = ("albedo", "normal", "depth", "emission", "variance", "radius", "photons")   # the last two: sppm
+AOV_NAMES = ("albedo", "normal", "depth", "emission", "variance", "radius", "photons")   # the last two: photon, sppm
 FIRST_HIT_AOVS = ("albedo", "normal", "depth", "emission")
 # sample indices are 32-bit on the device: the open-ended target of a time budget
 SPP_LIMIT = 1 << 31
@@ -299,10 +299,13 @@ def run_render(args, signals) -> int:
                 raise UsageError(f"{path}: is a folder, expected a file name for the {what}")
     keep_checkpoint = bool(args.checkpoint or args.checkpoint_every or args.resume)
     ckpt = load_checkpoint(ckpt_path) if args.resume else None
-    options = {k: getattr(args, k) for k in RESUMABLE if getattr(args, k) is not None}
+    from ..photon.command import OPTIONS as PHOTON_OPTIONS
+
+    resumable = RESUMABLE + PHOTON_OPTIONS
+    options = {k: getattr(args, k) for k in resumable if getattr(args, k, None) is not None}
     if ckpt is not None:
         saved = ckpt.meta.get("options", {})
-        options = {**{k: v for k, v in saved.items() if k in RESUMABLE}, **options}
+        options = {**{k: v for k, v in saved.items() if k in resumable}, **options}
         if not args.define:
             params = dict(ckpt.meta.get("params", {}))
         if args.aov is None:
@@ -328,7 +331,11 @@ def run_render(args, signals) -> int:
                                    strategy_depth=_strategy_depth(options, scene))
     from ..photon.command import photon_settings
 
-    settings, sppm = photon_settings(args, settings)   # --integrator sppm: iterations as spp
+    for name in PHOTON_OPTIONS:       # a checkpoint's photon options, unless given again
+        if getattr(args, name, None) is None and name in options:
+            setattr(args, name, options[name])
+    settings, photon = photon_settings(args, settings)   # --integrator sppm: iterations as spp
+    sppm = photon if settings.integrator.kind == "sppm" else None
     if "spp" in options or args.time is None or sppm is not None:
         target = settings.sampler.spp
     else:
@@ -362,6 +369,10 @@ def run_render(args, signals) -> int:
             from ..photon import SppmRenderer
 
             renderer = SppmRenderer(scene, settings, sppm, ctx=ctx)
+        elif photon is not None:
+            from ..photon import PhotonRenderer
+
+            renderer = PhotonRenderer(scene, settings, photon, ctx=ctx)
         else:
             renderer = Renderer(scene, settings, ctx=ctx)
     except moderngl.Error as exc:
@@ -484,6 +495,9 @@ def run_render(args, signals) -> int:
         "stderr_is_upper_bound": settings.sampler.kind != "independent",
         "mean": [float(v) for v in film.mean.reshape(-1, 3).mean(0)],
     }
+    if hasattr(renderer, "photon_stats"):     # photon, sppm: maps, radii, lookups, memory
+        stats["photon"] = renderer.photon_stats()
+        stats["biased"] = True
     if args.stats:
         _write_stats(Path(args.stats), stats)
     renderer.release()

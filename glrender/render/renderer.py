@@ -126,6 +126,8 @@ class Renderer:
     ``step(spp)`` adds samples to every pixel; ``film()`` reads the image back.
     """
 
+    integrator_files = INTEGRATOR_FILES   # the render kernels' integrators (kind: file)
+
     def __init__(self, scene: m.Scene, settings: RenderSettings | None = None, *,
                  ctx: Context | None = None, device: str | int | None = None,
                  **overrides: Any) -> None:
@@ -272,10 +274,12 @@ class Renderer:
         s = self.settings
         integ = s.integrator
         p = self.packed
-        if integ.kind not in INTEGRATOR_FILES:
+        files = self.integrator_files
+        if integ.kind not in files:
+            driver = "PhotonRenderer" if integ.kind == "photon" else "SppmRenderer"
             raise UsageError(f"integrator {integ.kind!r} has its own driver, not a render kernel: "
-                             f"use glrender.photon.SppmRenderer (or glrender render --integrator "
-                             f"{integ.kind}); Renderer takes {', '.join(INTEGRATOR_FILES)}")
+                             f"use glrender.photon.{driver} (or glrender render --integrator "
+                             f"{integ.kind}); Renderer takes {', '.join(files)}")
         geometry = codegen.generate(p, has_bvh=p.has_bvh, lights=self.lights_final)
         library = shaders.ShaderLibrary().with_generated({codegen.GENERATED_PATH: geometry})
         self.defines = shader_defines(
@@ -293,10 +297,10 @@ class Renderer:
         if s.strategy_depth:
             self._check_strategy_images()
             self.defines["GLRENDER_STRATEGY_DEPTH"] = s.strategy_depth
-        self._source_fingerprint = (geometry, sorted(self.defines.items()), INTEGRATOR_FILES[integ.kind])
+        self._source_fingerprint = (geometry, sorted(self.defines.items()), files[integ.kind])
         self.program: Any = shaders.compile_compute(
             self.ctx, "kernels/render.comp.glsl", defines=self.defines,
-            slots={"integrator": INTEGRATOR_FILES[integ.kind],
+            slots={"integrator": files[integ.kind],
                    "scene": codegen.GENERATED_PATH},
             library=library)
         if s.samples_per_pass is not None:

@@ -292,7 +292,7 @@ class Film:
         return {"box": 0.5, "tent": 1.0, "gaussian": 4.0 * self.gaussian_stddev, "mitchell": 2.0}[self.filter]
 
 
-INTEGRATORS = ("path", "direct", "ao", "lighttrace", "bdpt", "sppm")
+INTEGRATORS = ("path", "direct", "ao", "lighttrace", "bdpt", "sppm", "photon")
 STRATEGIES = ("light", "bsdf", "mis-balance", "mis-power")
 SPLIT_LIMIT = 16   # light samples per vertex and first-vertex branches of the path tracer
 

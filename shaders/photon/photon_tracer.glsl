@@ -49,3 +49,25 @@ void photon_scatter(inout Photon ph, SurfaceHit hit, Bsdf b, float u_lobe, vec2 
     ph.d = wi;
     ph.alive = true;
 }
+
+// The next surface a photon reaches, its BSDF and the numbers scattering there takes
+// (the same sampler dimensions in every photon kernel).
+struct PhotonHit {
+    SurfaceHit hit;
+    Bsdf b;
+    vec2 u_choice;   // .y picks the BSDF lobe
+    vec2 u_bsdf;
+    float u_rr;
+    vec2 u_lens;     // the photon-map view's camera connection
+};
+
+// Follows photon ph to its next surface: false when it leaves the scene.
+bool photon_next_hit(Photon ph, inout SamplerState s, out PhotonHit h) {
+    if (!scene_intersect(ph.o, ph.d, kInfinity, ph.time, h.hit)) return false;
+    h.u_choice = sampler_2d(s);
+    h.u_bsdf = sampler_2d(s);
+    h.u_rr = sampler_1d(s);
+    h.u_lens = sampler_2d(s);
+    h.b = bsdf_from_material(h.hit.material, h.hit.uv);
+    return true;
+}

@@ -17,6 +17,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "integrators/integrator_common.glsl"
 #include "integrators/shading.glsl"
 #include "integrators/pixel.glsl"
+#include "photon/camera_path.glsl"
 
 void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
@@ -54,14 +55,7 @@ void main() {
             vp_extra[2u * i + 1u] = vec4(beta, 0.0);
             break;
         }
-        BsdfSample bs = bsdf_sample(b, wo, u_choice.y, u_bsdf, false);
-        if (!bs.valid) break;
-        vec3 wi = frame_from_local(frame, bs.wi);
-        if (dot(wi, hit.ng) * bs.wi.z <= 0.0) break;
-        beta *= bs.weight;
-        if (!(max_component(beta) > 0.0)) break;
-        o = offset_ray_origin(hit.p, hit.ng, wi);
-        d = wi;
+        if (!continue_camera_path(hit, b, frame, wo, u_choice.y, u_bsdf, beta, o, d)) break;
         t_max = kInfinity;
     }
     if (!is_finite(L) || !is_finite(beta)) {
