@@ -57,11 +57,17 @@ vec3 integrator_li(vec3 o, vec3 d, float t_max, float time, inout SamplerState s
         LOOP_TICK();
         SurfaceHit hit;
         if (!scene_intersect(o, d, t_max, time, hit)) {
-            L += beta * environment_contribution(d, depth, o, 1.0, true);
+            vec3 Le = environment_contribution(d, depth, o, 1.0, true);
+            L += beta * Le;
+            if (kAovs && depth == 0) aov.emission = Le;   // the emission AOV: the first hit's
             break;
         }
         if (depth == 0) record_aov(aov, hit);
-        if (hit.light != 0u) L += beta * emitter_hit_contribution(hit, d, depth, o, 1.0, true);
+        if (hit.light != 0u) {
+            vec3 Le = emitter_hit_contribution(hit, d, depth, o, 1.0, true);
+            L += beta * Le;
+            if (kAovs && depth == 0) aov.emission = Le;
+        }
         Bsdf b = bsdf_from_material(hit.material, hit.uv);
         GatherPoint g = gather_point(hit, b, d);
         vec2 u_choice = sampler_2d(s);
