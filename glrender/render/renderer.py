@@ -279,6 +279,8 @@ class Renderer:
             emission_only=s.emission_only)
         if p.has_bvh and codegen.has_alpha_cutouts(p):
             self.defines["GLRENDER_ALPHA_CUTOUTS"] = 1     # geometry/bvh.glsl asks the scene
+        if codegen.has_normal_shadowing(p):
+            self.defines["GLRENDER_NORMAL_SHADOWING"] = 1  # bsdf/bsdf.glsl bsdf_normal_shadowing
         self._source_fingerprint = (geometry, sorted(self.defines.items()), INTEGRATOR_FILES[integ.kind])
         self.program: Any = shaders.compile_compute(
             self.ctx, "kernels/render.comp.glsl", defines=self.defines,

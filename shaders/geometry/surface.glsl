@@ -16,6 +16,7 @@ struct SurfaceHit {
     uint light;     // index + 1 into lights[] of the area light on this surface, 0 if none
     uint prim;      // primitive id (compiled primitives first, then BVH triangles)
     vec3 dpdu;      // dp/du, the surface's tangent along u (not unit; zero where uv give none)
+    vec3 ns0;       // the shading normal before a normal map replaced ns (ns without one)
 };
 
 // The shading frame of a hit: z = the shading normal, x = dp/du made orthogonal to it, as

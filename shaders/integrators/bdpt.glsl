@@ -20,7 +20,7 @@
 #include "integrators/bdpt_vertex.glsl"
 
 Vertex vertex_from_hit(SurfaceHit hit, Frame frame, Bsdf b, vec3 beta) {
-    return Vertex(hit.p, hit.ng, frame.z, frame.x, beta, hit.uv, kVertexSurface, hit.material, hit.light,
+    return Vertex(hit.p, hit.ng, frame.z, hit.ns0, frame.x, beta, hit.uv, kVertexSurface, hit.material, hit.light,
                   false, !bsdf_is_delta(b), 0.0, 0.0);
 }
 
@@ -44,6 +44,7 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
         Vertex prev = light_path ? g_light[n - 1] : g_camera[n - 1];
         Bsdf b = bsdf_from_material(hit.material, hit.uv);
         Frame frame = shading_frame(hit);
+        bsdf_normal_frame(b, hit.ns0, frame);
         Vertex v = vertex_from_hit(hit, frame, b, beta);
         v.pdf_fwd = solid_angle_to_area(pdf_sa, prev, v);
         if (!light_path && n == 1) record_aov(aov, hit);
@@ -92,7 +93,9 @@ vec3 vertex_f(Vertex v, vec3 from, vec3 to, bool adjoint) {
     Frame frame = vertex_frame(v);
     vec3 wo_w = normalize(from - v.p), wi_w = normalize(to - v.p);
     vec3 wo = frame_to_local(frame, wo_w), wi = frame_to_local(frame, wi_w);
-    vec3 f = bsdf_eval(bsdf_from_material(v.material, v.uv), wo, wi, adjoint);
+    Bsdf b = bsdf_from_material(v.material, v.uv);
+    bsdf_normal_frame(b, v.ns0, frame);
+    vec3 f = bsdf_eval(b, wo, wi, adjoint);
     if (adjoint) f *= shading_normal_correction(wo_w, wi_w, v.ns, v.ng);
     return f;
 }

@@ -30,6 +30,7 @@ struct Vertex {
     vec3 p;
     vec3 ng;        // geometric normal (0 for points off surfaces: pinhole, lens, point lights)
     vec3 ns;        // shading normal
+    vec3 ns0;       // the shading normal before a normal map (bsdf_normal_frame)
     vec3 tangent;   // x axis of the shading frame (geometry/surface.glsl's shading_frame)
     vec3 beta;      // subpath throughput up to and including this vertex's arrival
     vec2 uv;
@@ -47,7 +48,7 @@ Vertex g_light[kBdptVertices];
 float g_time;   // the sample's shutter time
 
 Vertex vertex_point(uint kind, vec3 p, vec3 ng, vec3 beta) {
-    return Vertex(p, ng, ng, vec3(0.0), beta, vec2(0.0), kind, 0u, 0u, false, true, 0.0, 0.0);
+    return Vertex(p, ng, ng, ng, vec3(0.0), beta, vec2(0.0), kind, 0u, 0u, false, true, 0.0, 0.0);
 }
 
 // The shading frame of a surface vertex, as its hit's shading_frame gave it.

@@ -50,6 +50,7 @@ void light_trace(inout SamplerState s) {
         float u_rr = sampler_1d(s);
         Bsdf b = bsdf_from_material(hit.material, hit.uv);
         Frame frame = shading_frame(hit);
+        bsdf_normal_frame(b, hit.ns0, frame);
         vec3 wo = frame_to_local(frame, -d);
 
         // Connect the vertex to the lens

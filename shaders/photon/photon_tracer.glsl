@@ -33,6 +33,7 @@ Photon photon_start(inout SamplerState s) {
 // ph.alive = false when it is absorbed or leaves through the wrong side of a surface.
 void photon_scatter(inout Photon ph, SurfaceHit hit, Bsdf b, float u_lobe, vec2 u_dir, float u_rr) {
     Frame frame = frame_from_z(hit.ns);
+    bsdf_normal_frame(b, hit.ns0, frame);
     vec3 wo = frame_to_local(frame, -ph.d);
     BsdfSample bs = bsdf_sample(b, wo, u_lobe, u_dir, true);
     ph.alive = false;
