@@ -19,6 +19,11 @@ struct SurfaceHit {
     vec3 ns0;       // the shading normal before a normal map replaced ns (ns without one)
 };
 
+// True while the rays traced are a light path's (importance transport): a normal map's
+// flip of invalid normals, which Mitsuba decides by the direction toward the camera's side,
+// is then not applied (bsdf/normal_map.glsl apply_normal_map).
+bool g_light_path_rays = false;
+
 // The shading frame of a hit: z = the shading normal, x = dp/du made orthogonal to it, as
 // Mitsuba's SurfaceInteraction::initialize_sh_frame, so that anisotropic roughness (alpha_u
 // along x) follows the surface's u direction. Without a usable dp/du, any frame around z.

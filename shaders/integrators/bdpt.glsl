@@ -37,6 +37,7 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
     while (n < max_vertices) {
         LOOP_TICK();
         SurfaceHit hit;
+        g_light_path_rays = light_path;   // a normal map's flip is for camera paths
         if (!scene_intersect(o, d, t_max, g_time, hit)) break;
         vec2 u_choice = sampler_2d(s);
         vec2 u_bsdf = sampler_2d(s);

@@ -43,6 +43,7 @@ void light_trace(inout SamplerState s) {
     for (int segments = 1; segments + 1 <= max_segments; ++segments) {
         LOOP_TICK();
         SurfaceHit hit;
+        g_light_path_rays = true;     // a normal map's flip is for camera paths
         if (!scene_intersect(o, d, kInfinity, st.time, hit)) break;
         vec2 u_lens = sampler_2d(s);
         vec2 u_choice = sampler_2d(s);

@@ -45,6 +45,7 @@ void main() {
     for (int segments = 1; segments <= max_segments && ph.alive; ++segments) {
         LOOP_TICK();
         SurfaceHit hit;
+        g_light_path_rays = true;     // a normal map's flip is for camera paths
         if (!scene_intersect(ph.o, ph.d, kInfinity, ph.time, hit)) break;
         vec2 u_choice = sampler_2d(s);
         vec2 u_bsdf = sampler_2d(s);
