@@ -34,9 +34,9 @@ float vp_pack_unit(vec3 n) {
     return q.x * 2048.0 + q.y;
 }
 
-vec3 vp_unpack_unit(float packed) {
-    float qx = floor(packed / 2048.0);
-    vec2 e = vec2(qx, packed - qx * 2048.0) / 2047.0 * 2.0 - 1.0;
+vec3 vp_unpack_unit(float code) {
+    float qx = floor(code / 2048.0);
+    vec2 e = vec2(qx, code - qx * 2048.0) / 2047.0 * 2.0 - 1.0;
     vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
     float t = max(-n.z, 0.0);
     n.xy += vec2(n.x >= 0.0 ? -t : t, n.y >= 0.0 ? -t : t);
