@@ -102,3 +102,20 @@ def test03_emitted_power_of_all_lights_chosen_by_power(gl_ctx):
     # every light is chosen, in proportion to its power (binomial, 5 sigma)
     counts = np.bincount(index.astype(np.int64), minlength=5)
     assert counts.sum() == PHOTONS and np.all(counts > 0)
+
+
+def test04_visible_point_unit_vector_round_trip(gl_ctx):
+    """The visible point keeps the BSDF's unperturbed normal (a normal map's shadowing term)
+    in one float: octahedral, 11 bits a coordinate, exact as a float, back within 2e-3."""
+    from glrender.testing.harness import run_glsl
+
+    rng = np.random.default_rng(9)
+    n = rng.normal(size=(4096, 3))
+    n = np.concatenate([n, np.eye(3), -np.eye(3), [[0.0, 0.0, 1.0], [1e-3, 0.0, -1.0]]])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    out = run_glsl("float code = vp_pack_unit(n); vec3 back = vp_unpack_unit(code);",
+                   {"n": n.astype(np.float32)}, {"code": "float", "back": "vec3"},
+                   includes=["photon/layout.glsl"])
+    code = out["code"].astype(np.float64)
+    assert np.all(code == np.round(code)) and code.min() >= 0 and code.max() < 2 ** 22
+    np.testing.assert_allclose(out["back"], n, atol=2e-3)
