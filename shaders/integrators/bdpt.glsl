@@ -20,7 +20,7 @@
 #include "integrators/bdpt_vertex.glsl"
 
 Vertex vertex_from_hit(SurfaceHit hit, Frame frame, Bsdf b, vec3 beta) {
-    return Vertex(hit.p, hit.ng, frame.z, hit.ns0, frame.x, beta, hit.uv, kVertexSurface, hit.material, hit.light,
+    return Vertex(hit.p, hit.ng, frame.z, VERTEX_NS0(hit.ns0) frame.x, beta, hit.uv, kVertexSurface, hit.material, hit.light,
                   false, !bsdf_is_delta(b), 0.0, 0.0);
 }
 
@@ -95,7 +95,7 @@ vec3 vertex_f(Vertex v, vec3 from, vec3 to, bool adjoint) {
     vec3 wo_w = normalize(from - v.p), wi_w = normalize(to - v.p);
     vec3 wo = frame_to_local(frame, wo_w), wi = frame_to_local(frame, wi_w);
     Bsdf b = bsdf_from_material(v.material, v.uv);
-    bsdf_normal_frame(b, v.ns0, frame);
+    bsdf_normal_frame(b, vertex_ns0(v), frame);
     vec3 f = bsdf_eval(b, wo, wi, adjoint);
     if (adjoint) f *= shading_normal_correction(wo_w, wi_w, v.ns, v.ng);
     return f;
