@@ -28,7 +28,7 @@ from bidir_scenes import renders
 SCENE = Path(__file__).resolve().parents[1] / "parity" / "scenes" / "bsdf-normalmap-mitsuba-defaults.xml"
 SEEDS_PATH, SEEDS_OTHER = (11, 12, 13, 14), (21, 22, 23, 24)
 BLOCK = 16
-# integrator: (its spp, the path tracer's spp)
+# integrator: its spp (the path tracer takes 128)
 SPP = {"lighttrace": 64, "bdpt": 32}
 
 
