@@ -294,6 +294,8 @@ class Renderer:
             emission_only=s.emission_only)
         if p.has_bvh and codegen.has_alpha_cutouts(p):
             self.defines["GLRENDER_ALPHA_CUTOUTS"] = 1     # geometry/bvh.glsl asks the scene
+        if codegen.has_normal_shadowing(p):
+            self.defines["GLRENDER_NORMAL_SHADOWING"] = 1  # bsdf/bsdf.glsl bsdf_normal_shadowing
         if s.strategy_depth:
             self._check_strategy_images()
             self.defines["GLRENDER_STRATEGY_DEPTH"] = s.strategy_depth

@@ -129,6 +129,10 @@ class Material:
     of +Y up in the image; ``normal_scale`` scales its x and y) and an ``opacity`` bitmap
     (its mean of RGB; BVH meshes only): where it is below ``alpha_cutoff`` the surface is
     a hole for every ray, camera, path and shadow rays alike (glTF's MASK mode).
+    With a normal map, ``normal_shadowing`` multiplies the BSDF by the shadowing term of
+    Conty Estevez et al. 2019 and ``normal_flip`` turns a map normal that hides the
+    arriving ray back round the unperturbed normal (Mitsuba's use_shadowing_function and
+    flip_invalid_normals; both off unless a scene asks).
     """
 
     kind: str = "diffuse"
@@ -146,6 +150,8 @@ class Material:
     name: str = ""
     normal_map: Optional[Texture] = None
     normal_scale: float = 1.0
+    normal_shadowing: bool = False
+    normal_flip: bool = False
     opacity: Optional[Texture] = None
     alpha_cutoff: float = 0.5
 

@@ -31,7 +31,7 @@
 #endif
 
 Vertex vertex_from_hit(SurfaceHit hit, Frame frame, Bsdf b, vec3 beta) {
-    return Vertex(hit.p, hit.ng, frame.z, frame.x, beta, hit.uv, kVertexSurface, hit.material, hit.light,
+    return Vertex(hit.p, hit.ng, frame.z, VERTEX_NS0(hit.ns0) frame.x, beta, hit.uv, kVertexSurface, hit.material, hit.light,
                   false, !bsdf_is_delta(b), 0.0, 0.0);
 }
 
@@ -48,6 +48,7 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
     while (n < max_vertices) {
         LOOP_TICK();
         SurfaceHit hit;
+        g_light_path_rays = light_path;   // a normal map's flip is for camera paths
         if (!scene_intersect(o, d, t_max, g_time, hit)) {
             // a camera subpath that leaves the scene ends on the environment (s = 0)
             if (!light_path && u_params.counts.z != 0u) {
@@ -69,6 +70,7 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
         Vertex prev = light_path ? g_light[n - 1] : g_camera[n - 1];
         Bsdf b = bsdf_from_material(hit.material, hit.uv);
         Frame frame = shading_frame(hit);
+        bsdf_normal_frame(b, hit.ns0, frame);
         Vertex v = vertex_from_hit(hit, frame, b, beta);
         v.pdf_fwd = solid_angle_to_area(pdf_sa, prev, v);
         if (!light_path && n == 1) record_aov(aov, hit);
@@ -121,6 +123,7 @@ vec3 vertex_f(Vertex v, vec3 from, vec3 to, bool adjoint, out float pdf_to, out 
     vec3 wo_w = normalize(from - v.p), wi_w = normalize(to - v.p);
     vec3 wo = frame_to_local(frame, wo_w), wi = frame_to_local(frame, wi_w);
     Bsdf b = bsdf_from_material(v.material, v.uv);
+    bsdf_normal_frame(b, vertex_ns0(v), frame);
     vec3 f = bsdf_eval_pdf(b, wo, wi, adjoint, pdf_to);
     pdf_from = bsdf_pdf(b, wi, wo);
     if (adjoint) f *= shading_normal_correction(wo_w, wi_w, v.ns, v.ng);

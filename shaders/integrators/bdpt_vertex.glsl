@@ -36,6 +36,9 @@ struct Vertex {
     vec3 p;
     vec3 ng;        // geometric normal (0 for points off surfaces: pinhole, lens, point lights)
     vec3 ns;        // shading normal
+#ifdef GLRENDER_NORMAL_SHADOWING
+    vec3 ns0;       // the shading normal before a normal map (bsdf_normal_frame)
+#endif
     vec3 tangent;   // x axis of the shading frame (geometry/surface.glsl's shading_frame)
     vec3 beta;      // subpath throughput up to and including this vertex's arrival
     vec2 uv;
@@ -48,12 +51,29 @@ struct Vertex {
     float pdf_rev;  // area density of this vertex from the other direction
 };
 
+// Vertex's constructor argument ns0 (n), in scenes with a normal map's shadowing term only:
+// the others keep no copy of it in their subpaths.
+#ifdef GLRENDER_NORMAL_SHADOWING
+#define VERTEX_NS0(n) n,
+#else
+#define VERTEX_NS0(n)
+#endif
+
+// The shading normal before a normal map at v (its shading normal where none keeps it).
+vec3 vertex_ns0(Vertex v) {
+#ifdef GLRENDER_NORMAL_SHADOWING
+    return v.ns0;
+#else
+    return v.ns;
+#endif
+}
+
 Vertex g_camera[kBdptVertices];
 Vertex g_light[kBdptVertices];
 float g_time;   // the sample's shutter time
 
 Vertex vertex_point(uint kind, vec3 p, vec3 ng, vec3 beta) {
-    return Vertex(p, ng, ng, vec3(0.0), beta, vec2(0.0), kind, 0u, 0u, false, true, 0.0, 0.0);
+    return Vertex(p, ng, ng, VERTEX_NS0(ng) vec3(0.0), beta, vec2(0.0), kind, 0u, 0u, false, true, 0.0, 0.0);
 }
 
 // The shading frame of a surface vertex, as its hit's shading_frame gave it.

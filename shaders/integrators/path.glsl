@@ -141,6 +141,7 @@ bool path_segment(inout PathState st, inout SamplerState s) {
     // only the emission seen directly or through delta surfaces
     if (kEmissionOnly && !bsdf_is_delta(b)) return false;
     Frame frame = shading_frame(hit);
+    bsdf_normal_frame(b, hit.ns0, frame);
     vec3 wo = frame_to_local(frame, -st.d);
 
     // Next-event estimation (its numbers are drawn even when unused, so that later

@@ -19,6 +19,7 @@
 
 GatherPoint gather_point(SurfaceHit hit, Bsdf b, vec3 d) {
     Frame frame = shading_frame(hit);
+    bsdf_normal_frame(b, hit.ns0, frame);
     return GatherPoint(hit.p, hit.ng, b, frame, frame_to_local(frame, -d));
 }
 
@@ -43,6 +44,7 @@ vec3 final_gather(GatherPoint g, SurfaceHit hit, float time, int segments, int m
             return beta * photon_estimate(kGlobalMap, gather_point(h, b, d), all_types, max_segments - k);
         }
         Frame frame = shading_frame(h);
+        bsdf_normal_frame(b, h.ns0, frame);
         vec2 u_l = sampler_2d(s);
         vec2 u_d = sampler_2d(s);
         if (!continue_camera_path(h, b, frame, frame_to_local(frame, -d), u_l.x, u_d, beta, o, d)) break;

@@ -40,6 +40,7 @@ void main() {
         if (hit.light != 0u) L += beta * emitter_hit_contribution(hit, d, depth, o, 1.0, true);
         Bsdf b = bsdf_from_material(hit.material, hit.uv);
         Frame frame = frame_from_z(hit.ns);
+        bsdf_normal_frame(b, hit.ns0, frame);
         vec3 wo = frame_to_local(frame, -d);
         vec2 u_choice = sampler_2d(s);
         vec2 u_light = sampler_2d(s);
@@ -52,7 +53,7 @@ void main() {
             vp_shading[2u * i] = vec4(-d, uintBitsToFloat(hit.material));
             vp_shading[2u * i + 1u] = vec4(hit.ns, hit.uv.x);
             vp_extra[2u * i] = vec4(hit.ng, hit.uv.y);
-            vp_extra[2u * i + 1u] = vec4(beta, 0.0);
+            vp_extra[2u * i + 1u] = vec4(beta, vp_pack_unit(b.n0));
             break;
         }
         if (!continue_camera_path(hit, b, frame, wo, u_choice.y, u_bsdf, beta, o, d)) break;

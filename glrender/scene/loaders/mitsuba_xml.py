@@ -511,13 +511,10 @@ class _Builder:
 
             if t == "normalmap":
                 # Mitsuba 3.7.1 on also multiplies by a shadowing term (Conty Estevez et al.
-                # 2019) and mirrors a normal that faces away from wi: both on by default
-                extras = [k for k in ("use_shadowing_function", "flip_invalid_normals")
-                          if self.prop(node, k, "bool", True)]
-                if extras:
-                    self.r.notes.add(f"normalmap {' and '.join(extras)} (not applied: glrender's "
-                                     f"normal map is the plain perturbed frame)", node.line)
-                return replace(mat, normal_map=self.texture(textures[key]))
+                # 2019) and flips a normal that hides wi: both on by default, as here
+                return replace(mat, normal_map=self.texture(textures[key]),
+                               normal_shadowing=self.prop(node, "use_shadowing_function", "bool", True),
+                               normal_flip=self.prop(node, "flip_invalid_normals", "bool", True))
             self.r.notes.add("mask (read as an opacity cutout at 0.5)", node.line)
             return replace(mat, opacity=self.texture(textures[key]))
         if t == "bumpmap":

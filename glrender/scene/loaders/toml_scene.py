@@ -293,7 +293,8 @@ def _texture(ctx, key: str, t) -> m.Texture:
 
 _MATERIAL_FIELDS = {"type", "reflectance", "specular_reflectance", "specular_transmittance", "eta",
                     "k", "int_ior", "ext_ior", "alpha", "distribution", "nonlinear", "two_sided",
-                    "material", "normal_map", "normal_scale", "opacity", "alpha_cutoff"}
+                    "material", "normal_map", "normal_scale", "normal_shadowing", "normal_flip",
+                    "opacity", "alpha_cutoff"}
 # Mitsuba's default interior IOR per kind ("bk7" for dielectrics, "polypropylene" for plastics)
 _DEFAULT_INT_IOR = {"plastic": "polypropylene", "roughplastic": "polypropylene"}
 
@@ -356,6 +357,11 @@ def _material(ctx, name: str, t) -> m.Material:
             setattr(mat, field_name, ctx.spectrum(value, f"{key}.{field_name}"))
     if "normal_scale" in t:
         mat.normal_scale = ctx.number(t["normal_scale"], f"{key}.normal_scale", -100, 100)
+    for field_name in ("normal_shadowing", "normal_flip"):
+        if field_name in t:
+            if "normal_map" not in t:
+                ctx.fail(f"{key}.{field_name}", "applies to a normal map: give normal_map too")
+            setattr(mat, field_name, ctx.boolean(t[field_name], f"{key}.{field_name}"))
     if "alpha_cutoff" in t:
         mat.alpha_cutoff = ctx.number(t["alpha_cutoff"], f"{key}.alpha_cutoff", 0, 1)
     return mat
