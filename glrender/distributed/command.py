@@ -22,6 +22,7 @@ from ..errors import UsageError
 from .merge import Partial
 
 CHECKPOINT_FORMAT = "glrender-distributed-checkpoint"
+CHECKPOINT_VERSION = 2    # 2: exact fixed-point sums per band (1: float32 means and M2)
 UNSUPPORTED = (("time", "--time"), ("checkpoint_every", "--checkpoint-every"))
 
 
@@ -53,13 +54,13 @@ def _save_checkpoint(path: Path, meta: dict, bands: dict) -> None:
     arrays = {}
     for (frame, band), p in bands.items():
         tag = f"{'s' if frame is None else frame}_{band}"
-        arrays[f"mean_{tag}"] = p.mean
-        arrays[f"m2_{tag}"] = p.m2
+        arrays[f"sums_{tag}"] = p.sums
+        arrays[f"squares_{tag}"] = p.squares
         if p.aov is not None:
             arrays[f"aov_{tag}"] = p.aov
         if p.splat is not None:
             arrays[f"splat_{tag}"] = p.splat
-    meta = {**meta, "format": CHECKPOINT_FORMAT,
+    meta = {**meta, "format": CHECKPOINT_FORMAT, "version": CHECKPOINT_VERSION,
             "bands": [[frame, band, list(p.samples)] for (frame, band), p in bands.items()]}
 
     def write(tmp: Path) -> None:
@@ -80,6 +81,10 @@ def _load_checkpoint(path: Path, job: str) -> dict:
             meta = json.loads(str(z["meta"]))
             if meta.get("format") != CHECKPOINT_FORMAT:
                 raise ValueError("not a distributed render's checkpoint")
+            if meta.get("version") != CHECKPOINT_VERSION:
+                raise UsageError(f"{path}: a distributed checkpoint of version "
+                                 f"{meta.get('version')}, this glrender reads version "
+                                 f"{CHECKPOINT_VERSION} (render without --resume)")
             if meta.get("job") != job:
                 raise UsageError(f"{path}: the checkpoint belongs to another scene, other "
                                  f"settings or another unit size (render without --resume)")
@@ -88,7 +93,7 @@ def _load_checkpoint(path: Path, job: str) -> dict:
                 tag = f"{'s' if frame is None else frame}_{band}"
                 aov = z[f"aov_{tag}"] if f"aov_{tag}" in z.files else None
                 splat = z[f"splat_{tag}"] if f"splat_{tag}" in z.files else None
-                bands[(frame, band)] = Partial(z[f"mean_{tag}"], z[f"m2_{tag}"], aov,
+                bands[(frame, band)] = Partial(z[f"sums_{tag}"], z[f"squares_{tag}"], aov,
                                                tuple(samples), splat=splat)
             return bands
     except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:

@@ -12,8 +12,8 @@ import numpy as np
 # ---- binding numbers (three separate GL binding spaces) ----------------------------
 UBO_PARAMS = 0
 
-SSBO_ACCUM_MEAN = 0
-SSBO_ACCUM_M2 = 1
+SSBO_ACCUM_SUM = 0
+SSBO_ACCUM_SQ = 1
 SSBO_MATERIALS = 2
 SSBO_LIGHTS = 3
 SSBO_DISTRIBUTIONS = 4
@@ -29,7 +29,7 @@ TEX_TEXTURES = 8
 TEX_TEXTURE_RECORDS = 9
 
 SSBO_BINDINGS = {
-    "AccumMean": SSBO_ACCUM_MEAN, "AccumM2": SSBO_ACCUM_M2, "Materials": SSBO_MATERIALS,
+    "AccumSum": SSBO_ACCUM_SUM, "AccumSq": SSBO_ACCUM_SQ, "Materials": SSBO_MATERIALS,
     "Lights": SSBO_LIGHTS, "Distributions": SSBO_DISTRIBUTIONS, "AccumAov": SSBO_AOV,
     "DebugCounters": SSBO_DEBUG, "AccumSplat": SSBO_SPLAT,
 }

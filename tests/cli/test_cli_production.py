@@ -41,9 +41,10 @@ def test02_crop_resumes_from_its_checkpoint(tmp_path):
 
 def test02b_memory_is_reported(tmp_path):
     _, stats = render(tmp_path, "m", "--spp", 1, "--aov", "albedo")
-    # mean and M2 (16 bytes each), albedo/normal/depth (32), doubled by the undo copy
-    assert stats["memory"] == {"device_bytes_per_pixel": 128,
-                               "device_accumulation_bytes": 128 * 40 * 30, "slices": 1,
+    # sums with counts and squares (64 + 48 bytes), albedo/normal/depth sums (112), doubled
+    # by the undo copy
+    assert stats["memory"] == {"device_bytes_per_pixel": 448,
+                               "device_accumulation_bytes": 448 * 40 * 30, "slices": 1,
                                "texture_bytes": 0}
 
 

@@ -1,0 +1,89 @@
+"""The renderer's exact accumulation on the host (the twin of shaders/film/accum.glsl).
+
+Every sample value is added on the device as a 128-bit two's-complement fixed-point
+number with ``FRACTION`` fractional bits, stored as four little-endian 32-bit words. Sums
+of integers do not depend on the order or grouping of the additions, so accumulations of
+disjoint sample ranges (passes, dispatches, units of a distributed render) add up to
+the same bits as one accumulation of all of them: :func:`add` is that addition.
+
+Per pixel (``Renderer.state()``): ``sums`` (N, 4, 4) words — the sums of r, g, b and
+(finite count, dropped count, 0, 0); ``squares`` (N, 3, 4) — the sums of squares;
+``aov`` (N, 7, 4) — the sums of albedo rgb, normal xyz and depth (AOV renders).
+:func:`statistics` turns them into the mean, M2 and counts a :class:`Film` holds, in
+float64 rounded to float32: a pure function of the integers.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+FRACTION = 48                 # kAccumFraction
+LIMIT = float(2 ** 30)        # kAccumLimit: samples with a larger component are dropped
+AOV_CHANNELS = 7
+
+
+def add(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a + b for arrays of 128-bit words (..., 4) uint32, modulo 2^128 (exact)."""
+    a64 = np.ascontiguousarray(a, np.uint32).view(np.uint64)   # (..., 2): low, high halves
+    b64 = np.ascontiguousarray(b, np.uint32).view(np.uint64)
+    out = np.empty_like(a64)
+    lo = a64[..., 0] + b64[..., 0]
+    carry = (lo < a64[..., 0]).astype(np.uint64)
+    out[..., 0] = lo
+    out[..., 1] = a64[..., 1] + b64[..., 1] + carry
+    return out.view(np.uint32)
+
+
+def add_counts(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The sums block of two accumulations added: 128-bit channel sums and the counts word."""
+    out = add(a, b)
+    out[..., 3, :] = a[..., 3, :] + b[..., 3, :]   # counts: plain 32-bit integers
+    return out
+
+
+def values(words: np.ndarray) -> np.ndarray:
+    """128-bit fixed-point words (..., 4) as float64 values (...)."""
+    w = np.ascontiguousarray(words, np.uint32).view(np.uint64)
+    hi = w[..., 1].view(np.int64).astype(np.float64)
+    lo = w[..., 0].astype(np.float64)
+    return hi * 2.0 ** (64 - FRACTION) + lo * 2.0 ** -FRACTION
+
+
+def fixed(x) -> np.ndarray:
+    """float32 values as 128-bit fixed-point words (..., 4), rounded to nearest with ties
+    away from zero, as the device converts them (for tests)."""
+    x = np.asarray(x, np.float32)
+    words = []
+    for v in x.astype(np.float64).ravel():
+        a = abs(float(v)) * 2.0 ** FRACTION        # exact: a power-of-two scale
+        q = math.floor(a) + (1 if a - math.floor(a) >= 0.5 else 0)
+        q = (-q if v < 0 else q) % (1 << 128)
+        words.append([(q >> (32 * k)) & 0xFFFFFFFF for k in range(4)])
+    return np.array(words, np.uint32).reshape(*x.shape, 4)
+
+
+def zeros(pixels: int, aovs: bool) -> dict:
+    """An empty accumulation of ``pixels`` pixels."""
+    return {"sums": np.zeros((pixels, 4, 4), np.uint32),
+            "squares": np.zeros((pixels, 3, 4), np.uint32),
+            "aov": np.zeros((pixels, AOV_CHANNELS, 4) if aovs else (1, 4), np.uint32)}
+
+
+def statistics(sums: np.ndarray, squares: np.ndarray, aov: np.ndarray | None = None):
+    """(mean (N, 3), M2 (N, 3), count (N,), dropped (N,), aovs (N, 7) or None), float32.
+
+    mean = S / n and M2 = Q - S^2 / n (at least 0) in float64 from the exact sums."""
+    sums = np.asarray(sums, np.uint32).reshape(-1, 4, 4)
+    n = sums[:, 3, 0].astype(np.float64)
+    dropped = sums[:, 3, 1].astype(np.float32)
+    safe = np.where(n > 0, n, 1.0)[:, None]
+    s = values(sums[:, :3])
+    q = values(np.asarray(squares, np.uint32).reshape(-1, 3, 4))
+    mean = s / safe
+    m2 = np.maximum(q - s * mean, 0.0)
+    means = None
+    if aov is not None:
+        means = (values(np.asarray(aov, np.uint32).reshape(-1, AOV_CHANNELS, 4)) / safe
+                 ).astype(np.float32)
+    return mean.astype(np.float32), m2.astype(np.float32), n.astype(np.float32), dropped, means
