@@ -70,6 +70,23 @@ def _save_checkpoint(path: Path, meta: dict, bands: dict) -> None:
     atomic_write(path, write)
 
 
+def _checkpoint_unit_size(path: Path) -> int:
+    """The unit size a checkpoint's render used (its plan record)."""
+    import zipfile
+
+    if not path.is_file():
+        raise UsageError(f"{path}: no checkpoint to resume (render without --resume to start, "
+                         f"or name the file with --checkpoint)")
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            meta = json.loads(str(z["meta"]))
+        if meta.get("format") != CHECKPOINT_FORMAT:
+            raise ValueError("not a distributed render's checkpoint")
+        return int(meta["plan"]["unit_size"])
+    except (OSError, ValueError, KeyError, TypeError, zipfile.BadZipFile) as exc:
+        raise UsageError(f"{path}: not a readable checkpoint ({exc})") from None
+
+
 def _load_checkpoint(path: Path, job: str) -> dict:
     import zipfile
 
@@ -173,11 +190,13 @@ def run_distributed(args, signals) -> int:
                                    sampler=args.sampler, max_depth=args.max_depth,
                                    strategy=args.strategy,
                                    aovs=any(n in FIRST_HIT_AOVS for n in aov_names))
-    plan = cl.make_plan(width, height, settings, args.unit_size, frames)
-    unit_size = plan.unit_size
+    cl.check_integrator(settings)
     job = cl.Job(source, settings, width, height, args.device)
-    jid = cl.job_id(job, plan)
-    done = _load_checkpoint(ckpt_path, jid) if args.resume else {}
+    # the unit size: --unit-size, else the one the checkpoint recorded (--resume), else
+    # the calibrated one (glrender.distributed.calibrate, once the cluster is up)
+    unit_size, unit_from, calibration = args.unit_size, "option", None
+    if unit_size is None and args.resume:
+        unit_size, unit_from = _checkpoint_unit_size(ckpt_path), "checkpoint"
 
     # -- cluster -----------------------------------------------------------------------------
     for name in ("distributed", "distributed.nanny", "distributed.scheduler",
@@ -192,6 +211,18 @@ def run_distributed(args, signals) -> int:
         where = f"a local cluster of {args.workers} worker process" + \
                 ("es" if args.workers > 1 else "")
     try:
+        if unit_size is None:
+            from . import calibrate
+
+            largest, calibration = calibrate.unit_size(client, job)
+            unit_from = calibration["source"]
+            unit_size = cl.make_plan(width, height, settings, None, frames, largest).unit_size
+            say(f"glrender: unit size {unit_size} pixel-samples ("
+                f"{'calibrated' if unit_from == 'calibrated' else 'from the calibration'} for "
+                f"{calibration['key']}, {calibration['cache']})")
+        plan = cl.make_plan(width, height, settings, unit_size, frames)
+        jid = cl.job_id(job, plan)
+        done = _load_checkpoint(ckpt_path, jid) if args.resume else {}
         n_workers = len(client.scheduler_info().get("workers", {}))
         say(f"glrender: rendering {scene_path} ({width}x{height}, {settings.sampler.spp} spp, "
             f"{len(frames) if frames != [None] else 'one'} frame{'s' if len(frames) > 1 else ''}, "
@@ -238,7 +269,8 @@ def run_distributed(args, signals) -> int:
         _write_stats(Path(args.stats), {
             "glrender": __version__, "scene": str(scene_path), "params": params,
             "outputs": written, "cluster": where, "workers": n_workers, "plan": plan.record(),
-            "unit_size": unit_size, "scene_by": source.mode, "scene_hash": source.digest,
+            "unit_size": unit_size, "unit_size_from": unit_from, "calibration": calibration,
+            "scene_by": source.mode, "scene_hash": source.digest,
             "width": width, "height": height, "integrator": settings.integrator.kind,
             "sampler": settings.sampler.kind, "seed": settings.sampler.seed,
             "spp": settings.sampler.spp, "frames": frames if frames != [None] else None,

@@ -179,3 +179,30 @@ def test06_splatting_integrators_render_whole_frames(gl_ctx, cluster, kind):
     assert split.plan.bands == ((0, 4),) and split.plan.ranges == ((0, 8), (8, 16))
     np.testing.assert_array_equal(split.bands[(None, 0)].splat, ref_sums)
     assert_same(split.films[None], ref)
+
+
+def test07_default_unit_size_is_calibrated_once(gl_ctx, cluster, scene, tmp_path, monkeypatch):
+    """The Python API without a unit size: the first render measures on a worker and
+    writes the cache, the second reads it; both plan with the recorded size and give
+    the single-process image."""
+    from glrender.distributed import calibrate
+    from glrender.distributed.plan import default_unit_size
+
+    monkeypatch.setenv("GLRENDER_CACHE_DIR", str(tmp_path))
+    _, client = cluster
+    settings = settings_from_scene(scene, spp=8, seed=6)
+    ref = single_process(scene, settings)
+    first = render(scene, client=client, settings=settings)
+    assert first.calibration["source"] == "calibrated" and first.calibration["rate"] > 0
+    written = calibrate.cache_path().read_bytes()
+    second = render(scene, client=client, settings=settings)
+    assert second.calibration["source"] == "cache"
+    assert second.calibration["unit_size"] == first.calibration["unit_size"]
+    assert calibrate.cache_path().read_bytes() == written
+    size = default_unit_size(72, 52, 8, largest=first.calibration["unit_size"])
+    assert first.plan.unit_size == second.plan.unit_size == size
+    info = client.run(lambda: __import__("glrender.distributed.worker").distributed.worker.worker_info())
+    assert first.calibration["key"] == calibrate.kind_key(
+        next(iter(info.values()))["renderer"], None, "path")     # the workers' device
+    assert_same(first.films[None], ref)
+    assert_same(second.films[None], ref)
