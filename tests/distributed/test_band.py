@@ -113,3 +113,20 @@ def test03_bad_bands_and_starts_are_refused(renderer):
     r.reset(rows=(1, 2))
     r.restore(st)
     r.reset()
+
+
+def test04_splat_image_counts_the_samples_since_start(gl_ctx, scene):
+    """Light tracing: the splatted image of samples [8, 16) is normalized by its own 8
+    samples (not by 16 from index 0), so the two halves average to the full render's."""
+    settings = settings_from_scene(scene, spp=16, seed=3, integrator="lighttrace", max_depth=3)
+    with Renderer(scene, settings) as r:
+        r.step(16)
+        full = r.splat_image().astype(np.float64)
+        halves = []
+        for start in (0, 8):
+            r.reset(start=start)
+            r.step(8)
+            halves.append(r.splat_image().astype(np.float64))
+    assert full.max() > 0
+    eps = float(np.finfo(np.float32).eps)
+    np.testing.assert_allclose((halves[0] + halves[1]) / 2, full, rtol=4 * eps, atol=1e-30)
