@@ -70,41 +70,45 @@ def _save_checkpoint(path: Path, meta: dict, bands: dict) -> None:
     atomic_write(path, write)
 
 
-def _checkpoint_unit_size(path: Path) -> int:
-    """The unit size a checkpoint's render used (its plan record)."""
+def _open_checkpoint(path: Path):
+    """A distributed checkpoint of this version: (its record, its arrays: an open npz)."""
     import zipfile
 
     if not path.is_file():
         raise UsageError(f"{path}: no checkpoint to resume (render without --resume to start, "
                          f"or name the file with --checkpoint)")
     try:
-        with np.load(path, allow_pickle=False) as z:
-            meta = json.loads(str(z["meta"]))
-        if meta.get("format") != CHECKPOINT_FORMAT:
+        z = np.load(path, allow_pickle=False)
+        meta = json.loads(str(z["meta"]))
+        if not isinstance(meta, dict) or meta.get("format") != CHECKPOINT_FORMAT:
             raise ValueError("not a distributed render's checkpoint")
-        return int(meta["plan"]["unit_size"])
-    except (OSError, ValueError, KeyError, TypeError, zipfile.BadZipFile) as exc:
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
         raise UsageError(f"{path}: not a readable checkpoint ({exc})") from None
+    if meta.get("version") != CHECKPOINT_VERSION:
+        z.close()
+        raise UsageError(f"{path}: a distributed checkpoint of version {meta.get('version')}, "
+                         f"this glrender reads version {CHECKPOINT_VERSION} (render without "
+                         f"--resume)")
+    return meta, z
+
+
+def _checkpoint_unit_size(path: Path) -> int:
+    """The unit size a checkpoint's render used (its plan record)."""
+    meta, z = _open_checkpoint(path)
+    z.close()
+    try:
+        return int(meta["plan"]["unit_size"])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise UsageError(f"{path}: not a readable checkpoint (no unit size: {exc})") from None
 
 
 def _load_checkpoint(path: Path, job: str) -> dict:
-    import zipfile
-
-    if not path.is_file():
-        raise UsageError(f"{path}: no checkpoint to resume (render without --resume to start, "
-                         f"or name the file with --checkpoint)")
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            meta = json.loads(str(z["meta"]))
-            if meta.get("format") != CHECKPOINT_FORMAT:
-                raise ValueError("not a distributed render's checkpoint")
-            if meta.get("version") != CHECKPOINT_VERSION:
-                raise UsageError(f"{path}: a distributed checkpoint of version "
-                                 f"{meta.get('version')}, this glrender reads version "
-                                 f"{CHECKPOINT_VERSION} (render without --resume)")
-            if meta.get("job") != job:
-                raise UsageError(f"{path}: the checkpoint belongs to another scene, other "
-                                 f"settings or another unit size (render without --resume)")
+    meta, z = _open_checkpoint(path)
+    with z:
+        if meta.get("job") != job:
+            raise UsageError(f"{path}: the checkpoint belongs to another scene, other "
+                             f"settings or another unit size (render without --resume)")
+        try:
             bands = {}
             for frame, band, samples in meta["bands"]:
                 tag = f"{'s' if frame is None else frame}_{band}"
@@ -113,8 +117,8 @@ def _load_checkpoint(path: Path, job: str) -> dict:
                 bands[(frame, band)] = Partial(z[f"sums_{tag}"], z[f"squares_{tag}"], aov,
                                                tuple(samples), splat=splat)
             return bands
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
-        raise UsageError(f"{path}: not a readable checkpoint ({exc})") from None
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            raise UsageError(f"{path}: not a readable checkpoint ({exc})") from None
 
 
 class _UnitsBar:

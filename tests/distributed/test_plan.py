@@ -127,3 +127,23 @@ def test07_default_unit_size():
     assert default_unit_size(3840, 2160, 65536, largest=1 << 20) == 1 << 20
     # small renders: at least the minimum
     assert default_unit_size(4, 4, 1) == 1 << 12
+
+
+def test08_distributed_checkpoints_keep_sums_and_refuse_other_versions(tmp_path, monkeypatch):
+    from glrender.distributed import command
+    from glrender.errors import UsageError
+
+    part = _partial(np.arange(24, dtype=np.float32).reshape(2, 4, 3), 0)
+    path = tmp_path / "c.ckpt"
+    command._save_checkpoint(path, {"job": "j", "plan": {"unit_size": 4096}}, {(None, 0): part})
+    (got,) = command._load_checkpoint(path, "j").values()
+    np.testing.assert_array_equal(got.sums, part.sums)
+    np.testing.assert_array_equal(got.squares, part.squares)
+    assert command._checkpoint_unit_size(path) == 4096
+    monkeypatch.setattr(command, "CHECKPOINT_VERSION", 1)
+    command._save_checkpoint(path, {"job": "j"}, {(None, 0): part})
+    monkeypatch.setattr(command, "CHECKPOINT_VERSION", 2)
+    for read in (lambda: command._load_checkpoint(path, "j"),
+                 lambda: command._checkpoint_unit_size(path)):
+        with pytest.raises(UsageError, match="version 1, this glrender reads version 2"):
+            read()
