@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 FRACTION = 48                 # kAccumFraction
-LIMIT = float(2 ** 30)        # kAccumLimit: samples with a larger component are dropped
+LIMIT = float(2 ** 30)        # kAccumLimit: samples with a component this large are dropped
 AOV_CHANNELS = 7
 
 
@@ -61,13 +61,6 @@ def fixed(x) -> np.ndarray:
         q = (-q if v < 0 else q) % (1 << 128)
         words.append([(q >> (32 * k)) & 0xFFFFFFFF for k in range(4)])
     return np.array(words, np.uint32).reshape(*x.shape, 4)
-
-
-def zeros(pixels: int, aovs: bool) -> dict:
-    """An empty accumulation of ``pixels`` pixels."""
-    return {"sums": np.zeros((pixels, 4, 4), np.uint32),
-            "squares": np.zeros((pixels, 3, 4), np.uint32),
-            "aov": np.zeros((pixels, AOV_CHANNELS, 4) if aovs else (1, 4), np.uint32)}
 
 
 def statistics(sums: np.ndarray, squares: np.ndarray, aov: np.ndarray | None = None):
