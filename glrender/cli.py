@@ -278,8 +278,8 @@ def _add_render(sub) -> None:
                    help="render frames A through B of an animated scene (':' all of its range) "
                         "to -o with a {frame} pattern, e.g. -o 'out/f{frame:04d}.exr'")
     g.add_argument("--unit-size", type=int, default=None, metavar="N",
-                   help="pixel-samples per work unit (default: ~1/32 of a frame, at most 2^22, "
-                        "at least a tile row at full spp)")
+                   help="pixel-samples per work unit (default: ~2 s of work, calibrated once "
+                        "per device and integrator and cached; any size gives the same image)")
     g.add_argument("--scene-on-workers", default=None, metavar="PATH",
                    help="workers load the scene from PATH (a shared file system) instead of "
                         "receiving its files from this process")

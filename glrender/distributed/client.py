@@ -20,7 +20,7 @@ from pathlib import Path
 
 from ..errors import UsageError
 from .merge import FrameImage
-from .plan import Plan, default_unit_size
+from .plan import NOMINAL_UNIT_SIZE, Plan, default_unit_size
 from .worker import Job, hold, merge_partials, render_unit
 
 
@@ -99,25 +99,43 @@ class Result:
     seconds: float = 0.0
     unit_seconds: float = 0.0                     # render time summed over the units
     bytes_to_client: int = 0
+    calibration: dict | None = None               # how the default unit size was found
 
 
-def make_plan(width: int, height: int, settings, unit_size: int | None, frames) -> Plan:
-    """The plan of a render (unit_size None: plan.default_unit_size). Integrators that
-    splat onto the whole film get whole-frame bands; SPPM's iterations depend on each
-    other and do not split."""
-    from ..render.renderer import SPLATTING
-
-    kind = settings.integrator.kind
-    if kind == "sppm":
+def check_integrator(settings) -> None:
+    if settings.integrator.kind == "sppm":
         raise UsageError("--integrator sppm does not run on a cluster yet (its iterations "
                          "depend on each other): render it in one process")
-    if kind == "photon":
+    if settings.integrator.kind == "photon":
         raise UsageError("--integrator photon does not run on a cluster yet (each worker would "
                          "need the photon maps): render it in one process")
+
+
+def make_plan(width: int, height: int, settings, unit_size: int | None, frames,
+              largest: int | None = None) -> Plan:
+    """The plan of a render (unit_size None: plan.default_unit_size, with ``largest`` the
+    calibrated size). Integrators that splat onto the whole film get whole-frame bands;
+    SPPM's and the photon integrator's renders do not split."""
+    from ..render.renderer import SPLATTING
+
+    check_integrator(settings)
+    kind = settings.integrator.kind
     spp = settings.sampler.spp
     if unit_size is None:
-        unit_size = default_unit_size(width, height, spp)
+        unit_size = default_unit_size(width, height, spp, len(frames),
+                                      largest or NOMINAL_UNIT_SIZE)
     return Plan(width, height, spp, unit_size, tuple(frames), whole_frame=kind in SPLATTING)
+
+
+def job_hash(job: Job) -> str:
+    return hashlib.sha256(pickle.dumps(job.key(None), protocol=4)).hexdigest()[:16]
+
+
+def job_future(client, job: Job):
+    """The task whose result is the job (with the scene's bytes), not scattered data: the
+    scheduler keeps its recipe, so a copy lost with a worker is made again; workers fetch
+    it from a peer. Its key is a function of the job: every call gets the same task."""
+    return client.submit(hold, job, key=f"glrender-{job_hash(job)}-job", pure=False)
 
 
 def job_id(job: Job, plan: Plan) -> str:
@@ -136,7 +154,9 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
     ``params``: the scene file's parameters (-D); ``width``/``height`` override the
     film's size. ``settings`` (RenderSettings; default: the scene's, with ``spp``), ``frames``
     (frame numbers of an animated scene, None: a still), ``unit_size`` (pixel-samples
-    per unit; None: plan.default_unit_size, recorded in ``Result.plan``), ``device`` (each worker's --device), ``done`` (finished bands
+    per unit; None: calibrated once per device and scene kind, glrender.distributed.calibrate,
+    recorded in ``Result.plan`` and ``Result.calibration``; any unit size gives the same
+    image), ``device`` (each worker's --device), ``done`` (finished bands
     {(frame, band): Partial} of an earlier run with the same plan, e.g. a checkpoint),
     ``source`` (the SceneSource workers load, when ``scene`` is that source's Scene),
     ``stop()`` (asked while waiting: True ends the render early, with the finished
@@ -159,15 +179,20 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
     frame_list = (None,) if frames is None else tuple(int(f) for f in frames)
     if frames is not None and scene_obj.animation is None:
         raise UsageError(f"{scene_obj.source} has no [animation]: render it without frames")
-    plan = make_plan(width, height, settings, unit_size, frame_list)
+    check_integrator(settings)
     job = Job(source, settings, width, height, device)
-    jid = job_id(job, plan)
     done = dict(done or {})
     t0 = time.perf_counter()
 
-    # the job (with the scene's bytes) as a task, not scattered data: the scheduler keeps
-    # its recipe, so a copy lost with a worker is made again; workers fetch it from a peer
-    job_future = client.submit(hold, job, key=f"glrender-{jid}-job", pure=False)
+    jobf = job_future(client, job)
+    calibration = None
+    largest = None
+    if unit_size is None:
+        from . import calibrate
+
+        largest, calibration = calibrate.unit_size(client, job)
+    plan = make_plan(width, height, settings, unit_size, frame_list, largest)
+    jid = job_id(job, plan)
     finals, unit_futures = {}, []
     tree = plan.merge_tree()
     for frame in frame_list:
@@ -176,7 +201,7 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
                 continue
             leaves = []
             for unit in plan.band_units(frame, band):
-                fut = client.submit(render_unit, job_future, unit, key=f"glrender-{jid}-{unit.name}",
+                fut = client.submit(render_unit, jobf, unit, key=f"glrender-{jid}-{unit.name}",
                                     pure=False)
                 leaves.append(fut)
                 unit_futures.append((fut, plan.unit_pixel_samples(unit)))
@@ -184,7 +209,7 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
                                                  f"glrender-{jid}-merge-{frame}-{band}")
     units_total = len(plan.units())
     units_before = units_total - len(unit_futures)
-    result = Result({}, plan, bands=done)
+    result = Result({}, plan, bands=done, calibration=calibration)
     pending = dict(finals)
     try:
         while pending:

@@ -22,6 +22,7 @@ from ..errors import UsageError
 from .merge import Partial
 
 CHECKPOINT_FORMAT = "glrender-distributed-checkpoint"
+CHECKPOINT_VERSION = 2    # 2: exact fixed-point sums per band (1: float32 means and M2)
 UNSUPPORTED = (("time", "--time"), ("checkpoint_every", "--checkpoint-every"))
 
 
@@ -53,13 +54,13 @@ def _save_checkpoint(path: Path, meta: dict, bands: dict) -> None:
     arrays = {}
     for (frame, band), p in bands.items():
         tag = f"{'s' if frame is None else frame}_{band}"
-        arrays[f"mean_{tag}"] = p.mean
-        arrays[f"m2_{tag}"] = p.m2
+        arrays[f"sums_{tag}"] = p.sums
+        arrays[f"squares_{tag}"] = p.squares
         if p.aov is not None:
             arrays[f"aov_{tag}"] = p.aov
         if p.splat is not None:
             arrays[f"splat_{tag}"] = p.splat
-    meta = {**meta, "format": CHECKPOINT_FORMAT,
+    meta = {**meta, "format": CHECKPOINT_FORMAT, "version": CHECKPOINT_VERSION,
             "bands": [[frame, band, list(p.samples)] for (frame, band), p in bands.items()]}
 
     def write(tmp: Path) -> None:
@@ -69,30 +70,55 @@ def _save_checkpoint(path: Path, meta: dict, bands: dict) -> None:
     atomic_write(path, write)
 
 
-def _load_checkpoint(path: Path, job: str) -> dict:
+def _open_checkpoint(path: Path):
+    """A distributed checkpoint of this version: (its record, its arrays: an open npz)."""
     import zipfile
 
     if not path.is_file():
         raise UsageError(f"{path}: no checkpoint to resume (render without --resume to start, "
                          f"or name the file with --checkpoint)")
     try:
-        with np.load(path, allow_pickle=False) as z:
-            meta = json.loads(str(z["meta"]))
-            if meta.get("format") != CHECKPOINT_FORMAT:
-                raise ValueError("not a distributed render's checkpoint")
-            if meta.get("job") != job:
-                raise UsageError(f"{path}: the checkpoint belongs to another scene, other "
-                                 f"settings or another unit size (render without --resume)")
+        z = np.load(path, allow_pickle=False)
+        meta = json.loads(str(z["meta"]))
+        if not isinstance(meta, dict) or meta.get("format") != CHECKPOINT_FORMAT:
+            raise ValueError("not a distributed render's checkpoint")
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
+        raise UsageError(f"{path}: not a readable checkpoint ({exc})") from None
+    if meta.get("version") != CHECKPOINT_VERSION:
+        z.close()
+        raise UsageError(f"{path}: a distributed checkpoint of version {meta.get('version')}, "
+                         f"this glrender reads version {CHECKPOINT_VERSION} (render without "
+                         f"--resume)")
+    return meta, z
+
+
+def _checkpoint_unit_size(path: Path) -> int:
+    """The unit size a checkpoint's render used (its plan record)."""
+    meta, z = _open_checkpoint(path)
+    z.close()
+    try:
+        return int(meta["plan"]["unit_size"])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise UsageError(f"{path}: not a readable checkpoint (no unit size: {exc})") from None
+
+
+def _load_checkpoint(path: Path, job: str) -> dict:
+    meta, z = _open_checkpoint(path)
+    with z:
+        if meta.get("job") != job:
+            raise UsageError(f"{path}: the checkpoint belongs to another scene, other "
+                             f"settings or another unit size (render without --resume)")
+        try:
             bands = {}
             for frame, band, samples in meta["bands"]:
                 tag = f"{'s' if frame is None else frame}_{band}"
                 aov = z[f"aov_{tag}"] if f"aov_{tag}" in z.files else None
                 splat = z[f"splat_{tag}"] if f"splat_{tag}" in z.files else None
-                bands[(frame, band)] = Partial(z[f"mean_{tag}"], z[f"m2_{tag}"], aov,
+                bands[(frame, band)] = Partial(z[f"sums_{tag}"], z[f"squares_{tag}"], aov,
                                                tuple(samples), splat=splat)
             return bands
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
-        raise UsageError(f"{path}: not a readable checkpoint ({exc})") from None
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            raise UsageError(f"{path}: not a readable checkpoint ({exc})") from None
 
 
 class _UnitsBar:
@@ -170,11 +196,13 @@ def run_distributed(args, signals) -> int:
                                    light_samples=args.light_samples, split=args.split,
                                    strategy=args.strategy,
                                    aovs=any(n in FIRST_HIT_AOVS for n in aov_names))
-    plan = cl.make_plan(width, height, settings, args.unit_size, frames)
-    unit_size = plan.unit_size
+    cl.check_integrator(settings)
     job = cl.Job(source, settings, width, height, args.device)
-    jid = cl.job_id(job, plan)
-    done = _load_checkpoint(ckpt_path, jid) if args.resume else {}
+    # the unit size: --unit-size, else the one the checkpoint recorded (--resume), else
+    # the calibrated one (glrender.distributed.calibrate, once the cluster is up)
+    unit_size, unit_from, calibration = args.unit_size, "option", None
+    if unit_size is None and args.resume:
+        unit_size, unit_from = _checkpoint_unit_size(ckpt_path), "checkpoint"
 
     # -- cluster -----------------------------------------------------------------------------
     for name in ("distributed", "distributed.nanny", "distributed.scheduler",
@@ -189,6 +217,18 @@ def run_distributed(args, signals) -> int:
         where = f"a local cluster of {args.workers} worker process" + \
                 ("es" if args.workers > 1 else "")
     try:
+        if unit_size is None:
+            from . import calibrate
+
+            largest, calibration = calibrate.unit_size(client, job)
+            unit_from = calibration["source"]
+            unit_size = cl.make_plan(width, height, settings, None, frames, largest).unit_size
+            say(f"glrender: unit size {unit_size} pixel-samples ("
+                f"{'calibrated' if unit_from == 'calibrated' else 'from the calibration'} for "
+                f"{calibration['key']}, {calibration['cache']})")
+        plan = cl.make_plan(width, height, settings, unit_size, frames)
+        jid = cl.job_id(job, plan)
+        done = _load_checkpoint(ckpt_path, jid) if args.resume else {}
         n_workers = len(client.scheduler_info().get("workers", {}))
         say(f"glrender: rendering {scene_path} ({width}x{height}, {settings.sampler.spp} spp, "
             f"{len(frames) if frames != [None] else 'one'} frame{'s' if len(frames) > 1 else ''}, "
@@ -235,7 +275,8 @@ def run_distributed(args, signals) -> int:
         _write_stats(Path(args.stats), {
             "glrender": __version__, "scene": str(scene_path), "params": params,
             "outputs": written, "cluster": where, "workers": n_workers, "plan": plan.record(),
-            "unit_size": unit_size, "scene_by": source.mode, "scene_hash": source.digest,
+            "unit_size": unit_size, "unit_size_from": unit_from, "calibration": calibration,
+            "scene_by": source.mode, "scene_hash": source.digest,
             "width": width, "height": height, "integrator": settings.integrator.kind,
             "sampler": settings.sampler.kind, "seed": settings.sampler.seed,
             "spp": settings.sampler.spp, "frames": frames if frames != [None] else None,

@@ -1,19 +1,13 @@
 """Partial accumulations of a band and how they merge.
 
-A :class:`Partial` holds one band's per-pixel Welford statistics in the renderer's
-layout (``Renderer.state()``): ``mean`` (N, 4) = mean RGB and the count of finite
-samples, ``m2`` (N, 4) = M2 RGB and the count of dropped non-finite samples,
-``aov`` (N, AOV_VEC4S, 4) = running means of first-hit albedo, normal/depth and seen
-emission (or None).
-A unit's partial is float32, as the device accumulated it; merged partials are
-float64. :func:`merge` combines two partials of disjoint sample ranges with Chan,
-Golub and LeVeque's pairwise update (1979):
-
-    n = na + nb,  delta = mean_b - mean_a,
-    mean = mean_a + delta nb / n,  M2 = M2_a + M2_b + delta^2 na nb / n
-
-evaluated in float64 in a fixed order (the plan's merge tree), so the result is
-the same bits wherever it runs.
+A :class:`Partial` holds one band's per-pixel exact sums in the renderer's layout
+(``Renderer.state()``, glrender.render.accum): ``sums`` (N, 4, 4) uint32 words, the
+128-bit fixed-point sums of r, g, b and the (finite, dropped) sample counts;
+``squares`` (N, 3, 4), the sums of squares; ``aov`` (N, AOV_CHANNELS, 4), the sums of
+the first-hit AOVs: albedo, normal/depth and seen emission (or None). :func:`merge`
+adds two partials of adjacent sample ranges: integer addition, exact and associative,
+so a band merged from any split of its samples, along any tree, holds the bits of one
+process rendering all its samples.
 """
 from __future__ import annotations
 
@@ -21,13 +15,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..gpu.layout import AOV_VEC4S, aov_images
+from ..render import accum, strategies
 
 
 @dataclass
 class Partial:
-    mean: np.ndarray
-    m2: np.ndarray
+    sums: np.ndarray
+    squares: np.ndarray
     aov: np.ndarray | None
     samples: tuple[int, int]     # the sample indices [start, stop) it holds
     seconds: float = 0.0         # render time on the worker (units), summed by merges
@@ -36,43 +30,30 @@ class Partial:
 
     @property
     def nbytes(self) -> int:
-        return sum(a.nbytes for a in (self.mean, self.m2, self.aov, self.splat) if a is not None)
+        return sum(a.nbytes for a in (self.sums, self.squares, self.aov, self.splat)
+                   if a is not None)
 
 
 def from_state(state: dict, pixels: int, aovs: bool, samples, seconds: float = 0.0,
                splat: bool = False) -> Partial:
     """A unit's partial from ``Renderer.state()``."""
-    mean = state["mean"].reshape(pixels, 4)
-    m2 = state["m2"].reshape(pixels, 4)
-    aov = state["aov"].reshape(pixels, AOV_VEC4S, 4) if aovs else None
-    sums = None
+    sums = state["sums"].reshape(pixels, 4, 4)
+    squares = state["squares"].reshape(pixels, 3, 4)
+    aov = state["aov"].reshape(pixels, accum.AOV_CHANNELS, 4) if aovs else None
+    sums_splat = None
     if splat:   # two 32-bit words (low, high) per pixel and channel, as the device adds them
-        words = np.asarray(state["splat"], np.uint32).reshape(-1, 2).astype(np.uint64)
-        sums = ((words[:, 1] << np.uint64(32)) | words[:, 0]).view(np.int64).reshape(-1, 3)
-    return Partial(mean, m2, aov, tuple(samples), seconds, sums)
+        sums_splat = strategies.fixed_sums(state["splat"]).reshape(-1, 3)
+    return Partial(sums, squares, aov, tuple(samples), seconds, sums_splat)
 
 
 def merge(a: Partial, b: Partial) -> Partial:
-    """Chan et al.'s merge of ``a`` (earlier samples) and ``b`` (the next ones), in float64."""
+    """The partial of ``a``'s samples and the next ones, ``b``'s: exact sums."""
     if a.samples[1] != b.samples[0]:
         raise ValueError(f"merge: sample ranges {a.samples} and {b.samples} are not adjacent")
-    ma, mb = a.mean.astype(np.float64), b.mean.astype(np.float64)
-    na, nb = ma[:, 3:], mb[:, 3:]
-    n = na + nb
-    safe = np.where(n > 0, n, 1.0)
-    w = nb / safe
-    delta = mb[:, :3] - ma[:, :3]
-    mean = np.empty_like(ma)
-    mean[:, :3] = ma[:, :3] + delta * w
-    mean[:, 3:] = n
-    m2 = a.m2.astype(np.float64) + b.m2.astype(np.float64)   # M2 sums, non-finite counts add
-    m2[:, :3] += delta * delta * (na * nb / safe)
-    aov = None
-    if a.aov is not None:
-        aa, ab = a.aov.astype(np.float64), b.aov.astype(np.float64)
-        aov = aa + (ab - aa) * w[:, None, :]
+    aov = None if a.aov is None else accum.add(a.aov, b.aov)
     splat = None if a.splat is None else a.splat + b.splat
-    return Partial(mean, m2, aov, (a.samples[0], b.samples[1]), a.seconds + b.seconds, splat)
+    return Partial(accum.add_counts(a.sums, b.sums), accum.add(a.squares, b.squares), aov,
+                   (a.samples[0], b.samples[1]), a.seconds + b.seconds, splat)
 
 
 def merge_tree(tree, leaves: list):
@@ -87,21 +68,20 @@ class FrameImage:
 
     def __init__(self, width: int, height: int, aovs: bool):
         self.width, self.height, self.aovs = width, height, aovs
-        self.mean = np.zeros((height, width, 4), np.float32)
-        self.m2 = np.zeros((height, width, 4), np.float32)
-        self.aov = np.zeros((height, width, AOV_VEC4S, 4), np.float32) if aovs else None
+        self.sums = np.zeros((height * width, 4, 4), np.uint32)
+        self.squares = np.zeros((height * width, 3, 4), np.uint32)
+        self.aov = np.zeros((height * width, accum.AOV_CHANNELS, 4), np.uint32) if aovs else None
         self.splat = None      # fixed-point splat sums of the whole film (whole-frame bands)
         self.bands_done: set[int] = set()
 
     def place(self, band: int, first_row: int, partial: Partial) -> None:
-        """Put a band's final partial at tile row ``first_row`` (float64 merges round to
-        float32 here, the precision of the device's accumulation and of the outputs)."""
-        y0 = 8 * first_row
-        h = len(partial.mean) // self.width
-        self.mean[y0:y0 + h] = partial.mean.reshape(h, self.width, 4)
-        self.m2[y0:y0 + h] = partial.m2.reshape(h, self.width, 4)
+        """Put a band's final partial at tile row ``first_row``."""
+        p0 = 8 * first_row * self.width
+        n = len(partial.sums)
+        self.sums[p0:p0 + n] = partial.sums
+        self.squares[p0:p0 + n] = partial.squares
         if self.aov is not None:
-            self.aov[y0:y0 + h] = partial.aov.reshape(h, self.width, AOV_VEC4S, 4)
+            self.aov[p0:p0 + n] = partial.aov
         if partial.splat is not None:
             self.splat = partial.splat if self.splat is None else self.splat + partial.splat
         self.bands_done.add(band)
@@ -109,17 +89,17 @@ class FrameImage:
     def film(self, spp: int, sampler: str):
         from ..film import Film
 
-        aovs = aov_images(self.aov, self.height, self.width) if self.aov is not None else {}
-        mean = self.mean
+        h, w = self.height, self.width
+        mean, m2, count, dropped, aov = accum.statistics(self.sums, self.squares, self.aov)
+        mean = mean.reshape(h, w, 3)
+        aovs = accum.aov_images(aov, h, w) if aov is not None else {}
         if self.splat is not None:
             # as Renderer.film and splat_image: the sums over the light paths (one per
             # camera sample of every pixel), rounded to float32, added in float32
             from ..render.renderer import SPLAT_SCALE
 
-            paths = max(spp, 1) * self.width * self.height
+            paths = max(spp, 1) * w * h
             image = (self.splat.astype(np.float64) / (SPLAT_SCALE * paths)).astype(np.float32)
-            mean = mean.copy()
-            mean[..., :3] += image.reshape(self.height, self.width, 3)
-        return Film(mean=mean[..., :3].copy(), m2=self.m2[..., :3].copy(),
-                    count=self.mean[..., 3].copy(), nonfinite=self.m2[..., 3].copy(), spp=spp,
-                    aovs=aovs, sampler=sampler)
+            mean += image.reshape(h, w, 3)
+        return Film(mean=mean, m2=m2.reshape(h, w, 3), count=count.reshape(h, w),
+                    nonfinite=dropped.reshape(h, w), spp=spp, aovs=aovs, sampler=sampler)

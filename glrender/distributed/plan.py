@@ -6,21 +6,19 @@ over one range of sample indices. The unit size is a budget in pixel-samples
 (pixels x samples per pixel):
 
 - when a tile row at the full sample count fits it, a band takes as many tile rows as
-  fit and one range holds every sample: each pixel's accumulation is then exactly the
-  one a single process makes (the same samples in the same order), and the merged
-  image is bitwise the single-process image whatever the unit size;
+  fit and one range holds every sample;
 - otherwise each band is one tile row and its samples are split into ranges (whole
-  passes of ``samples_per_pass``), merged pairwise along a fixed balanced tree
-  (Chan et al.'s formula in float64, glrender.distributed.merge): bitwise the same
-  for every cluster and worker count, and equal to the single-process image to
-  float32 rounding.
+  passes of ``samples_per_pass``), merged pairwise along a fixed balanced tree.
 
-Integrators that splat light paths onto the whole film (light tracing, BDPT) render
-whole frames (``whole_frame``: one band) split into sample ranges: their splats are
-64-bit fixed-point sums, which add exactly in any order.
+Either way the merged image is bitwise the single-process image, whatever the unit
+size: the renderer accumulates exact 128-bit fixed-point sums (glrender.render.accum),
+and sums of disjoint sample ranges add up, in any grouping, to the bits of one
+accumulation of all of them. Integrators that splat light paths onto the whole film
+(light tracing, BDPT) render whole frames (``whole_frame``: one band) split into
+sample ranges: their splats are 64-bit fixed-point sums, exact in the same way.
 
-A unit's transfer is its band's accumulation: 32 bytes per pixel (80 with AOVs),
-``width x 8 x rows`` pixels, e.g. 1 MB for one tile row of a 3840-pixel-wide image.
+A unit's transfer is its band's accumulation: 112 bytes per pixel (272 with AOVs),
+``width x 8 x rows`` pixels, e.g. 3.4 MB for one tile row of a 3840-pixel-wide image.
 """
 from __future__ import annotations
 
@@ -138,28 +136,30 @@ def tree_ranges(tree) -> tuple[int, int]:
     return tree_ranges(tree[0])[0], tree_ranges(tree[1])[1]
 
 
-# the largest default unit in pixel-samples: ~2-4 s on one llvmpipe thread for the Cornell box
-# (benchmarks/scale.py measured ~1-2 M pixel-samples/s per thread), long enough that a
-# task's scheduling and transfer overhead (~10 ms) is below 1%
+# the largest default unit in pixel-samples when nothing was measured: ~2-4 s on one
+# llvmpipe thread for the Cornell box (benchmarks/scale.py measured ~1-2 M pixel-samples/s
+# per thread), long enough that a task's scheduling and transfer overhead (~10 ms) is
+# below 1%
 NOMINAL_UNIT_SIZE = 1 << 22
+# seconds of work per unit that a calibrated unit size aims at
+UNIT_SECONDS = 2.0
+# a render gets at least this many units (when each keeps MIN_UNIT_SIZE): work for as
+# many task slots
+MIN_UNITS = 32
 
 
-def default_unit_size(width: int, height: int, spp: int, frames: int = 1) -> int:
-    """The unit size when none is given: a pure function of the render (never of the
-    cluster). About 1/32 of a frame's pixel-samples (work for 32 task slots), at most
-    NOMINAL_UNIT_SIZE, rounded up to a power of two; but at least one tile row at the full
-    sample count when that row costs no more than 4 nominal units, so bands keep every
-    sample and the image is bitwise the single-process one."""
+def default_unit_size(width: int, height: int, spp: int, frames: int = 1,
+                      largest: int = NOMINAL_UNIT_SIZE) -> int:
+    """The unit size when none is given: ``largest`` (the calibrated size, see
+    glrender.distributed.calibrate) unless the render is small, then about 1/MIN_UNITS
+    of a frame's pixel-samples, rounded up to a power of two (at least MIN_UNIT_SIZE).
+    A pure function of the render and the calibration, never of the cluster."""
     total = width * height * spp
-    size = 1 << max(12, math.ceil(math.log2(max(total / 32, 1))))
-    size = min(size, NOMINAL_UNIT_SIZE)
-    row = width * TILE * spp
-    if row <= 4 * NOMINAL_UNIT_SIZE:
-        size = max(size, row)
-    return max(size, MIN_UNIT_SIZE)
+    size = 1 << max(12, math.ceil(math.log2(max(total / MIN_UNITS, 1))))
+    return max(min(size, largest), MIN_UNIT_SIZE)
 
 
-def calibrated_unit_size(pixel_samples_per_second: float, seconds: float) -> int:
+def calibrated_unit_size(pixel_samples_per_second: float, seconds: float = UNIT_SECONDS) -> int:
     """A unit size from a measured rate: about ``seconds`` of work per unit, rounded to
     a power of two (so nearby measurements give the same plan)."""
     target = max(pixel_samples_per_second * seconds, MIN_UNIT_SIZE)

@@ -15,8 +15,9 @@ class Film:
     """The accumulation of a render, as numpy arrays (rows top to bottom).
 
     - ``mean``: (H, W, 3) linear RGB, the image.
-    - ``m2``: (H, W, 3) Welford's sum of squared deviations per pixel.
-    - ``count``: (H, W) finite samples per pixel; ``nonfinite``: dropped samples.
+    - ``m2``: (H, W, 3) the sum of squared deviations from the mean per pixel.
+    - ``count``: (H, W) finite samples per pixel; ``nonfinite``: dropped samples
+      (non-finite, or with a component of 2^30 or more: glrender.render.accum).
     - ``variance``: per-*sample* variance m2 / (count - 1). Under stratified or
       Sobol' sampling samples are not independent and this overstates the error of
       the mean (it is an upper bound); tests take error bars from independent seeds.

@@ -12,15 +12,12 @@ import numpy as np
 # ---- binding numbers (three separate GL binding spaces) ----------------------------
 UBO_PARAMS = 0
 
-SSBO_ACCUM_MEAN = 0
-SSBO_ACCUM_M2 = 1
+SSBO_ACCUM_SUM = 0
+SSBO_ACCUM_SQ = 1
 SSBO_MATERIALS = 2
 SSBO_LIGHTS = 3
 SSBO_DISTRIBUTIONS = 4
 SSBO_AOV = 5
-# vec4s per pixel in SSBO_AOV (kAovVec4s): albedo (rgb, -), normal (xyz, depth), emission (rgb, -)
-AOV_VEC4S = 3
-AOV_BYTES = 16 * AOV_VEC4S
 SSBO_DEBUG = 6
 SSBO_SPLAT = 7
 
@@ -32,7 +29,7 @@ TEX_TEXTURES = 8
 TEX_TEXTURE_RECORDS = 9
 
 SSBO_BINDINGS = {
-    "AccumMean": SSBO_ACCUM_MEAN, "AccumM2": SSBO_ACCUM_M2, "Materials": SSBO_MATERIALS,
+    "AccumSum": SSBO_ACCUM_SUM, "AccumSq": SSBO_ACCUM_SQ, "Materials": SSBO_MATERIALS,
     "Lights": SSBO_LIGHTS, "Distributions": SSBO_DISTRIBUTIONS, "AccumAov": SSBO_AOV,
     "DebugCounters": SSBO_DEBUG, "AccumSplat": SSBO_SPLAT,
 }
@@ -102,14 +99,6 @@ LIGHT_KINDS = {
     "directional": 6, "constant": 7, "envmap": 8,
 }
 LIGHT_FLAG_TWO_SIDED = 1
-
-
-def aov_images(aov: np.ndarray, height: int, width: int) -> dict[str, np.ndarray]:
-    """The first-hit AOV images of an SSBO_AOV accumulation (float32, AOV_VEC4S vec4s a
-    pixel, rows top to bottom): albedo, normal, emission (H, W, 3) and depth (H, W)."""
-    a = np.asarray(aov, np.float32).reshape(height, width, AOV_VEC4S, 4)
-    return {"albedo": a[:, :, 0, :3].copy(), "normal": a[:, :, 1, :3].copy(),
-            "depth": a[:, :, 1, 3].copy(), "emission": a[:, :, 2, :3].copy()}
 
 
 def zeros(dtype: np.dtype, count: int = 1) -> np.ndarray:

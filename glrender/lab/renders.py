@@ -2,7 +2,7 @@
 
 Every variant renders ``runs`` images of ``spp`` samples with the independent sampler,
 each with its own seed (a full randomization), so the per-pixel per-sample variance of
-each image (Welford's M2 from the accumulation) is exact and the spread between the
+each image (M2 from the accumulation's exact sums) is exact and the spread between the
 runs gives standard errors. The cost is the device time of ``Renderer.step`` (the
 renderer finishes the GL queue around each dispatch), per sample per pixel, and, with
 ``count_rays``, the rays the path tracer traced (an exact count).

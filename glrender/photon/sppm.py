@@ -378,15 +378,15 @@ class SppmRenderer:
 
     def state(self) -> dict[str, Any]:
         """The per-pixel SPPM state: what a checkpoint saves. The checkpoint format holds
-        float32 arrays (``mean``, ``m2``, ``aov``, ``splat``): ``mean`` carries the float64
-        state's bits (radius, N, tau rgb, Ld sum rgb per pixel) viewed as float32, so a
-        resumed render continues exactly where it stopped."""
+        uint32 arrays (``sums``, ``squares``, ``aov``, ``splat``): ``sums`` carries the
+        float64 state's bits (radius, N, tau rgb, Ld sum rgb per pixel) viewed as uint32,
+        so a resumed render continues exactly where it stopped."""
         n = self.width * self.height
         packed = np.concatenate([np.asarray(getattr(self, name), np.float64).reshape(n, k)
                                  for name, k in self._STATE], axis=1)
         return {"fingerprint": self.fingerprint(), "spp_done": self.iterations,
-                "mean": np.ascontiguousarray(packed).view(np.float32).reshape(-1),
-                "m2": np.zeros(4, np.float32), "aov": np.zeros(4, np.float32),
+                "sums": np.ascontiguousarray(packed).view(np.uint32).reshape(-1),
+                "squares": np.zeros(4, np.uint32), "aov": np.zeros(4, np.uint32),
                 "splat": np.zeros(4, np.uint32),
                 "width": self.width, "height": self.height, "rows": self.rows}
 
@@ -397,7 +397,7 @@ class SppmRenderer:
                              "render settings (fingerprints differ)")
         n = self.width * self.height
         width = sum(k for _, k in self._STATE)
-        bits = np.ascontiguousarray(state["mean"], np.float32)
+        bits = np.ascontiguousarray(state["sums"], np.uint32)
         if bits.size != 2 * width * n:
             raise UsageError(f"the saved SPPM state has {bits.size // 2} numbers, expected {width * n}")
         packed = bits.view(np.float64).reshape(n, width)

@@ -106,8 +106,8 @@ class Display:
                 self._frame.release()
             self._frame = _Target(gl, size)
         gl.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT)  # the kernel's writes, visible here
-        renderer._mean.bind_to_storage_buffer(layout.SSBO_ACCUM_MEAN)
-        renderer._m2.bind_to_storage_buffer(layout.SSBO_ACCUM_M2)
+        renderer._sums.bind_to_storage_buffer(layout.SSBO_ACCUM_SUM)
+        renderer._squares.bind_to_storage_buffer(layout.SSBO_ACCUM_SQ)
         renderer._aov.bind_to_storage_buffer(layout.SSBO_AOV)
         self._set("u_view", VIEWS.index(settings.view))
         self._set("u_curve", TONE_CURVES.index(settings.curve))

@@ -26,6 +26,7 @@ import time
 
 import numpy as np
 
+from ..render import accum
 from ..render.renderer import Renderer
 
 MAX_TILES_PER_DISPATCH = 65535   # GL's guaranteed work group count along x
@@ -126,8 +127,8 @@ class SppmProgressive:
     camera pass, then its photon dispatches (PHOTONS_PER_DISPATCH photons each), spread
     over as many calls as the budget asks, so the window keeps responding; the image (the
     host's float64 estimate) is written into the inner renderer's accumulation buffer
-    after every iteration, where the display reads it (m2 stays zero: SPPM has no
-    per-sample variance). ``spp`` counts iterations."""
+    after every iteration, as sums over the iteration count, where the display reads it
+    (the squares stay zero: SPPM has no per-sample variance). ``spp`` counts iterations."""
 
     def __init__(self, renderer, target_spp: int | None = None):
         self.renderer = renderer
@@ -154,12 +155,14 @@ class SppmProgressive:
     def _show(self) -> None:
         r = self.renderer
         n = r.width * r.height
-        mean = np.zeros((n, 4), np.float32)
+        sums = np.zeros((n, 4, 4), np.uint32)   # the accumulation's sums (glrender.render.accum)
         if r.iterations:
-            mean[:, :3] = r.radiance().reshape(n, 3)
-            mean[:, 3] = r.iterations
-        r.base._mean.write(mean.tobytes())
-        r.base._m2.write(np.zeros((n, 4), np.float32).tobytes())
+            # the estimate times the count, so that the display's sum / count is the estimate
+            radiance = r.radiance().reshape(n, 3).astype(np.float64)
+            sums[:, :3] = accum.fixed_values(radiance * r.iterations)
+            sums[:, 3, 0] = r.iterations
+        r.base._sums.write(sums.tobytes())
+        r.base._squares.write(np.zeros((n, 3, 4), np.uint32).tobytes())
 
     def _step(self) -> None:
         """One piece of work: a camera pass and the grid, or one photon dispatch (the

@@ -1,7 +1,8 @@
 """Checkpoints: a render's accumulation on disk, to continue it after an interrupt.
 
-A checkpoint holds what :meth:`Renderer.state` returns (per-pixel Welford mean and M2,
-sample and non-finite counts, first-hit AOVs, the next sample index) plus a JSON record:
+A checkpoint holds what :meth:`Renderer.state` returns (per-pixel exact fixed-point sums
+of the samples and their squares, sample and dropped-sample counts, sums of the first-hit
+AOVs, the next sample index) plus a JSON record:
 the renderer's fingerprint (the hash of the scene as rendered and every setting that
 decides a sample), the settings themselves (to explain a refusal), the target sample
 count and where the render came from. Continuing it with :meth:`Renderer.restore` gives
@@ -25,8 +26,8 @@ from ..errors import UsageError
 from ..film.io import atomic_write
 
 FORMAT = "glrender-checkpoint"
-VERSION = 1
-ARRAYS = ("mean", "m2", "aov")
+VERSION = 2     # 2: exact fixed-point sums (1: float32 Welford means)
+ARRAYS = ("sums", "squares", "aov")
 
 
 @dataclass
@@ -63,14 +64,15 @@ def save_checkpoint(path, renderer, **info) -> None:
     atomically. ``info`` adds JSON fields to the record (target spp, scene, ...)."""
     state = renderer.state()
     meta = {"format": FORMAT, "version": VERSION, "fingerprint": state["fingerprint"],
-            "spp_done": int(state["spp_done"]), "settings": settings_record(renderer),
+            "spp_done": int(state["spp_done"]), "spp_start": int(state.get("spp_start", 0)),
+            "settings": settings_record(renderer),
             "files": dict(getattr(renderer.scene, "files", {}) or {}),
             "rows": [int(r) for r in state.get("rows", (0, 0))], **info}
 
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as f:
             np.savez(f, meta=np.array(json.dumps(meta)),
-                     **{name: np.ascontiguousarray(state[name], np.float32) for name in ARRAYS},
+                     **{name: np.ascontiguousarray(state[name], np.uint32) for name in ARRAYS},
                      splat=np.ascontiguousarray(state["splat"], np.uint32),
                      **({"strategies": np.ascontiguousarray(state["strategies"], np.uint32)}
                         if renderer.settings.strategy_depth else {}))
@@ -95,9 +97,10 @@ def load_checkpoint(path) -> Checkpoint:
                                  f"supported (this glrender reads version {VERSION}); render "
                                  f"without --resume")
             state = {"fingerprint": str(meta["fingerprint"]), "spp_done": int(meta["spp_done"]),
+                     "spp_start": int(meta.get("spp_start", 0)),
                      "width": int(meta["settings"]["width"]),
                      "height": int(meta["settings"]["height"]),
-                     **{name: np.array(data[name], np.float32) for name in ARRAYS}}
+                     **{name: np.array(data[name], np.uint32) for name in ARRAYS}}
             if "rows" in meta:    # the tile rows held (a crop or a distributed band)
                 state["rows"] = tuple(int(r) for r in meta["rows"])
             if "splat" in data:   # light tracing's and BDPT's fixed-point splat sums

@@ -18,7 +18,6 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import DeviceError, SceneError, UsageError
-from ..gpu.layout import AOV_BYTES
 from ..scene.model import SPLIT_LIMIT, parse_rr
 
 AOV_NAMES = ("albedo", "normal", "depth", "emission", "variance", "radius", "photons")   # the last two: photon, sppm
@@ -128,8 +127,11 @@ def _available_memory() -> int | None:
 def _check_memory(width: int, height: int, aovs: bool, on_host_device: bool) -> None:
     """Refuse images whose buffers cannot fit, before allocating them."""
     pixels = width * height
-    device = pixels * (16 + 16 + (AOV_BYTES if aovs else 0)) * 2   # accumulators and the undo copy
-    host = pixels * (32 + 76 + 24)                         # read-back, Film arrays, encoding
+    from .renderer import AOV_BYTES, SQUARE_BYTES, SUM_BYTES
+
+    accumulation = SUM_BYTES + SQUARE_BYTES
+    device = pixels * (accumulation + (AOV_BYTES if aovs else 0)) * 2   # and the undo copy
+    host = pixels * (accumulation + 76 + 24)               # read-back, Film arrays, encoding
     need = host + (device if on_host_device else 0)
     have = _available_memory()
     if have is not None and need > have:

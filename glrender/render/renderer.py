@@ -3,9 +3,11 @@
 A *pass* renders ``samples_per_pass`` samples in every pixel; a pass is split into
 dispatches of whole 8x8 tiles, as many per dispatch as fit the time target
 (measured as the render goes), so progress, previews and Ctrl-C stay responsive.
-Each pixel accumulates its samples in index order (Welford's running mean and M2 in
-float32 on the device): the result is bitwise the same however the passes and
-dispatches are split, for a given scene, seed, spp and device. Every invocation runs
+Each pixel accumulates its samples as exact 128-bit fixed-point sums of the values and
+their squares on the device (shaders/film/accum.glsl, glrender/render/accum.py): integer
+sums do not depend on how the samples are grouped, so the result is bitwise the same
+however the passes and dispatches are split, and sample ranges rendered apart add up to
+the same bits, for a given scene, seed, spp and device. Every invocation runs
 a few samples only, far below llvmpipe's silent ~65,535-iteration loop cap.
 """
 from __future__ import annotations
@@ -25,7 +27,7 @@ from ..gpu.pack import PackedScene, pack_scene
 from ..sampling.sequences import strata_columns
 from ..scene import model as m
 from ..film import Film
-from . import strategies
+from . import accum, strategies
 from .params import shader_defines
 
 TILE = 8
@@ -36,6 +38,9 @@ INTEGRATOR_FILES = {"path": "integrators/path.glsl", "direct": "integrators/dire
 SPLATTING = ("lighttrace", "bdpt")
 SPLAT_SCALE = 65536.0   # kSplatScale: fixed-point units per unit of splatted value
 BDPT_DEPTH_CAP = 16     # kBdptDepthCap: bdpt's longest path (integrators/bdpt_vertex.glsl)
+# bytes per pixel of the accumulation (glrender/render/accum.py): 128-bit sums of r, g, b
+# and the counts; sums of squares; the AOVs' sums
+SUM_BYTES, SQUARE_BYTES, AOV_BYTES = 64, 48, 16 * accum.AOV_CHANNELS
 
 
 @dataclass
@@ -374,14 +379,18 @@ class Renderer:
     def state(self) -> dict[str, Any]:
         """The accumulation so far (numpy arrays and the sample count): what a checkpoint
         saves. ``restore(state)`` on a renderer with the same fingerprint continues it, and
-        the final image is bitwise the same as an uninterrupted render."""
+        the final image is bitwise the same as an uninterrupted render. The arrays are the
+        exact sums of glrender.render.accum (uint32 words): those of disjoint sample
+        ranges add up (accum.add) to the bits of one render of all of them."""
         return {"fingerprint": self.fingerprint(), "spp_done": self.spp_done,
-                "mean": np.frombuffer(self._mean.read(), np.float32).copy(),
-                "m2": np.frombuffer(self._m2.read(), np.float32).copy(),
-                "aov": np.frombuffer(self._aov.read(), np.float32).copy(),
+                "spp_start": self.spp_start,
+                **{name: self._read(buf).copy() for name, buf in self._state_buffers()},
                 "splat": np.frombuffer(self._splat.read(), np.uint32).copy(),
                 "strategies": np.frombuffer(self._strategies.read(), np.uint32).copy(),
                 "width": self.width, "height": self.height, "rows": self.rows}
+
+    def _state_buffers(self) -> tuple[tuple[str, Any], ...]:
+        return (("sums", self._sums), ("squares", self._squares), ("aov", self._aov))
 
     def restore(self, state: dict[str, Any]) -> None:
         """Continue from ``state()`` of an equal renderer (same fingerprint)."""
@@ -392,8 +401,8 @@ class Renderer:
         if rows != self.rows:
             raise UsageError(f"the saved accumulation holds tile rows {rows}, this renderer "
                              f"{self.rows} (reset(rows=...) first)")
-        for name, buf in (("mean", self._mean), ("m2", self._m2), ("aov", self._aov)):
-            data = np.ascontiguousarray(state[name], np.float32)
+        for name, buf in self._state_buffers():
+            data = np.ascontiguousarray(state[name], np.uint32)
             if data.nbytes != buf.size:
                 raise UsageError(f"the saved accumulation's {name} has {data.nbytes} bytes, "
                                  f"expected {buf.size}")
@@ -410,6 +419,7 @@ class Renderer:
                                  f"bytes, expected {self._strategies.size}")
             self._strategies.write(words.tobytes())
         self.spp_done = int(state["spp_done"])
+        self.spp_start = int(state.get("spp_start", 0))
 
     def _warm_up(self) -> None:
         """llvmpipe compiles a kernel at its first dispatch (seconds for a cold cache):
@@ -442,14 +452,14 @@ class Renderer:
             raise UsageError(f"start: expected a sample index in [0, 2^31), got {start}")
         self.rows = (int(first), int(count))
         n = self.width * self.band_height
-        for name in ("_mean", "_m2", "_aov", "_debug"):
+        for name in ("_sums", "_squares", "_aov", "_debug"):
             old = getattr(self, name, None)
             if old is not None:
                 old.release()
         self._release_snapshot()
-        self._mean = self.gl.buffer(reserve=16 * n)
-        self._m2 = self.gl.buffer(reserve=16 * n)
-        self._aov = self.gl.buffer(reserve=layout.AOV_BYTES * n if self.settings.aovs else 16)
+        self._sums = self.gl.buffer(reserve=SUM_BYTES * n)
+        self._squares = self.gl.buffer(reserve=SQUARE_BYTES * n)
+        self._aov = self.gl.buffer(reserve=AOV_BYTES * n if self.settings.aovs else 16)
         counting = self.settings.count_loops or self.settings.count_rays
         self._debug = self.gl.buffer(reserve=4 * n if counting else 16)
         # splats land anywhere on the film: the whole image, two words per pixel and channel
@@ -464,7 +474,7 @@ class Renderer:
             reserve=strategies.buffer_bytes(depth, self.width, self.height) if depth else 16)
         for buf in self._accumulators():
             buf.clear()
-        self.spp_done = int(start)
+        self.spp_done = self.spp_start = int(start)
 
     def set_camera(self, camera: m.Camera) -> None:
         """Move the camera (or change its lens) and forget the samples so far.
@@ -512,8 +522,8 @@ class Renderer:
         return prm
 
     def _bind(self) -> None:
-        self._mean.bind_to_storage_buffer(layout.SSBO_ACCUM_MEAN)
-        self._m2.bind_to_storage_buffer(layout.SSBO_ACCUM_M2)
+        self._sums.bind_to_storage_buffer(layout.SSBO_ACCUM_SUM)
+        self._squares.bind_to_storage_buffer(layout.SSBO_ACCUM_SQ)
         self._materials.bind_to_storage_buffer(layout.SSBO_MATERIALS)
         self._lights.bind_to_storage_buffer(layout.SSBO_LIGHTS)
         self._dist.bind_to_storage_buffer(layout.SSBO_DISTRIBUTIONS)
@@ -580,9 +590,10 @@ class Renderer:
 
     def _slice_bytes_per_pixel(self) -> list[tuple[Any, int, int]]:
         """The per-pixel accumulation buffers in use: (buffer, bytes per pixel, binding)."""
-        bufs = [(self._mean, 16, layout.SSBO_ACCUM_MEAN), (self._m2, 16, layout.SSBO_ACCUM_M2)]
+        bufs = [(self._sums, SUM_BYTES, layout.SSBO_ACCUM_SUM),
+                (self._squares, SQUARE_BYTES, layout.SSBO_ACCUM_SQ)]
         if self.settings.aovs:
-            bufs.append((self._aov, layout.AOV_BYTES, layout.SSBO_AOV))
+            bufs.append((self._aov, AOV_BYTES, layout.SSBO_AOV))
         if self.settings.count_loops or self.settings.count_rays:
             bufs.append((self._debug, 4, layout.SSBO_DEBUG))
         return bufs
@@ -590,7 +601,7 @@ class Renderer:
     def _slices(self) -> list[tuple[int, int]]:
         """The accumulation's tile rows in slices (first row, rows) whose part of every
         per-pixel buffer fits one storage-buffer binding (llvmpipe: 128 MiB, so a film of
-        more than 8.4M pixels, or 2.8M with AOVs, takes several), each starting at an
+        more than 2.1M pixels, or 0.84M with AOVs, takes several), each starting at an
         offset the device can bind."""
         limit = self._binding_limit()
         widest = max(bpp for _, bpp, _ in self._slice_bytes_per_pixel())
@@ -609,7 +620,7 @@ class Renderer:
         return [(r, min(per, first + count - r)) for r in range(first, first + count, per)]
 
     def device_bytes_per_pixel(self) -> int:
-        """Bytes of device memory per accumulated pixel: mean and M2, AOVs and loop counters
+        """Bytes of device memory per accumulated pixel: sums and squares, AOVs and loop counters
         when enabled, a whole-image splat image for light tracing and BDPT, and the copy that
         undoes a stopped pass."""
         per = sum(bpp for _, bpp, _ in self._slice_bytes_per_pixel())
@@ -636,7 +647,7 @@ class Renderer:
                                        size=rows * self.width * bpp)
 
     def _accumulators(self) -> tuple[Any, ...]:
-        return (self._mean, self._m2, self._aov, self._debug, self._splat, self._strategies)
+        return (self._sums, self._squares, self._aov, self._debug, self._splat, self._strategies)
 
     def _take_snapshot(self) -> None:
         if self._snapshot is None:
@@ -687,21 +698,26 @@ class Renderer:
     def film(self) -> Film:
         """Read the accumulation back as a :class:`Film` (the band of ``rows`` only)."""
         h = self.band_height
-        mean = np.frombuffer(self._mean.read(), np.float32).reshape(h, self.width, 4)
-        m2 = np.frombuffer(self._m2.read(), np.float32).reshape(h, self.width, 4)
+        aov = self._read(self._aov) if self.settings.aovs else None
+        mean, m2, count, dropped, aov_means = accum.statistics(
+            self._read(self._sums), self._read(self._squares), aov)
+        mean = mean.reshape(h, self.width, 3)
         aovs = {}
-        if self.settings.aovs:
-            aovs = layout.aov_images(np.frombuffer(self._aov.read(), np.float32), h, self.width)
+        if aov_means is not None:
+            aovs = accum.aov_images(aov_means, h, self.width)
         if self.settings.integrator.kind in SPLATTING:
             first = TILE * self.rows[0]
-            mean = mean.copy()
-            mean[..., :3] += self.splat_image()[first:first + h]
+            mean += self.splat_image()[first:first + h]
         debug = None
         if self.settings.count_loops:
             debug = np.frombuffer(self._debug.read(), np.uint32).reshape(h, self.width).copy()
-        return Film(mean=mean[..., :3].copy(), m2=m2[..., :3].copy(), count=mean[..., 3].copy(),
-                    nonfinite=m2[..., 3].copy(), spp=self.spp_done, aovs=aovs, loop_counts=debug,
-                    sampler=self.settings.sampler.kind)
+        return Film(mean=mean, m2=m2.reshape(h, self.width, 3), count=count.reshape(h, self.width),
+                    nonfinite=dropped.reshape(h, self.width), spp=self.spp_done, aovs=aovs,
+                    loop_counts=debug, sampler=self.settings.sampler.kind)
+
+    @staticmethod
+    def _read(buf: Any) -> np.ndarray:
+        return np.frombuffer(buf.read(), np.uint32)
 
     def rays(self) -> int:
         """Rays traced since the last reset (camera, continuation and shadow rays, summed
@@ -713,13 +729,13 @@ class Renderer:
     def splat_image(self) -> np.ndarray:
         """The splatted part of the image (light tracing, BDPT's t = 1 strategies), (H, W, 3)
         float32: the fixed-point sums over the number of light paths, one per camera sample
-        of every pixel of the whole image. ``film()`` adds it to the camera-side mean; its
-        variance is not in the film's M2 (error bars of splatted images come from
-        independent renders)."""
+        of every pixel accumulated (the band's, since ``reset``'s start). ``film()`` adds it
+        to the camera-side mean; its variance is not in the film's M2 (error bars of
+        splatted images come from independent renders)."""
         if self.settings.integrator.kind not in SPLATTING:
             return np.zeros((self.height, self.width, 3), np.float32)
         sums = strategies.fixed_sums(np.frombuffer(self._splat.read(), np.uint32))
-        paths = max(self.spp_done, 1) * self.width * self.height
+        paths = max(self.spp_done - self.spp_start, 1) * self.width * self.band_height
         image = sums.astype(np.float64) / (SPLAT_SCALE * paths)
         return image.reshape(self.height, self.width, 3).astype(np.float32)
 

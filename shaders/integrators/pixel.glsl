@@ -12,15 +12,16 @@
 #include "camera/filter.glsl"
 #include "integrators/integrator_common.glsl"
 #include "sampling/sampler.glsl"
+#include "film/accum.glsl"
 
-// Running per-pixel statistics (Welford): mean (rgb, finite samples), M2 (rgb,
-// dropped non-finite samples), and the AOV means.
+// A pixel's statistics, exact fixed-point sums (film/accum.glsl): per channel the sum
+// and the sum of squares of the finite samples, their count and the count of dropped
+// samples (non-finite, or beyond kAccumLimit), and the sums of the AOVs.
 struct Accumulator {
-    vec4 mean;
-    vec4 m2;
-    vec4 albedo;
-    vec4 normal;   // xyz normal, w depth
-    vec4 emission; // rgb seen emission, w unused
+    uvec4 sum[3];
+    uvec4 sq[3];
+    uvec2 counts;    // x: finite samples, y: dropped samples
+    uvec4 aov[kAovChannels];   // albedo rgb, normal xyz, depth, seen emission rgb
 };
 
 // A camera ray for sample `index` of the pixel: pixel filter, lens and shutter time,
@@ -46,8 +47,9 @@ CameraSample camera_sample(uvec2 pixel, inout SamplerState s) {
 }
 
 // Adds one sample's radiance L (and first-hit AOVs) to the pixel's statistics;
-// non-finite samples are dropped and counted. With a clamp c > 0 (u_params.misc.z)
-// a sample whose largest component exceeds c is scaled down to it (hue kept; biased).
+// non-finite samples, and those with a component of kAccumLimit or more, are dropped
+// and counted. With a clamp c > 0 (u_params.misc.z) a sample whose largest component
+// exceeds c is scaled down to it (hue kept; biased).
 void accumulate(inout Accumulator acc, vec3 L, Aov aov, uint index) {
     if (kDebugNonFinite != 0u && (index % 7u) == kDebugNonFinite - 1u) L = vec3(uintBitsToFloat(0x7fc00000u));
     float clamp_to = u_params.misc.z;
@@ -56,18 +58,30 @@ void accumulate(inout Accumulator acc, vec3 L, Aov aov, uint index) {
         L *= clamp_to / largest;
         aov.emission *= clamp_to / largest;
     }
-    if (is_finite(L)) {
-        acc.mean.w += 1.0;
-        vec3 delta = L - acc.mean.rgb;
-        acc.mean.rgb += delta / acc.mean.w;
-        acc.m2.rgb += delta * (L - acc.mean.rgb);
+    if (is_finite(L) && max(abs(L.r), max(abs(L.g), abs(L.b))) < kAccumLimit) {
+        // constant indices only: an array indexed by a loop variable may be kept in
+        // memory and addressed lane by lane
+        acc.counts.x += 1u;
+        accum_add(acc.sum[0], accum_fixed(L.r));
+        accum_add(acc.sum[1], accum_fixed(L.g));
+        accum_add(acc.sum[2], accum_fixed(L.b));
+        accum_add(acc.sq[0], accum_fixed_abs(L.r * L.r));
+        accum_add(acc.sq[1], accum_fixed_abs(L.g * L.g));
+        accum_add(acc.sq[2], accum_fixed_abs(L.b * L.b));
         if (kAovs) {
-            acc.albedo += (vec4(aov.albedo, 0.0) - acc.albedo) / acc.mean.w;
-            acc.normal += (vec4(aov.normal, aov.depth) - acc.normal) / acc.mean.w;
-            acc.emission += (vec4(aov.emission, 0.0) - acc.emission) / acc.mean.w;
+            accum_add(acc.aov[0], accum_fixed(aov.albedo.r));
+            accum_add(acc.aov[1], accum_fixed(aov.albedo.g));
+            accum_add(acc.aov[2], accum_fixed(aov.albedo.b));
+            accum_add(acc.aov[3], accum_fixed(aov.normal.x));
+            accum_add(acc.aov[4], accum_fixed(aov.normal.y));
+            accum_add(acc.aov[5], accum_fixed(aov.normal.z));
+            accum_add(acc.aov[6], accum_fixed(aov.depth));
+            accum_add(acc.aov[7], accum_fixed(aov.emission.r));
+            accum_add(acc.aov[8], accum_fixed(aov.emission.g));
+            accum_add(acc.aov[9], accum_fixed(aov.emission.b));
         }
     } else {
-        acc.m2.w += 1.0;
+        acc.counts.y += 1u;
     }
 }
 

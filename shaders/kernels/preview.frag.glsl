@@ -15,6 +15,7 @@
 // - variance: the per-sample variance M2 / (n - 1), through exposure and curve like color.
 #include "scene/layout.glsl"
 #include "film/tonemap.glsl"
+#include "film/accum.glsl"
 
 const int kViewColor = 0;
 const int kViewAlbedo = 1;
@@ -37,16 +38,27 @@ uniform sampler2D u_texture; // image-sized, rows bottom to top (a framebuffer's
 
 out vec4 frag_color;
 
-// The display value of image pixel `idx` of the accumulation (exposure, curve, encoding).
-vec3 accumulation_color(uint idx, vec4 mean) {
-    if (u_view == kViewColor) return display_encode(mean.rgb, u_scale, u_curve, u_srgb);
+// The display value of image pixel `idx` of the accumulation (exposure, curve, encoding);
+// count: its count of finite samples (> 0).
+vec3 accumulation_color(uint idx, uint count) {
+    double n = double(count);
+    dvec3 mean = dvec3(accum_value(accum_sum[4u * idx]), accum_value(accum_sum[4u * idx + 1u]),
+                       accum_value(accum_sum[4u * idx + 2u])) / n;
+    if (u_view == kViewColor) return display_encode(vec3(mean), u_scale, u_curve, u_srgb);
     if (u_view == kViewVariance) {
-        vec3 variance = mean.w > 1.0 ? accum_m2[idx].rgb / (mean.w - 1.0) : vec3(0.0);
+        dvec3 sq = dvec3(accum_value(accum_sq[3u * idx]), accum_value(accum_sq[3u * idx + 1u]),
+                         accum_value(accum_sq[3u * idx + 2u]));
+        vec3 variance = count > 1u ? vec3(max(sq - mean * mean * n, 0.0LF) / (n - 1.0LF)) : vec3(0.0);
         return display_encode(variance, u_scale, u_curve, u_srgb);
     }
     if (!u_has_aovs) return vec3(0.0);
-    if (u_view == kViewAlbedo) return display_encode(accum_aov[kAovVec4s * idx].rgb, 1.0, kToneCurveClamp, u_srgb);
-    return clamp(0.5 * accum_aov[kAovVec4s * idx + 1u].xyz + 0.5, 0.0, 1.0);
+    uint base = kAovChannels * idx;
+    vec3 a = vec3(dvec3(accum_value(accum_aov[base]), accum_value(accum_aov[base + 1u]),
+                        accum_value(accum_aov[base + 2u])) / n);
+    if (u_view == kViewAlbedo) return display_encode(a, 1.0, kToneCurveClamp, u_srgb);
+    vec3 normal = vec3(dvec3(accum_value(accum_aov[base + 3u]), accum_value(accum_aov[base + 4u]),
+                             accum_value(accum_aov[base + 5u])) / n);
+    return clamp(0.5 * normal + 0.5, 0.0, 1.0);
 }
 
 void main() {
@@ -61,9 +73,9 @@ void main() {
         rgb = texelFetch(u_texture, texel, 0).rgb;
     } else {
         uint idx = pixel.y * u_image.x + pixel.x;
-        vec4 mean = accum_mean[idx];
-        if (mean.w > 0.0) {
-            rgb = accumulation_color(idx, mean);
+        uint n = accum_sum[4u * idx + 3u].x;
+        if (n > 0u) {
+            rgb = accumulation_color(idx, n);
         } else if (u_has_texture) {
             rgb = texelFetch(u_texture, texel, 0).rgb;
         }

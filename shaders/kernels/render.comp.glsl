@@ -4,10 +4,11 @@
 // Each dispatch covers tiles [first, first + count) of a hashed permutation of the
 // image's tiles (llvmpipe hands each thread a contiguous run of work groups: the
 // permutation spreads expensive regions across threads). The integrator renders the
-// pixel's samples of this pass (integrators/pixel.glsl) in index order into Welford's
-// running mean and M2, so the image is bitwise the same however passes are split into
-// dispatches. Non-finite samples are dropped and counted in accum_m2[].w. The
-// accumulation may hold a band of tile rows only (a unit of a distributed render).
+// pixel's samples of this pass (integrators/pixel.glsl) into exact fixed-point sums
+// (film/accum.glsl), so the image is bitwise the same however the samples are split into
+// passes, dispatches or sample ranges added elsewhere. Non-finite samples are dropped and
+// counted. The accumulation may hold a band of tile rows only (a unit of a distributed
+// render).
 layout(local_size_x = 8, local_size_y = 8) in;
 
 #include "common/params.glsl"
@@ -27,19 +28,21 @@ void main() {
     uint idx = (pixel.y - 8u * first_row) * u_params.image.x + pixel.x;
     uint pixel_hash = sampler_pixel_hash(pixel, u_params.dispatch.z);
 
-    Accumulator acc = Accumulator(accum_mean[idx], accum_m2[idx], vec4(0.0), vec4(0.0), vec4(0.0));
-    if (kAovs) {
-        acc.albedo = accum_aov[kAovVec4s * idx];
-        acc.normal = accum_aov[kAovVec4s * idx + 1u];
-        acc.emission = accum_aov[kAovVec4s * idx + 2u];
+    Accumulator acc;
+    for (int c = 0; c < 3; ++c) {
+        acc.sum[c] = accum_sum[4u * idx + c];
+        acc.sq[c] = accum_sq[3u * idx + c];
     }
+    acc.counts = accum_sum[4u * idx + 3u].xy;
+    for (int c = 0; c < int(kAovChannels); ++c) acc.aov[c] = kAovs ? accum_aov[kAovChannels * idx + c] : uvec4(0u);
     integrator_pixel(pixel, pixel_hash, u_params.samples.x, u_params.samples.y, acc);
-    accum_mean[idx] = acc.mean;
-    accum_m2[idx] = acc.m2;
+    for (int c = 0; c < 3; ++c) {
+        accum_sum[4u * idx + c] = acc.sum[c];
+        accum_sq[3u * idx + c] = acc.sq[c];
+    }
+    accum_sum[4u * idx + 3u] = uvec4(acc.counts, 0u, 0u);
     if (kAovs) {
-        accum_aov[kAovVec4s * idx] = acc.albedo;
-        accum_aov[kAovVec4s * idx + 1u] = acc.normal;
-        accum_aov[kAovVec4s * idx + 2u] = acc.emission;
+        for (int c = 0; c < int(kAovChannels); ++c) accum_aov[kAovChannels * idx + c] = acc.aov[c];
     }
     if (kCountLoops) debug_counters[idx] = max(debug_counters[idx], g_loop_count);
     if (kCountRays) debug_counters[idx] += g_ray_count;

@@ -23,11 +23,12 @@ layout(std140, binding = 0) uniform RenderParams {
 } u_params;
 
 // ---- storage blocks (std430) ---------------------------------------------------
-// 0, 1: accumulation per pixel, Welford's running mean and M2 (Chan et al.):
-//   accum_mean[i] = (mean r, g, b, count of finite samples)
-//   accum_m2[i]   = (M2 r, g, b, count of dropped non-finite samples)
-layout(std430, binding = 0) buffer AccumMean { vec4 accum_mean[]; };
-layout(std430, binding = 1) buffer AccumM2 { vec4 accum_m2[]; };
+// 0, 1: accumulation per pixel, exact 128-bit fixed-point sums (film/accum.glsl):
+//   accum_sum[4 i + c] = sum of channel c (r, g, b) of the finite samples, c < 3;
+//   accum_sum[4 i + 3] = (count of finite samples, count of dropped samples, 0, 0)
+//   accum_sq[3 i + c]  = sum of the squares of channel c
+layout(std430, binding = 0) buffer AccumSum { uvec4 accum_sum[]; };
+layout(std430, binding = 1) buffer AccumSq { uvec4 accum_sq[]; };
 
 // 2: materials. kind: see kMaterial* in bsdf/bsdf.glsl.
 struct MaterialData {
@@ -66,10 +67,11 @@ layout(std430, binding = 3) readonly buffer Lights { LightData lights[]; };
 // 4: packed distributions (light selection alias table, environment map 2D distribution).
 layout(std430, binding = 4) readonly buffer Distributions { float distribution_data[]; };
 
-// 5: first-hit AOVs per pixel, running means: albedo (rgb, -), shading normal (xyz, depth),
-// seen emission (rgb, -); kAovVec4s vec4s a pixel (glrender/gpu/layout.py AOV_VEC4S).
-layout(std430, binding = 5) buffer AccumAov { vec4 accum_aov[]; };
-const uint kAovVec4s = 3u;
+// 5: first-hit AOVs per pixel, sums over the finite samples as accum_sum's (kAovChannels
+//   per pixel, glrender/render/accum.py AOV_CHANNELS): albedo r, g, b, shading normal
+//   x, y, z, depth, seen emission r, g, b.
+layout(std430, binding = 5) buffer AccumAov { uvec4 accum_aov[]; };
+const uint kAovChannels = 10u;
 
 // 6: debug counters per pixel (loop iterations of the worst sample) when enabled.
 layout(std430, binding = 6) buffer DebugCounters { uint debug_counters[]; };

@@ -41,9 +41,10 @@ def test02_crop_resumes_from_its_checkpoint(tmp_path):
 
 def test02b_memory_is_reported(tmp_path):
     _, stats = render(tmp_path, "m", "--spp", 1, "--aov", "albedo")
-    # mean and M2 (16 bytes each), albedo/normal/depth/emission (48), doubled by the undo copy
-    assert stats["memory"] == {"device_bytes_per_pixel": 160,
-                               "device_accumulation_bytes": 160 * 40 * 30, "slices": 1,
+    # sums with counts and squares (64 + 48 bytes), albedo/normal/depth/emission sums (160),
+    # doubled by the undo copy
+    assert stats["memory"] == {"device_bytes_per_pixel": 544,
+                               "device_accumulation_bytes": 544 * 40 * 30, "slices": 1,
                                "texture_bytes": 0}
 
 

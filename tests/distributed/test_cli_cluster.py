@@ -38,6 +38,24 @@ def test01_local_cluster_writes_the_same_exr(tmp_path):
 
 
 @pytest.mark.slow
+def test01b_split_sample_ranges_write_the_same_exr(tmp_path):
+    """The smallest unit size: every band's 16 samples in two ranges of 8, merged on the
+    workers; the EXR (with the variance and albedo layers) is the single process's,
+    byte for byte."""
+    out, ref = tmp_path / "cluster.exr", tmp_path / "single.exr"
+    aovs = ["--aov", "variance,albedo"]
+    r = run("render", CORNELL, *SMALL, *aovs, "-o", out, "--workers", 2, "--unit-size", 4096,
+            "--stats", tmp_path / "s.json")
+    assert r.returncode == 0, r.stderr
+    import json
+
+    plan = json.loads((tmp_path / "s.json").read_text())["plan"]
+    assert plan["ranges"] == 2 and plan["bands"] == 5 and plan["units"] == 10
+    assert run("render", CORNELL, *SMALL, *aovs, "-o", ref, "--quiet").returncode == 0
+    assert out.read_bytes() == ref.read_bytes()
+
+
+@pytest.mark.slow
 def test02_dask_scheduler_and_workers(tmp_path):
     """`dask scheduler` and two `dask worker` processes on 127.0.0.1: the same file."""
     cluster = DaskProcesses(tmp_path)
@@ -45,9 +63,9 @@ def test02_dask_scheduler_and_workers(tmp_path):
         cluster.wait_for_workers(2)
         out = tmp_path / "remote.exr"
         r = run("render", CORNELL, *SMALL, "-o", out, "--scheduler", cluster.address,
-                "--unit-size", 48 * 8 * 16)
+                "--unit-size", 4096)      # 5 bands of 2 sample ranges
         assert r.returncode == 0, r.stderr
-        assert "5 units" in r.stderr and cluster.address in r.stderr
+        assert "10 units" in r.stderr and cluster.address in r.stderr
     finally:
         cluster.close()
     assert out.read_bytes() == single(tmp_path)
@@ -128,7 +146,8 @@ def test06_ctrl_c_writes_a_checkpoint_that_resume_finishes(tmp_path):
     size = ["--width", 128, "--height", 128, "--spp", 64, "--seed", 5]
     master, slave = pty.openpty()
     proc = subprocess.Popen([sys.executable, "-m", "glrender", "render", str(CORNELL),
-                             *map(str, size), "-o", str(out), "--workers", "2"],
+                             *map(str, size), "-o", str(out), "--workers", "2",
+                             "--unit-size", str(128 * 8 * 64)],
                             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=slave)
     os.close(slave)
     text = []
@@ -158,9 +177,50 @@ def test06_ctrl_c_writes_a_checkpoint_that_resume_finishes(tmp_path):
     log = "".join(text)
     assert "stopped by SIGINT" in log and "continue with --resume" in log, log
     assert not out.exists() and (tmp_path / "big.exr.ckpt").is_file()
+    # without --unit-size: the checkpoint's (the calibrated one would plan other units)
     r = run("render", CORNELL, *size, "-o", out, "--workers", 2, "--resume")
     assert r.returncode == 0, r.stderr
-    assert "bands done" in r.stderr
+    assert "bands done" in r.stderr and "16 units" in r.stderr
     single = tmp_path / "single.exr"
     assert run("render", CORNELL, *size, "-o", single, "--quiet").returncode == 0
     assert out.read_bytes() == single.read_bytes()
+
+
+@pytest.mark.slow
+def test07_the_unit_size_is_calibrated_once_then_reused_and_recorded(tmp_path):
+    """Without --unit-size the first render calibrates on a worker and writes the cache;
+    the next one reads it (no calibration); both record the unit size in --stats; a render
+    given the recorded size plans the same units; every image is the single process's."""
+    import json
+    import os
+
+    env = {**os.environ, "GLRENDER_CACHE_DIR": str(tmp_path / "cache")}
+    cache = tmp_path / "cache" / "unit-size.json"
+    outs, stats = [], []
+    for i, extra in enumerate([[], [], None]):
+        if extra is None:     # the recorded unit size, given back
+            extra = ["--unit-size", stats[0]["unit_size"]]
+        out = tmp_path / f"run{i}.exr"
+        r = run("render", CORNELL, *SMALL, "-o", out, "--workers", 1, "--stats",
+                tmp_path / f"s{i}.json", *extra, env=env)
+        assert r.returncode == 0, r.stderr
+        outs.append(out.read_bytes())
+        stats.append(json.loads((tmp_path / f"s{i}.json").read_text()))
+        if i == 0:
+            assert "unit size" in r.stderr and "calibrated for" in r.stderr, r.stderr
+            entries = json.loads(cache.read_text())["entries"]
+            assert len(entries) == 1 and cache.stat().st_size > 0
+            written = cache.read_bytes()
+        elif i == 1:
+            assert "from the calibration" in r.stderr and "calibrated for" not in r.stderr
+            assert cache.read_bytes() == written            # read, not measured again
+    assert [s["unit_size_from"] for s in stats] == ["calibrated", "cache", "option"]
+    (entry,) = json.loads(written)["entries"].values()
+    assert stats[0]["calibration"]["rate"] == entry["rate"] > 0
+    assert stats[0]["unit_size"] == stats[1]["unit_size"] == stats[2]["unit_size"]
+    assert stats[0]["plan"] == stats[1]["plan"] == stats[2]["plan"]
+    assert outs[0] == outs[1] == outs[2] == single(tmp_path)
+    # an unreadable cache: one line naming the file
+    cache.write_text("{")
+    r = run("render", CORNELL, *SMALL, "-o", tmp_path / "x.exr", "--workers", 1, env=env)
+    assert "unit-size.json" in one_error_line(r)

@@ -8,7 +8,6 @@ import pytest
 
 import glrender
 from glrender.distributed import local_cluster, render
-from glrender.distributed.merge import from_state, merge_tree
 from glrender.render.renderer import Renderer, settings_from_scene
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -68,7 +67,7 @@ def test01_workers_are_spawned_with_one_thread(cluster):
 
 
 def test02_bitwise_the_single_process_image(gl_ctx, cluster, scene):
-    """Bands at the full sample count: every pixel accumulates exactly as in one process."""
+    """Bands at the full sample count: every pixel accumulates as in one process."""
     _, client = cluster
     settings = settings_from_scene(scene, spp=16, seed=11, aovs=True)
     ref = single_process(scene, settings)
@@ -76,42 +75,22 @@ def test02_bitwise_the_single_process_image(gl_ctx, cluster, scene):
                  width=72, height=52)       # the scene file, sent by value
     assert res.plan.bands == ((0, 2), (2, 2), (4, 2), (6, 1)) and len(res.plan.ranges) == 1
     assert_same(res.films[None], ref)
-    assert res.bytes_to_client == 72 * 52 * 64
+    assert res.bytes_to_client == 72 * 52 * (64 + 48 + 160)   # sums, squares, AOV sums
 
 
-def test03_sample_ranges_merge_in_a_fixed_order(gl_ctx, cluster, scene):
-    """Ranges of samples merged along the plan's tree on the workers: the same bits as
-    the same units rendered and merged in this process, and the single-process image to
-    float32 rounding."""
+def test03_sample_ranges_are_bitwise_the_single_process_image(gl_ctx, cluster, scene):
+    """A unit size that splits every band's samples into ranges (three of 8, merged on the
+    workers), AOVs included: bitwise the single-process image, since every pixel's sums
+    are exact; the same for ranges of another size."""
     _, client = cluster
-    settings = settings_from_scene(scene, spp=24, seed=2)
-    res = render(scene, client=client, settings=settings, unit_size=72 * 8 * 8)
-    plan = res.plan
-    assert plan.ranges == ((0, 8), (8, 16), (16, 24)) and len(plan.bands) == 7
-    r = Renderer(scene, settings)
-    film = res.films[None]
-    for band, (first, count) in enumerate(plan.bands):
-        leaves = []
-        for unit in plan.band_units(None, band):
-            r.reset(start=unit.samples[0], rows=unit.rows)
-            r.step(unit.samples[1] - unit.samples[0])
-            leaves.append(from_state(r.state(), r.width * r.band_height, False, unit.samples))
-        local = merge_tree(plan.merge_tree(), leaves)
-        y0 = 8 * first
-        h = r.band_height
-        np.testing.assert_array_equal(film.mean[y0:y0 + h].reshape(-1, 3),
-                                      local.mean[:, :3].astype(np.float32))
-        np.testing.assert_array_equal(film.m2[y0:y0 + h].reshape(-1, 3),
-                                      local.m2[:, :3].astype(np.float32))
-    r.release()
+    settings = settings_from_scene(scene, spp=24, seed=2, aovs=True)
     ref = single_process(scene, settings)
-    np.testing.assert_array_equal(film.count, ref.count)
-    eps = np.finfo(np.float32).eps
-    # float32 Welford over 24 samples vs float64 merges: within 24 * 3 eps of the largest
-    # value a pixel's mean takes (its mean plus three standard deviations bounds it loosely:
-    # use sqrt(M2) + mean, which bounds every sample of the pixel)
-    bound = 24 * 3 * eps * (ref.mean + np.sqrt(ref.m2) + 1e-30)
-    assert (np.abs(film.mean - ref.mean) <= bound).all()
+    res = render(scene, client=client, settings=settings, unit_size=72 * 8 * 8)
+    assert res.plan.ranges == ((0, 8), (8, 16), (16, 24)) and len(res.plan.bands) == 7
+    assert_same(res.films[None], ref)
+    res = render(scene, client=client, settings=settings, unit_size=72 * 8 * 16)
+    assert res.plan.ranges == ((0, 16), (16, 24))
+    assert_same(res.films[None], ref)
 
 
 @pytest.mark.slow
@@ -199,11 +178,31 @@ def test06_splatting_integrators_render_whole_frames(gl_ctx, cluster, kind):
     split = render(s, client=client, settings=settings, unit_size=40 * 32 * 8)
     assert split.plan.bands == ((0, 4),) and split.plan.ranges == ((0, 8), (8, 16))
     np.testing.assert_array_equal(split.bands[(None, 0)].splat, ref_sums)
-    film = split.films[None]
-    np.testing.assert_array_equal(film.count, ref.count)
-    splat = (ref_sums.astype(np.float64) / (SPLAT_SCALE * 16 * 40 * 32)).reshape(32, 40, 3)
-    camera = ref.mean - splat.astype(np.float32)
-    # the camera side: float32 Welford over 16 samples vs float64 merges (see test03)
-    eps = np.finfo(np.float32).eps
-    bound = 16 * 3 * eps * (np.abs(camera) + np.sqrt(ref.m2)) + 4 * eps * np.abs(ref.mean)
-    assert (np.abs(film.mean - ref.mean) <= bound + 1e-30).all()
+    assert_same(split.films[None], ref)
+
+
+def test07_default_unit_size_is_calibrated_once(gl_ctx, cluster, scene, tmp_path, monkeypatch):
+    """The Python API without a unit size: the first render measures on a worker and
+    writes the cache, the second reads it; both plan with the recorded size and give
+    the single-process image."""
+    from glrender.distributed import calibrate
+    from glrender.distributed.plan import default_unit_size
+
+    monkeypatch.setenv("GLRENDER_CACHE_DIR", str(tmp_path))
+    _, client = cluster
+    settings = settings_from_scene(scene, spp=8, seed=6)
+    ref = single_process(scene, settings)
+    first = render(scene, client=client, settings=settings)
+    assert first.calibration["source"] == "calibrated" and first.calibration["rate"] > 0
+    written = calibrate.cache_path().read_bytes()
+    second = render(scene, client=client, settings=settings)
+    assert second.calibration["source"] == "cache"
+    assert second.calibration["unit_size"] == first.calibration["unit_size"]
+    assert calibrate.cache_path().read_bytes() == written
+    size = default_unit_size(72, 52, 8, largest=first.calibration["unit_size"])
+    assert first.plan.unit_size == second.plan.unit_size == size
+    info = client.run(lambda: __import__("glrender.distributed.worker").distributed.worker.worker_info())
+    assert first.calibration["key"] == calibrate.kind_key(
+        next(iter(info.values()))["renderer"], None, "path")     # the workers' device
+    assert_same(first.films[None], ref)
+    assert_same(second.films[None], ref)

@@ -4,6 +4,7 @@ import pytest
 
 from glrender.distributed.merge import FrameImage, Partial, merge, merge_tree
 from glrender.distributed.plan import Plan, calibrated_unit_size, tree_ranges
+from glrender.render import accum
 
 
 @pytest.mark.parametrize("w,h,spp,size", [(72, 56, 16, 1 << 12), (72, 56, 16, 72 * 8 * 16 * 3),
@@ -60,24 +61,48 @@ def test04_calibrated_unit_size_is_a_power_of_two():
     assert calibrated_unit_size(3.5e6, 1.0) == calibrated_unit_size(4.5e6, 1.0) == 1 << 22
 
 
-def test05_chan_merge_matches_float64_statistics():
-    """Merging partials of random sample sets gives their pooled mean and M2 (float64)."""
+def _partial(x, start):
+    """A partial of samples x (n, pixels, 3) float32, as the device sums them."""
+    words = accum.fixed(x)                                   # (n, pixels, 3, 4)
+    sums = np.zeros((x.shape[1], 4, 4), np.uint32)
+    squares = np.zeros((x.shape[1], 3, 4), np.uint32)
+    for w, w2 in zip(words, accum.fixed(x * x)):
+        sums[:, :3] = accum.add(sums[:, :3], w)
+        squares = accum.add(squares, w2)
+    sums[:, 3, 0] = len(x)
+    return Partial(sums, squares, None, (start, start + len(x)))
+
+
+def test05_merges_are_exact_in_any_grouping():
+    """Partials of random float32 sample sets (a wide range of magnitudes and signs)
+    merged along different trees hold the same bits, the exact integer sums of the
+    samples' fixed-point values, and their statistics are the pooled mean and M2."""
     rng = np.random.default_rng(5)
     sizes = [3, 5, 8, 1, 7]
-    xs = [rng.normal(2.0, 3.0, size=(n, 10, 3)) for n in sizes]
+    xs = [(rng.normal(0.5, 3.0, size=(n, 10, 3)) * 10.0 ** rng.integers(-6, 7, size=(n, 10, 3))
+           ).astype(np.float32) for n in sizes]
     leaves, start = [], 0
     for x in xs:
-        n = len(x)
-        mean = np.concatenate([x.mean(0), np.full((10, 1), n)], axis=1)
-        m2 = np.concatenate([((x - x.mean(0)) ** 2).sum(0), np.zeros((10, 1))], axis=1)
-        leaves.append(Partial(mean, m2, None, (start, start + n)))
-        start += n
-    plan_tree = ((0, 1), (2, (3, 4)))
-    got = merge_tree(plan_tree, leaves)
+        leaves.append(_partial(x, start))
+        start += len(x)
+    a = merge_tree(((0, 1), (2, (3, 4))), leaves)
+    b = merge_tree((((0, 1), 2), (3, 4)), leaves)
+    c = merge(merge(merge(merge(leaves[0], leaves[1]), leaves[2]), leaves[3]), leaves[4])
     allx = np.concatenate(xs)
-    np.testing.assert_allclose(got.mean[:, :3], allx.mean(0), rtol=1e-13)
-    np.testing.assert_allclose(got.m2[:, :3], ((allx - allx.mean(0)) ** 2).sum(0), rtol=1e-12)
-    assert (got.mean[:, 3] == len(allx)).all() and got.samples == (0, len(allx))
+    d = _partial(allx, 0)
+    for got in (a, b, c):
+        np.testing.assert_array_equal(got.sums, d.sums)
+        np.testing.assert_array_equal(got.squares, d.squares)
+        assert got.samples == (0, len(allx))
+    # the words are the exact sums of the samples' values in units of 2^-48
+    exact = [sum(int(round(float(v) * 2 ** accum.FRACTION)) for v in allx[:, 4, 1])]
+    words = [int(w) << (32 * k) for k, w in enumerate(a.sums[4, 1])]
+    assert (sum(words) - (1 << 128 if sum(words) >> 127 else 0)) == exact[0]
+    mean, m2, count, dropped, _ = accum.statistics(a.sums, a.squares)
+    x64 = allx.astype(np.float64)
+    np.testing.assert_allclose(mean, x64.mean(0), rtol=1e-6, atol=1e-14)
+    np.testing.assert_allclose(m2, ((x64 - x64.mean(0)) ** 2).sum(0), rtol=1e-5)
+    assert (count == len(allx)).all() and (dropped == 0).all()
     with pytest.raises(ValueError, match="adjacent"):
         merge(leaves[0], leaves[2])
 
@@ -85,8 +110,7 @@ def test05_chan_merge_matches_float64_statistics():
 def test06_frame_image_places_bands():
     img = FrameImage(4, 12, aovs=False)
     for band, (first, h) in enumerate([(0, 8), (1, 4)]):
-        mean = np.full((4 * h, 4), band + 1.0)
-        img.place(band, first, Partial(mean, np.zeros((4 * h, 4)), None, (0, 1)))
+        img.place(band, first, _partial(np.full((1, 4 * h, 3), band + 1.0, np.float32), 0))
     film = img.film(1, "sobol")
     assert (film.mean[:8] == 1).all() and (film.mean[8:] == 2).all() and film.spp == 1
 
@@ -94,12 +118,32 @@ def test06_frame_image_places_bands():
 def test07_default_unit_size():
     from glrender.distributed.plan import NOMINAL_UNIT_SIZE, default_unit_size
 
-    # Cornell 256^2 at 64 spp: 32 units of one tile row each, every band at full spp
+    # Cornell 256^2 at 64 spp: about 1/32 of the render per unit, a power of two
     size = default_unit_size(256, 256, 64)
-    plan = Plan(256, 256, 64, size)
-    assert size == 256 * 8 * 64 and len(plan.units()) == 32 and plan.ranges == ((0, 64),)
-    # 4K at 64k spp: a tile row costs far more than a nominal unit: sample ranges
+    assert size == 1 << 17 and len(Plan(256, 256, 64, size).units()) == 32
+    # 4K at 64k spp: the calibrated (here: nominal) size, sample ranges
     size = default_unit_size(3840, 2160, 65536)
     assert size == NOMINAL_UNIT_SIZE and len(Plan(3840, 2160, 65536, size).ranges) > 1
-    # small renders: at least the minimum; always a power of two or a tile row's cost
+    assert default_unit_size(3840, 2160, 65536, largest=1 << 20) == 1 << 20
+    # small renders: at least the minimum
     assert default_unit_size(4, 4, 1) == 1 << 12
+
+
+def test08_distributed_checkpoints_keep_sums_and_refuse_other_versions(tmp_path, monkeypatch):
+    from glrender.distributed import command
+    from glrender.errors import UsageError
+
+    part = _partial(np.arange(24, dtype=np.float32).reshape(2, 4, 3), 0)
+    path = tmp_path / "c.ckpt"
+    command._save_checkpoint(path, {"job": "j", "plan": {"unit_size": 4096}}, {(None, 0): part})
+    (got,) = command._load_checkpoint(path, "j").values()
+    np.testing.assert_array_equal(got.sums, part.sums)
+    np.testing.assert_array_equal(got.squares, part.squares)
+    assert command._checkpoint_unit_size(path) == 4096
+    monkeypatch.setattr(command, "CHECKPOINT_VERSION", 1)
+    command._save_checkpoint(path, {"job": "j"}, {(None, 0): part})
+    monkeypatch.setattr(command, "CHECKPOINT_VERSION", 2)
+    for read in (lambda: command._load_checkpoint(path, "j"),
+                 lambda: command._checkpoint_unit_size(path)):
+        with pytest.raises(UsageError, match="version 1, this glrender reads version 2"):
+            read()

@@ -13,35 +13,55 @@ import numpy as np
 import pytest
 
 from glrender.film.tonemap import TONE_CURVES, tonemap
-from glrender.gpu.layout import AOV_VEC4S
 from glrender.preview.display import VIEWS, Display, DisplaySettings, fit_viewport
+from glrender.render import accum
 
 W, H = 61, 37     # odd sizes: rows and columns cannot be swapped unnoticed
 
 
+def _words(values: np.ndarray) -> np.ndarray:
+    """float64 values as the accumulation's 128-bit fixed-point words (nearest)."""
+    out = []
+    for v in np.asarray(values, np.float64).ravel():
+        q = int(round(float(v) * 2.0 ** accum.FRACTION)) % (1 << 128)
+        out.append([(q >> (32 * k)) & 0xFFFFFFFF for k in range(4)])
+    return np.array(out, np.uint32).reshape(*np.shape(values), 4)
+
+
 def _accumulation(gl_ctx, seed=0):
-    """A stand-in for a renderer's accumulation: random means over 8 decades, counts
-    0..9 (0: a pixel without samples yet), variances, albedo and normals."""
+    """A stand-in for a renderer's accumulation (exact sums, glrender.render.accum):
+    random means over 8 decades, counts 0..9 (0: a pixel without samples yet),
+    variances from 1e-6 to 10 times the squared mean, albedo and normals."""
     rng = np.random.default_rng(seed)
     n = W * H
     mean = np.zeros((n, 4), np.float32)
     mean[:, :3] = 10.0 ** rng.uniform(-4, 4, (n, 3))
     mean[::97, 0] = 0.0
-    mean[::89, 1] = np.nan                          # tonemap: NaN shows as 0
-    mean[::83, 2] = np.inf                          # +inf: the curve's white
     mean[:, 3] = rng.integers(0, 10, n)
+    count = mean[:, 3:].astype(np.float64)
+    mean[:, :3] *= count[:, 0:1] > 0
     m2 = np.zeros((n, 4), np.float32)
-    m2[:, :3] = 10.0 ** rng.uniform(-4, 3, (n, 3))
-    aov = np.zeros((n, AOV_VEC4S, 4), np.float32)
+    m2[:, :3] = mean[:, :3].astype(np.float64) ** 2 * np.maximum(count - 1, 0) \
+        * 10.0 ** rng.uniform(-6, 1, (n, 3))
+    aov = np.zeros((n, 3, 4), np.float32)   # albedo (rgb, -), normal (xyz, depth), emission (rgb, -)
     aov[:, 0, :3] = rng.uniform(0, 1, (n, 3))
     normal = rng.normal(size=(n, 3))
     aov[:, 1, :3] = normal / np.linalg.norm(normal, axis=1, keepdims=True)
+    sums = np.zeros((n, 4, 4), np.uint32)
+    m64 = mean[:, :3].astype(np.float64)
+    sums[:, :3] = _words(m64 * count)
+    sums[:, 3, 0] = mean[:, 3]
+    squares = _words(m2[:, :3].astype(np.float64) + m64 ** 2 * count)
+    aov[:, 2, :3] = 10.0 ** rng.uniform(-2, 2, (n, 3))
+    # accum.AOV_CHANNELS sums: albedo rgb, normal xyz, depth, emission rgb
+    aov_sums = _words(np.concatenate([aov[:, 0, :3], aov[:, 1, :3], aov[:, 1, 3:], aov[:, 2, :3]],
+                                     axis=1).astype(np.float64) * count)
     gl = gl_ctx.gl
     source = SimpleNamespace(width=W, height=H, settings=SimpleNamespace(aovs=True),
-                             _mean=gl.buffer(mean.tobytes()), _m2=gl.buffer(m2.tobytes()),
-                             _aov=gl.buffer(aov.tobytes()))
+                             _sums=gl.buffer(sums.tobytes()), _squares=gl.buffer(squares.tobytes()),
+                             _aov=gl.buffer(aov_sums.tobytes()))
     arrays = SimpleNamespace(mean=mean.reshape(H, W, 4), m2=m2.reshape(H, W, 4),
-                             aov=aov.reshape(H, W, AOV_VEC4S, 4))
+                             aov=aov.reshape(H, W, 3, 4))
     return source, arrays
 
 
@@ -63,7 +83,7 @@ def _expected(arrays, settings: DisplaySettings) -> np.ndarray:
 def accumulation(gl_ctx):
     source, arrays = _accumulation(gl_ctx)
     yield source, arrays
-    for buf in (source._mean, source._m2, source._aov):
+    for buf in (source._sums, source._squares, source._aov):
         buf.release()
 
 
@@ -136,12 +156,13 @@ def test05_held_image_fills_pixels_without_samples(gl_ctx, accumulation):
     source, arrays = accumulation
     d = Display(gl_ctx)
     gl = gl_ctx.gl
-    restarted = np.zeros((H, W, 4), np.float32)
-    restarted[::2, :, :3] = 0.25       # every other row has samples: one grey value
-    restarted[::2, :, 3] = 1.0
+    restarted = np.zeros((H * W, 4, 4), np.uint32)
+    rows = (np.arange(H * W) // W) % 2 == 0     # every other row has samples: one grey value
+    restarted[rows, :3] = _words(np.full(3, 0.25))
+    restarted[rows, 3, 0] = 1
     empty = SimpleNamespace(width=W, height=H, settings=SimpleNamespace(aovs=False),
-                            _mean=gl.buffer(restarted.tobytes()), _m2=gl.buffer(reserve=W * H * 16),
-                            _aov=gl.buffer(reserve=16))
+                            _sums=gl.buffer(restarted.tobytes()),
+                            _squares=gl.buffer(reserve=W * H * 48), _aov=gl.buffer(reserve=16))
     try:
         shown = d.image(source, DisplaySettings())
         d.hold(source, DisplaySettings())
@@ -152,5 +173,5 @@ def test05_held_image_fills_pixels_without_samples(gl_ctx, accumulation):
         np.testing.assert_array_equal(d.image(empty, DisplaySettings()), img)
     finally:
         d.release()
-        for buf in (empty._mean, empty._m2, empty._aov):
+        for buf in (empty._sums, empty._squares, empty._aov):
             buf.release()

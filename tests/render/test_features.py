@@ -212,3 +212,29 @@ def test08_direct_strategies_converge_on_veachs_scene(gl_ctx):
                            extra_tests=6, check_mse=False)
         assert c.passed, f"{strategy}: {c.summary()} {c.messages} variances {variances}"
     assert variances["mis-power"] < min(variances["light"], variances["bsdf"]), variances
+
+
+def test02b_samples_beyond_the_accumulation_limit_are_dropped(gl_ctx, tmp_path):
+    """A sample with a component of 2^30 or more (glrender.render.accum.LIMIT) is dropped
+    and counted as the non-finite ones are: the light's own pixels at 1e8 times the Cornell
+    box's radiance (1.8e9), not at 1e7 (1.8e8)."""
+    from glrender.render import accum
+
+    text = (ROOT / "scenes" / "cornell-box" / "scene.toml").read_text()
+    films = {}
+    for scale in (1e7, 1e8):
+        path = tmp_path / f"bright{scale:g}.toml"
+        path.write_text(text.replace("radiance = [18.387, 13.9873, 6.75357]",
+                                     f"radiance = [{18.387 * scale}, {13.9873 * scale}, "
+                                     f"{6.75357 * scale}]"))
+        scene = glrender.load(path)
+        scene.film = replace(scene.film, width=32, height=32)
+        with Renderer(scene, settings_from_scene(scene, spp=4, seed=2)) as r:
+            r.step(4)
+            films[scale] = r.film()
+    below, above = films[1e7], films[1e8]
+    light = below.mean.max(axis=2) > 0.5 * 18.387e7        # pixels that see the light
+    assert light.sum() >= 4 and below.nonfinite_total == 0
+    assert 18.387e8 >= accum.LIMIT > 18.387e7
+    assert (above.nonfinite[light] > 0).all() and (above.count + above.nonfinite == 4).all()
+    assert np.isfinite(above.mean).all()

@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 
 import glrender
-from glrender.gpu.layout import AOV_BYTES
-from glrender.render.renderer import Renderer, settings_from_scene
+from glrender.render.renderer import AOV_BYTES, SUM_BYTES, Renderer, settings_from_scene
 
 CORNELL = Path(__file__).resolve().parents[2] / "scenes" / "cornell-box" / "scene.toml"
 
@@ -31,7 +30,8 @@ def test01_slices_equal_one_binding(gl_ctx, monkeypatch, aovs, count_loops):
         whole.step(4)
         expected = whole.film()
     # a binding of 2 tile rows of the widest buffer: 3 slices
-    monkeypatch.setattr(Renderer, "_binding_limit", lambda self: 2 * 8 * 52 * (AOV_BYTES if aovs else 16))
+    widest = AOV_BYTES if aovs else SUM_BYTES
+    monkeypatch.setattr(Renderer, "_binding_limit", lambda self: 2 * 8 * 52 * widest)
     with Renderer(scene, settings, ctx=gl_ctx) as sliced:
         slices = sliced._slices()
         assert len(slices) == 3 and sum(n for _, n in slices) == 6
@@ -50,7 +50,7 @@ def test01_slices_equal_one_binding(gl_ctx, monkeypatch, aovs, count_loops):
 def test02_stopped_pass_is_undone_across_slices(gl_ctx, monkeypatch):
     scene = cornell(40, 40)
     settings = settings_from_scene(scene, spp=8, seed=1, samples_per_pass=4, time_target=1e-9)
-    monkeypatch.setattr(Renderer, "_binding_limit", lambda self: 2 * 8 * 40 * 16)
+    monkeypatch.setattr(Renderer, "_binding_limit", lambda self: 2 * 8 * 40 * SUM_BYTES)
     with Renderer(scene, settings, ctx=gl_ctx) as r:
         assert len(r._slices()) == 3
         r.step(4)
@@ -69,7 +69,7 @@ def test02_stopped_pass_is_undone_across_slices(gl_ctx, monkeypatch):
 
 @pytest.mark.slow
 def test03_dci_4k_film(gl_ctx):
-    """4096 x 2160 (8.8M pixels, 141 MB per accumulation buffer, above llvmpipe's 128 MiB
+    """4096 x 2160 (8.8M pixels, 566 MB of per-pixel sums, above llvmpipe's 128 MiB
     binding) at 1 spp: rows across the slice boundary equal a crop rendered in one binding."""
     scene = cornell(4096, 2160)
     settings = settings_from_scene(scene, spp=1, seed=9)
