@@ -2,12 +2,13 @@
 
 Scenes: the caustic scene and the Cornell box (shared Mitsuba references). Configs:
 glrender sppm (default photons per iteration and initial radius, alpha 0.7), glrender
+photon (2^20 photons per map, the default radius; the maps' tracing time counted), glrender
 path and bdpt (the scenes' Sobol' sampler, max depth 8), and Mitsuba 3's path tracer
 (llvm_ad_rgb, independent sampler). Each config renders in its own process for up to
 --seconds after its kernels are compiled and warmed up, recording the error after every
 pass (glrender) and at the end (Mitsuba). The time to a target RMSE, for the whole image
 and for the caustic window (rows 130-170 x columns 130-200), is read off the recorded
-curve for SPPM (consistent but biased: its error does not fall as 1/sqrt(t)); for the
+curve for SPPM and photon (biased: their error does not fall as 1/sqrt(t)); for the
 unbiased path tracers it is t_end x MSE_end / target^2 (MSE ~ 1/t), which also covers
 targets not reached in the budget. The references' own noise is not subtracted (the
 caustic reference's is about 8% of a 20 s Mitsuba render's MSE, below the targets).
@@ -40,7 +41,7 @@ TARGETS = {"caustic": (0.05, 0.15), "cornell": (0.03, None)}
 GLRENDER_SCRIPT = r"""
 import json, sys, time, numpy as np, glrender
 from glrender.render.renderer import Renderer, settings_from_scene
-from glrender.photon import SppmRenderer, SppmSettings
+from glrender.photon import PhotonRenderer, PhotonSettings, SppmRenderer, SppmSettings
 toml, integrator, seconds, seed, ref_path, out = sys.argv[1:7]
 seconds, seed = float(seconds), int(seed)
 ref = np.load(ref_path).astype(np.float64)[..., :3]
@@ -52,13 +53,19 @@ if integrator == "sppm":
     r.step(1); r.reset()          # warm-up: the first dispatches
     image = r.radiance
     k = 1
+elif integrator == "photon":
+    # 2^20 photons per map, the default radius; tracing the maps is charged to its time
+    r = PhotonRenderer(scene, settings, PhotonSettings(photons=1 << 20))
+    r.step(r.samples_per_pass); r.reset()
+    image = lambda: r.film().mean.astype(np.float64)
+    k = r.samples_per_pass
 else:
     r = Renderer(scene, settings)
     r.step(r.samples_per_pass); r.reset()
     image = lambda: r.film().mean.astype(np.float64)
     k = r.samples_per_pass
-curve, measured = [], 0.0
-while measured < seconds:
+curve, measured = [], r.timings.get("photons", 0.0)
+while measured < seconds or not curve:
     t0 = time.perf_counter()
     r.step(k)
     measured += time.perf_counter() - t0      # the error evaluation below is not charged
@@ -83,7 +90,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seconds", type=float, default=60.0, help="render time per config")
     ap.add_argument("--scenes", default="caustic,cornell")
-    ap.add_argument("--configs", default="sppm,path,bdpt,mitsuba")
+    ap.add_argument("--configs", default="sppm,photon,path,bdpt,mitsuba")
+    ap.add_argument("--no-write", action="store_true", help="print the rows, leave RESULTS.md alone")
     args = ap.parse_args()
     rows, device = [], None
     tmp = Path(tempfile.mkdtemp(prefix="glrender-photon-bench-"))
@@ -113,7 +121,7 @@ def main() -> None:
             for column, target in ((1, targets[0]), (2, targets[1])):
                 if target is None:
                     times.append(None)
-                elif config == "sppm":
+                elif config in ("sppm", "photon"):
                     times.append(time_to(curve, column, target))
                 else:
                     times.append(t_end * curve[-1][column] / target ** 2)
@@ -121,6 +129,8 @@ def main() -> None:
             print(f"[{name}] {label:28s} {done:7d} {'iterations' if config == 'sppm' else 'spp'} in "
                   f"{t_end:.1f} s  RMSE {mse ** 0.5:.4g} (window {mse_w ** 0.5:.4g})  time to targets "
                   f"{times}", flush=True)
+    if args.no_write:
+        return
     head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=ROOT)
     write_results(rows, device, head.stdout.strip(), args)
 
@@ -143,10 +153,10 @@ def write_results(rows, device, commit, args) -> None:
     intro = (f"Measured {datetime.date.today()} at commit `{commit}`: glrender on `{device}` and Mitsuba 3 "
              f"`llvm_ad_rgb` on the same {os.cpu_count()}-core CPU, which other work shares (noisy "
              f"timings). Every config gets up to {args.seconds:.0f} s after warming up, in one run. "
-             "SPPM's time to a target is read off its error curve (it is consistent, not unbiased); "
+             "SPPM's and photon's time to a target is read off the error curve (they are biased); "
              "the path tracers' is t x MSE / target^2. The window is the caustic's, rows 130-170 x "
              "columns 130-200. Rerun with `.venv/bin/python benchmarks/photons.py`.")
-    lines = [f"{MARKER}: SPPM vs path tracing (time to a fixed RMSE)", "", intro, "",
+    lines = [f"{MARKER}: SPPM and photon vs path tracing (time to a fixed RMSE)", "", intro, "",
              "| scene | renderer | time | iterations / spp | RMSE | RMSE window | target RMSE (image / window) "
              "| time to image target | time to window target |",
              "|---|---|---|---|---|---|---|---|---|"]

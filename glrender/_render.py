@@ -55,8 +55,9 @@ def render(scene: Scene | str | os.PathLike[str], spp: int | None = None, *,
         progress: True: a progress bar on standard error when it is a terminal; False:
             nothing; a callable: ``progress(spp_done, seconds)`` after every pass.
         callback: ``callback(spp_done, spp_target)`` after every pass.
-        options: other overrides of :func:`glrender.settings_from_scene` (``rr_depth``,
-            ``light_selection``, ``area_sampling``, ``hide_emitters``, ...).
+        options: other overrides of :func:`glrender.settings_from_scene` (``rr_depth``, ``rr``,
+            ``light_samples``, ``split``, ``light_selection``, ``area_sampling``,
+            ``hide_emitters``, ...).
 
     Returns:
         The image and its per-pixel statistics; ``film.stats`` holds the timings

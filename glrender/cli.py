@@ -217,6 +217,15 @@ def _add_render(sub) -> None:
     g.add_argument("--max-depth", type=int, default=None, metavar="N",
                    help="path segments: 1 = emitters seen directly, 2 = direct light, "
                         "-1 = unbounded")
+    g.add_argument("--rr", default=None, metavar="throughput|fixed:Q|off",
+                   help="path tracer's Russian roulette: survive with min(throughput, 0.95) "
+                        "(default), with a fixed probability Q, or never")
+    g.add_argument("--rr-depth", type=int, default=None, metavar="K",
+                   help="path segments before Russian roulette starts (default: the scene's, 5)")
+    g.add_argument("--light-samples", type=int, default=None, metavar="N",
+                   help="path tracer: light samples (shadow rays) at every vertex (default 1)")
+    g.add_argument("--split", type=int, default=None, metavar="N",
+                   help="path tracer: BSDF branches at the first vertex (default 1)")
     from .photon.command import add_arguments as add_photon_arguments
 
     add_photon_arguments(p)
@@ -243,6 +252,13 @@ def _add_render(sub) -> None:
                    help="also write OUT.denoised.EXT denoised by Open Image Denoise (and a "
                         "denoised layer in an EXR); the image itself stays unbiased "
                         "(extra: glrender[denoise])")
+    g.add_argument("--strategy-images", default=None, metavar="DIR",
+                   help="bdpt: also write the weighted and unweighted image of every strategy "
+                        "(s, t) of path lengths up to --strategy-depth as labelled pyramids "
+                        "(DIR/weighted.png, DIR/unweighted.png) and floats (DIR/strategies.npz)")
+    g.add_argument("--strategy-depth", type=int, default=None, metavar="N",
+                   help="the longest path length (segments) of --strategy-images (default 5, "
+                        "or the max depth if smaller)")
     g.add_argument("--stats", default=None, metavar="FILE.json",
                    help="write statistics: device, scene hash, seed, spp, times, samples/s, "
                         "non-finite samples, mean relative standard error")

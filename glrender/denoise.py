@@ -63,14 +63,14 @@ def emission_spp(spp: int) -> int:
 def emission_settings(settings):
     """The :class:`~glrender.render.renderer.RenderSettings` of the seen-emission pass
     for a render with ``settings``: the path tracer with ``emission_only`` (through delta
-    surfaces for the path tracer, the first hit for the direct integrator and BDPT, as
-    their emission AOVs), same sampler, seed and emitter visibility, at :func:`emission_spp`.
+    surfaces for the path tracer, the first hit for the direct, photon and BDPT
+    integrators, as their emission AOVs), same sampler, seed and emitter visibility, at :func:`emission_spp`.
     None where the pass has nothing to add: integrators whose emission AOV is 0 (AO,
     light tracing, SPPM) and clamped renders (the clamp scales the AOV with the sample)."""
     from dataclasses import replace
 
     integ = settings.integrator
-    if integ.kind not in ("path", "direct", "bdpt") or settings.clamp is not None:
+    if integ.kind not in ("path", "direct", "bdpt", "photon") or settings.clamp is not None:
         return None
     max_depth = integ.max_depth if integ.kind == "path" else 1
     return replace(settings, integrator=replace(integ, kind="path", max_depth=max_depth),

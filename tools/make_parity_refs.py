@@ -116,10 +116,14 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     defaults, scenes = load_catalog()
-    names = args.names or sorted(scenes)
+    # a case that names another's `scene` uses that scene's reference
+    names = args.names or sorted(n for n in scenes if "scene" not in scenes[n])
     unknown = [n for n in names if n not in scenes]
     if unknown:
         raise SystemExit(f"not in catalog.toml: {', '.join(unknown)}")
+    borrowed = [n for n in names if "scene" in scenes[n]]
+    if borrowed:
+        raise SystemExit(f"these use another scene's reference (catalog key `scene`): {', '.join(borrowed)}")
     mi = mitsuba(args.variant)
     manifest_path = REFS / "manifest.json"
     manifest = json.loads(manifest_path.read_text()) if manifest_path.exists() else {"scenes": {}}

@@ -111,6 +111,9 @@ def make_plan(width: int, height: int, settings, unit_size: int | None, frames) 
     if kind == "sppm":
         raise UsageError("--integrator sppm does not run on a cluster yet (its iterations "
                          "depend on each other): render it in one process")
+    if kind == "photon":
+        raise UsageError("--integrator photon does not run on a cluster yet (each worker would "
+                         "need the photon maps): render it in one process")
     spp = settings.sampler.spp
     if unit_size is None:
         unit_size = default_unit_size(width, height, spp)

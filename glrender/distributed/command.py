@@ -166,6 +166,8 @@ def run_distributed(args, signals) -> int:
     scene = replace(scene, film=replace(scene.film, width=width, height=height))
     settings = settings_from_scene(scene, integrator=args.integrator, spp=args.spp, seed=args.seed,
                                    sampler=args.sampler, max_depth=args.max_depth,
+                                   rr=args.rr, rr_depth=args.rr_depth,
+                                   light_samples=args.light_samples, split=args.split,
                                    strategy=args.strategy,
                                    aovs=any(n in FIRST_HIT_AOVS for n in aov_names))
     plan = cl.make_plan(width, height, settings, args.unit_size, frames)

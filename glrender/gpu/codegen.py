@@ -60,6 +60,15 @@ def has_normal_maps(packed: PackedScene) -> bool:
     return bool(len(packed.materials) and (packed.materials["params"][:, 3] > 0).any())
 
 
+def has_normal_shadowing(packed: PackedScene) -> bool:
+    """Whether a normal-mapped material asks for the shadowing term (MATERIAL_FLAG_NORMAL_SHADOWING
+    in MaterialData.info.y); the renderer then compiles with GLRENDER_NORMAL_SHADOWING."""
+    from . import layout
+
+    return bool(len(packed.materials) and
+                (packed.materials["info"][:, 1] & layout.MATERIAL_FLAG_NORMAL_SHADOWING).any())
+
+
 def has_alpha_cutouts(packed: PackedScene) -> bool:
     """Whether a material has an opacity texture (MaterialData.color0.w: its texture + 1);
     the renderer then compiles with GLRENDER_ALPHA_CUTOUTS, and BVH traversal asks
@@ -264,11 +273,11 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
         "        }",
         "        ns = ng;",
         "    }",
-        "    hit = SurfaceHit(t, p, ng, ns, uv, material, light, prim, dpdu);",
+        "    hit = SurfaceHit(t, p, ng, ns, uv, material, light, prim, dpdu, ns);",
     ]
     normal_maps, cutouts = has_normal_maps(packed), has_bvh and has_alpha_cutouts(packed)
     if normal_maps:
-        body += ["    apply_normal_map(hit, scene_material(material));"]
+        body += ["    apply_normal_map(hit, scene_material(material), d);"]
     body += [
         "    return true;",
         "}",

@@ -94,6 +94,8 @@ MATERIAL_KINDS = {
 MATERIAL_FLAG_TWO_SIDED = 1
 MATERIAL_FLAG_GGX = 2
 MATERIAL_FLAG_NONLINEAR = 4
+MATERIAL_FLAG_NORMAL_SHADOWING = 8   # bsdf/bsdf.glsl bsdf_normal_shadowing
+MATERIAL_FLAG_NORMAL_FLIP = 16       # bsdf/normal_map.glsl apply_normal_map
 
 LIGHT_KINDS = {
     "parallelogram": 0, "triangle": 1, "sphere": 2, "disk": 3, "point": 4, "spot": 5,

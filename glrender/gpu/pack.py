@@ -191,6 +191,9 @@ def pack_material(mat: m.Material, textures: TextureTable | None = None) -> np.n
     flags = (layout.MATERIAL_FLAG_TWO_SIDED if mat.two_sided and not transmissive else 0) | \
         (layout.MATERIAL_FLAG_GGX if mat.distribution == "ggx" else 0) | \
         (layout.MATERIAL_FLAG_NONLINEAR if mat.nonlinear else 0)
+    if mat.normal_map is not None:
+        flags |= (layout.MATERIAL_FLAG_NORMAL_SHADOWING if mat.normal_shadowing else 0) | \
+            (layout.MATERIAL_FLAG_NORMAL_FLIP if mat.normal_flip else 0)
     what = f"material {mat.name or '?'}"
     if mat.int_ior <= 0 or mat.ext_ior <= 0:
         raise SceneError(f"{what}: int_ior and ext_ior must be positive")

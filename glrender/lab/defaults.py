@@ -44,17 +44,42 @@ def defaults_section(sections: list[Section]) -> Section | None:
                      f"neither wins everywhere.")
     roulette = _find(sections, "roulette")
     if roulette is not None:
-        t = roulette.tables[0]
-        by_rays = roulette.extra["efficiency_by_rays"]
-        rr = {d: by_rays[f"rr-depth-{d}"] / by_rays["none"] for d in (1, 3, 5)}
-        lines.append(f"**Russian roulette** (default: Mitsuba's throughput rule from depth "
-                     f"{integ.rr_depth}): by rays, throughput RR from depth 1/3/5 is ×"
-                     f"{rr[1]:.3g}/×{rr[3]:.3g}/×{rr[5]:.3g} as efficient as none; fixed survival "
-                     f"probabilities do worse (see Russian roulette). The walk is a model of a "
-                     f"path, not the renderer's path tracer.")
+        lines.append(roulette_line(roulette, integ))
     if not lines:
         return None
     return Section("defaults", "The renderer's defaults against the measurements",
                    "Each default of the renderer next to what this run measured best. The lab "
                    "does not change defaults: a difference here is a finding to act on.",
                    findings=lines)
+
+
+def roulette_line(roulette: Section, integ) -> str:
+    """The path tracer's roulette rule and splitting against the settings measured per scene:
+    the best by rays on each, and the setting whose worse scene is best (by rays)."""
+    from .roulette import DEFAULT, variants
+
+    label = variants()[1]
+    bests = roulette.extra["best"]
+    default = (f"`rr = {integ.rr}` from depth {integ.rr_depth}, {integ.light_samples} light "
+               f"sample, split {integ.split}")
+    per_scene = []
+    for title, b in bests.items():
+        ratio = b["ratio_by_rays"]
+        top = b["by_rays"]
+        per_scene.append(f"{title.split(':')[0]}: **{label[top]}** (×{ratio[top] / ratio[DEFAULT]:.3g} the "
+                         f"default's efficiency by rays)")
+    names = list(next(iter(bests.values()))["ratio_by_rays"])
+    worst = {n: min(b["ratio_by_rays"][n] for b in bests.values()) for n in names}
+    robust = max(worst, key=worst.get)
+    winners = {b["by_rays"] for b in bests.values()}
+    if winners == {DEFAULT}:
+        verdict = "the default is the measured best on every scene"
+    elif len(winners) == 1:
+        verdict = f"**{label[winners.pop()]} is best on every scene: the default should follow it**"
+    else:
+        verdict = (f"no setting is best on every scene; the one whose worse scene does best is "
+                   f"{label[robust]} (×{worst[robust]:.3g} of no roulette there, the default "
+                   f"×{worst[DEFAULT]:.3g}); the default stays Mitsuba's rule until more scenes "
+                   f"decide (see Russian roulette)")
+    return (f"**Russian roulette and splitting** (default: {default}): best by rays on "
+            + "; ".join(per_scene) + f". {verdict[0].upper()}{verdict[1:]}.")

@@ -83,22 +83,34 @@ def run(lab) -> Section:
             f"{b['var_light']:.4g}, BSDF {b['var_bsdf']:.4g}, power heuristic {b['var_power']:.4g}")
     section.extra["veach_bound"] = bounds
     section.extra["plate_pixels"] = {p: int(m.sum()) for p, m in masks.items()}
-    # Pixels that light and BSDF sampling both render exactly black over every run, and MIS
-    # does not: MIS only reweights those same two kinds of samples, so such pixels point at
-    # an inconsistency between the strategies' code paths (visibility, offsets).
-    black = (renders["light"].means.max(axis=(0, 3)) == 0) & (renders["bsdf"].means.max(axis=(0, 3)) == 0)
-    for s in ("mis-balance", "mis-power"):
-        lit = black & (renders[s].mean.mean(axis=2) > 0)
-        section.extra[f"black_in_single_lit_in_{s}"] = {
-            "pixels": int(lit.sum()), "max_mean": float(renders[s].mean.mean(axis=2)[lit].max(initial=0.0))}
-        if lit.any():
-            ys, xs = np.nonzero(lit)
-            section.findings.append(
-                f"{int(lit.sum())} pixels (rows {ys.min()}–{ys.max()}) are exactly black under light "
-                f"and under BSDF sampling in every run but not under {STRATEGIES[s]} (mean up to "
-                f"{renders[s].mean.mean(axis=2)[lit].max():.3g}): MIS reweights the same two "
-                f"kinds of samples, so one code path lets light through where the others do not "
-                f"(the dark red blocks of the efficiency map)")
+    # Pixels that two strategies render exactly black over every run and a third does not.
+    # Counted every way round: rare samples (the Gaussian filter's tails reaching lit pixels
+    # next to the shadow under plate 4) make such pixels in every direction, at rates set by
+    # how often each strategy finds that light; a leak would show in one direction only
+    # (tests/render/test_veach_shadow.py: with a box filter that shadow is black for all).
+    black = {s: r.means.max(axis=(0, 3)) == 0 for s, r in renders.items()}
+    names = list(STRATEGIES)
+    counts = {}
+    for lit_in in names:
+        for a in names:
+            for b in names:
+                if a < b and lit_in not in (a, b):
+                    counts[f"black in {a} and {b}, lit in {lit_in}"] = int(
+                        (black[a] & black[b] & ~black[lit_in]).sum())
+    section.extra["black_in_two_lit_in_third"] = counts
+    pair = counts.get("black in bsdf and light, lit in mis-power", 0)
+    back = counts.get("black in bsdf and mis-power, lit in light", 0)
+    among = counts.get("black in bsdf and mis-balance, lit in mis-power", 0)
+    odd = black["light"] & black["bsdf"] & ~black["mis-power"]
+    rows = f" (rows {np.nonzero(odd)[0].min()}–{np.nonzero(odd)[0].max()})" if odd.any() else ""
+    section.findings.append(
+        f"{pair} pixels{rows} are black under light and under BSDF sampling in every run but lit under "
+        f"MIS (power), and {back} black under BSDF sampling and MIS (power) but lit under light "
+        f"sampling; {among} even black under BSDF sampling and MIS (balance) but lit under MIS "
+        f"(power): no leak, but rare samples of the Gaussian filter's tails (at the full size, "
+        f"rows 229–231 see the floor in the shadow under plate 4, which a box filter renders "
+        f"black for every strategy; the dark red blocks along the bottom of the efficiency "
+        f"map); results.json has every combination")
     whole = section.tables[0]
     best_single = max(whole.row("light").efficiency, whole.row("bsdf").efficiency)
     for s in ("mis-balance", "mis-power"):

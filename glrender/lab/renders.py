@@ -4,7 +4,8 @@ Every variant renders ``runs`` images of ``spp`` samples with the independent sa
 each with its own seed (a full randomization), so the per-pixel per-sample variance of
 each image (Welford's M2 from the accumulation) is exact and the spread between the
 runs gives standard errors. The cost is the device time of ``Renderer.step`` (the
-renderer finishes the GL queue around each dispatch), per sample per pixel.
+renderer finishes the GL queue around each dispatch), per sample per pixel, and, with
+``count_rays``, the rays the path tracer traced (an exact count).
 """
 from __future__ import annotations
 
@@ -41,6 +42,7 @@ class Renders:
     seconds: float           # device time of all runs
     albedo: np.ndarray | None = None
     normal: np.ndarray | None = None
+    rays: int = 0            # rays traced in all runs (count_rays), else 0
 
     @property
     def runs(self) -> int:
@@ -61,21 +63,28 @@ class Renders:
         h, w = self.means.shape[1:3]
         return self.seconds / (self.runs * self.spp * h * w)
 
+    @property
+    def rays_per_sample(self) -> float:
+        h, w = self.means.shape[1:3]
+        return self.rays / (self.runs * self.spp * h * w)
+
 
 def render_variants(lab, scene, variants: dict[str, dict], runs: int, spp: int,
-                    aovs_of: str | None = None) -> dict[str, Renders]:
+                    aovs_of: str | None = None, count_rays: bool = False) -> dict[str, Renders]:
     """Render each variant (settings overrides) ``runs`` times, each run with its own seed
     (independent across runs and variants); the variants take turns run by run, so a
-    busy spell of the machine hits them alike."""
+    busy spell of the machine hits them alike. ``count_rays``: count the rays each variant
+    traces (every variant counts, so the counters' cost is alike too)."""
     from ..render.renderer import Renderer, settings_from_scene
 
     renderers, settings = {}, {}
-    acc = {name: {"means": [], "variances": [], "seconds": 0.0, "albedo": None, "normal": None}
-           for name in variants}
+    acc = {name: {"means": [], "variances": [], "seconds": 0.0, "albedo": None, "normal": None,
+                  "rays": 0} for name in variants}
     try:
         for name, overrides in variants.items():
             settings[name] = settings_from_scene(scene, sampler="independent", spp=spp,
-                                                 aovs=name == aovs_of, **overrides)
+                                                 aovs=name == aovs_of, count_rays=count_rays,
+                                                 **overrides)
             renderers[name] = Renderer(scene, settings[name], ctx=lab.ctx)
         for r in range(runs):
             for v, (name, renderer) in enumerate(renderers.items()):
@@ -88,6 +97,8 @@ def render_variants(lab, scene, variants: dict[str, dict], runs: int, spp: int,
                 a = acc[name]
                 a["seconds"] += time.perf_counter() - t0
                 film = renderer.film()
+                if count_rays:
+                    a["rays"] += renderer.rays()
                 a["means"].append(film.mean.astype(np.float64))
                 a["variances"].append(film.variance.astype(np.float64))
                 if name == aovs_of and a["albedo"] is None:
@@ -96,7 +107,8 @@ def render_variants(lab, scene, variants: dict[str, dict], runs: int, spp: int,
         for renderer in renderers.values():
             renderer.release()
     return {name: Renders(name, np.stack(a["means"]), np.stack(a["variances"]), spp, a["seconds"],
-                          albedo=a["albedo"], normal=a["normal"]) for name, a in acc.items()}
+                          albedo=a["albedo"], normal=a["normal"], rays=a["rays"])
+            for name, a in acc.items()}
 
 
 def tonemap(image: np.ndarray, exposure: float = 0.0) -> np.ndarray:
@@ -106,10 +118,12 @@ def tonemap(image: np.ndarray, exposure: float = 0.0) -> np.ndarray:
 
 
 def region_table(title: str, renders: dict[str, Renders], mask: np.ndarray | None = None,
-                 labels: dict[str, str] | None = None, baseline: str | None = None, note: str = ""):
+                 labels: dict[str, str] | None = None, baseline: str | None = None, note: str = "",
+                 exact: float | None = None):
     """A :class:`~glrender.lab.core.Table` over the pixels of ``mask`` (all by default): each
     run's estimate is the region's mean radiance, its variance the region's mean per-sample
-    variance (channels averaged); cost per sample per pixel."""
+    variance (channels averaged); cost per sample per pixel (and rays per sample when they
+    were counted); ``exact``: the region's exact mean radiance, when known."""
     from .core import Measurement, Table
 
     rows = []
@@ -119,7 +133,8 @@ def region_table(title: str, renders: dict[str, Renders], mask: np.ndarray | Non
         run_vars = r.variances[:, m, :].mean(axis=(1, 2))
         samples = r.spp * r.means.shape[1] * r.means.shape[2]
         rows.append(Measurement(name, estimates, samples, r.seconds, run_variances=run_vars,
-                                label=(labels or {}).get(name, name)))
+                                label=(labels or {}).get(name, name), exact=exact,
+                                units={"rays": r.rays_per_sample} if r.rays else {}))
     return Table(title, rows, baseline=baseline, note=note)
 
 

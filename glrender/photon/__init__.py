@@ -1,4 +1,6 @@
-"""Photon tracing and density estimation: stochastic progressive photon mapping (SPPM)."""
+"""Photon tracing and density estimation: photon mapping (the two-pass method) and
+stochastic progressive photon mapping (SPPM)."""
+from .photon import PhotonRenderer, PhotonSettings
 from .sppm import SppmRenderer, SppmSettings
 
-__all__ = ["SppmRenderer", "SppmSettings"]
+__all__ = ["PhotonRenderer", "PhotonSettings", "SppmRenderer", "SppmSettings"]

@@ -1,45 +1,94 @@
-"""The command line's photon mapping options (``glrender render --integrator sppm``)."""
+"""The command line's photon mapping options (``glrender render --integrator photon`` and
+``--integrator sppm``)."""
 from __future__ import annotations
 
 from dataclasses import replace
 from typing import Any
 
 from ..errors import UsageError
+from .photon import PhotonSettings
 from .sppm import SppmSettings
 
-OPTIONS = ("iterations", "photons_per_iteration", "initial_radius", "alpha", "kernel")
-AOVS = ("radius", "photons")   # SPPM's pictures: search radius, photon-map view
+SPPM_OPTIONS = ("iterations", "initial_radius", "alpha")
+PHOTON_OPTIONS = ("caustic_photons", "radius", "knn", "final_gather")
+SHARED_OPTIONS = ("photons_per_iteration", "kernel")   # --photons: per iteration (sppm) or per map
+OPTIONS = SHARED_OPTIONS + SPPM_OPTIONS + PHOTON_OPTIONS   # saved in checkpoints
+AOVS = ("radius", "photons")   # SPPM's search radius; the photon-map view (sppm and photon)
 
 
 def add_arguments(parser: Any) -> None:
     """The photon mapping options, as an argument group of ``glrender render``."""
-    g = parser.add_argument_group("photon mapping (--integrator sppm)")
-    g.add_argument("--iterations", type=int, default=None, metavar="N",
-                   help="SPPM iterations (one camera sample per pixel and a photon pass each; "
-                        "default: the scene's spp)")
+    g = parser.add_argument_group("photon mapping (--integrator photon, --integrator sppm)")
     g.add_argument("--photons-per-iteration", "--photons", dest="photons_per_iteration", type=int,
-                   default=None, metavar="N", help="photons per iteration (default: one per pixel, "
-                                                   "at least 16384)")
-    g.add_argument("--initial-radius", type=float, default=None, metavar="R",
-                   help="initial search radius in scene units (default: 2 pixel footprints at the "
-                        "scene's centre)")
+                   default=None, metavar="N",
+                   help="sppm: photons per iteration (default: one per pixel, at least 16384); "
+                        "photon: photons traced for the global map (default 262144)")
     g.add_argument("--kernel", choices=("uniform", "cone", "epanechnikov"), default=None,
-                   help="density estimation kernel over each pixel's disk (default: uniform)")
+                   help="density estimation kernel over each search disk (default: uniform)")
+    g.add_argument("--iterations", type=int, default=None, metavar="N",
+                   help="sppm: iterations (one camera sample per pixel and a photon pass each; "
+                        "default: the scene's spp)")
+    g.add_argument("--initial-radius", type=float, default=None, metavar="R",
+                   help="sppm: initial search radius in scene units (default: 2 pixel footprints "
+                        "at the scene's centre)")
     g.add_argument("--alpha", type=float, default=None, metavar="A",
-                   help="fraction of new photons kept per iteration, in (0, 1) (default 0.7)")
+                   help="sppm: fraction of new photons kept per iteration, in (0, 1) (default 0.7)")
+    g.add_argument("--caustic-photons", type=int, default=None, metavar="N",
+                   help="photon: photons traced for the caustic map (default: as --photons)")
+    g.add_argument("--radius", type=float, default=None, metavar="R",
+                   help="photon: fixed lookup radius in scene units (default: the radius holding "
+                        "64 photons around a typical photon of each map)")
+    g.add_argument("--knn", type=int, default=None, metavar="K",
+                   help="photon: estimate from the K nearest photons (1-64) instead of a fixed "
+                        "radius")
+    g.add_argument("--final-gather", action="store_const", const=True, default=None,
+                   help="photon: indirect light through one gather ray per sample (the global "
+                        "map looked up where it lands) instead of at the first surface")
 
 
-def photon_settings(args: Any, settings: Any) -> tuple[Any, SppmSettings | None]:
-    """The render settings (iterations as the sample count) and SPPM's own settings for
-    ``args``; photon options without ``--integrator sppm`` are refused."""
+def _flag(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+def photon_settings(args: Any, settings: Any) -> tuple[Any, SppmSettings | PhotonSettings | None]:
+    """The render settings (sppm: iterations as the sample count) and the photon
+    integrators' own settings for ``args``; their options with another integrator are
+    refused."""
     given = [name for name in OPTIONS if getattr(args, name, None) is not None]
     aovs = [n.strip() for n in (getattr(args, "aov", None) or "").split(",") if n.strip() in AOVS]
-    if settings.integrator.kind != "sppm":
+    kind = settings.integrator.kind
+    if kind not in ("sppm", "photon"):
         if given:
-            raise UsageError(f"--{given[0].replace('_', '-')}: only with --integrator sppm")
+            raise UsageError(f"{_flag(given[0])}: only with --integrator sppm or photon")
         if aovs:
-            raise UsageError(f"--aov {aovs[0]}: only with --integrator sppm")
+            raise UsageError(f"--aov {aovs[0]}: only with --integrator sppm or photon")
         return settings, None
+    other = PHOTON_OPTIONS if kind == "sppm" else SPPM_OPTIONS
+    for name in given:
+        if name in other:
+            raise UsageError(f"{_flag(name)}: only with --integrator {'photon' if kind == 'sppm' else 'sppm'}")
+    if kind == "photon":
+        if "radius" in aovs:
+            raise UsageError("--aov radius: only with --integrator sppm (the photon integrator's "
+                             "radius is one number per map, in --stats)")
+        photons = getattr(args, "photons_per_iteration", None)
+        if photons is not None and photons < 1:
+            raise UsageError(f"--photons {photons}: expected a positive number of photons")
+        caustic = getattr(args, "caustic_photons", None)
+        if caustic is not None and caustic < 1:
+            raise UsageError(f"--caustic-photons {caustic}: expected a positive number of photons")
+        radius, knn = getattr(args, "radius", None), getattr(args, "knn", None)
+        if radius is not None and knn is not None:
+            raise UsageError("--radius and --knn: give one (a fixed radius or the k nearest photons)")
+        if radius is not None and not radius > 0:
+            raise UsageError(f"--radius {radius}: expected a positive number of scene units")
+        if knn is not None and not 1 <= knn <= 64:
+            raise UsageError(f"--knn {knn}: expected an integer in [1, 64]")
+        kw = {} if photons is None else {"photons": photons}
+        return settings, PhotonSettings(caustic_photons=caustic, radius=radius, knn=knn,
+                                        kernel=getattr(args, "kernel", None) or "uniform",
+                                        final_gather=bool(getattr(args, "final_gather", None)),
+                                        photon_view="photons" in aovs, **kw)
     iterations = getattr(args, "iterations", None)
     if iterations is not None:
         if iterations < 1:

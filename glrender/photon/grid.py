@@ -10,6 +10,7 @@ indices listed under hash ``h``.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -73,3 +74,63 @@ def build_grid(positions: np.ndarray, radius: np.ndarray, pixels: np.ndarray) ->
     offsets = (n + 1) + np.concatenate([[0], np.cumsum(counts)])
     cells = np.concatenate([offsets.astype(np.uint32), entries])
     return HashGrid(cells, size.astype(np.uint32), n, lo, cell)
+
+
+@dataclass
+class PointGrid:
+    """A hash grid over points, each listed once, in the cell holding it: ``order`` sorts
+    the points by hash, and ``offsets[h] .. offsets[h + 1]`` are the sorted positions of
+    the points under hash ``h`` (a table of ``table_size`` hashes; other cells with the
+    same hash included: the lookup checks distances). A lookup of radius at most
+    ``cell / 2`` visits the 2 x 2 x 2 cells around its point
+    (``shaders/photon/photon_gather.glsl``)."""
+
+    order: np.ndarray        # int64 (N,): point indices in the grid's order
+    offsets: np.ndarray      # uint32 (table_size + 1,)
+    size: np.ndarray         # cells along x, y, z (uint32)
+    table_size: int          # 0: no grid (no points)
+    lo: np.ndarray           # corner of cell (0, 0, 0)
+    cell: float              # cell edge length
+
+    @property
+    def max_cell_entries(self) -> int:
+        """The most points listed under one hash."""
+        return int(np.diff(self.offsets).max()) if self.table_size else 0
+
+
+def build_point_grid(positions: np.ndarray, radius: float) -> PointGrid:
+    """The grid over ``positions`` (N, 3) for lookups of radius up to ``radius``: cell
+    edge 2 radius (with the grid's slack), a table of N hashes."""
+    n = len(positions)
+    if n == 0:
+        return PointGrid(np.zeros(0, np.int64), np.zeros(2, np.uint32), np.zeros(3, np.uint32), 0,
+                         np.zeros(3), 1.0)
+    p = np.asarray(positions, np.float64)
+    cell = 2.0 * float(radius) * (1 + _SLACK)
+    lo = p.min(axis=0) - _SLACK * cell
+    size = np.minimum(np.floor((p.max(axis=0) - lo) / cell).astype(np.int64) + 1, 1 << 30)
+    c = np.clip(np.floor((p - lo) / cell).astype(np.int64), 0, size - 1)
+    h = (grid_hash(c) % np.uint64(n)).astype(np.int64)
+    order = np.argsort(h, kind="stable")
+    offsets = np.concatenate([[0], np.cumsum(np.bincount(h, minlength=n))]).astype(np.uint32)
+    return PointGrid(order, offsets, size.astype(np.uint32), n, lo, cell)
+
+
+def typical_radius(positions: np.ndarray, k: int, queries: int = 128, subset: int = 1 << 15) -> float:
+    """The radius of a disk around a typical point of ``positions`` (N, 3) that holds ``k``
+    of them: the median over ``queries`` points (a fixed pseudo-random choice) of the
+    distance to the k-th nearest, found among ``subset`` of the points and scaled to all
+    of them (a surface density: the count grows with r^2). 0 for fewer than 2 points."""
+    n = len(positions)
+    if n < 2:
+        return 0.0
+    rng = np.random.default_rng(0x5eed)
+    p = np.asarray(positions, np.float32)
+    q = p[rng.choice(n, size=min(queries, n), replace=False)]
+    s = p[rng.choice(n, size=min(subset, n), replace=False)]
+    scale = len(s) / n
+    kk = int(min(len(s) - 1, max(1, round(k * scale))))
+    d2 = ((q[:, None, :] - s[None, :, :]) ** 2).sum(axis=-1)
+    # the query itself may be in the subset at distance 0: take the kk-th after it
+    dk = np.sqrt(np.partition(d2, kk, axis=1)[:, kk].astype(np.float64))
+    return float(np.median(dk) * math.sqrt(k * scale / kk))

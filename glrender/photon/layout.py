@@ -31,5 +31,26 @@ PHOTON_PARAMS = np.dtype([
 ])
 assert PHOTON_PARAMS.itemsize == 80
 
-# density estimation kernels (kKernel* in shaders/photon/sppm_deposit.glsl)
+# density estimation kernels (kKernel* in shaders/photon/density.glsl)
 KERNELS = {"uniform": 0, "cone": 1, "epanechnikov": 2}
+
+# the photon integrator (shaders/photon/map_layout.glsl)
+SSBO_GLOBAL_PHOTONS = 8     # also the map being traced
+SSBO_GLOBAL_CELLS = 9
+SSBO_CAUSTIC_PHOTONS = 10
+SSBO_CAUSTIC_CELLS = 11
+SSBO_MAP_COUNTERS = 12
+BYTES_PER_PHOTON = 48       # position and type, direction and normal, power and segments
+MAP_COUNTER_WORDS = 4       # stored, candidates skipped, visited, most visited by one lookup
+
+PHOTON_MAP_PARAMS = np.dtype([
+    ("trace", "<u4", 4),         # first, count, photons of the pass, map (0 global, 1 caustic)
+    ("store", "<u4", 4),         # capacity, max depth, photon view, -
+    ("global_size", "<u4", 4),   # cells xyz, hash table size
+    ("global_lo", "<f4", 4),     # corner xyz, cell edge
+    ("caustic_size", "<u4", 4),
+    ("caustic_lo", "<f4", 4),
+    ("radius", "<f4", 4),        # lookup radius global, caustic; 1 / photons global, caustic
+    ("mode", "<u4", 4),          # kernel, k nearest (0: fixed radius), final gather, direct by photons
+])
+assert PHOTON_MAP_PARAMS.itemsize == 128

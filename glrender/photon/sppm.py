@@ -241,6 +241,18 @@ class SppmRenderer:
                     should_stop: Callable[[], bool] | None = None) -> tuple[np.ndarray, np.ndarray] | None:
         """Traces the photons of ``iteration`` into the visible points ``position`` (from
         camera_pass): their flux Phi (N, 3) and photon counts M (N,); None if stopped."""
+        prm = self.begin_photons(iteration, position)
+        first = 0
+        while first < self.photons_per_iteration:
+            if first > 0 and should_stop is not None and should_stop():
+                return None
+            first = self.dispatch_photons(prm, first)
+        return self.end_photons()
+
+    def begin_photons(self, iteration: int, position: np.ndarray) -> Any:
+        """The photon pass's set-up: the grid over the visible points ``position``, the
+        radii and cleared deposits on the device; returns the parameter block for
+        :meth:`dispatch_photons`."""
         valid = np.nonzero(position[:, 3] > 0)[0]
         grid = build_grid(position[valid, :3], self.radius[valid], valid.astype(np.uint32))
         self.counters["max_cell"] = max(self.counters["max_cell"], grid.max_cell_entries)
@@ -252,17 +264,21 @@ class SppmRenderer:
         prm = self._photon_block(iteration)
         prm["grid_size"] = (*grid.size, grid.table_size)
         prm["grid_lo"] = (*grid.lo, grid.cell)
+        return prm
+
+    def dispatch_photons(self, prm: Any, first: int) -> int:
+        """Traces the next dispatch of photons from ``first``; returns where the next
+        one starts (photons_per_iteration when the pass is done)."""
         self._bind()
         self._view.bind_to_storage_buffer(scene_layout.SSBO_SPLAT)
-        first = 0
-        while first < self.photons_per_iteration:
-            if first > 0 and should_stop is not None and should_stop():
-                return None
-            count = min(PHOTONS_PER_DISPATCH, self.photons_per_iteration - first)
-            prm["photons"][:2] = (first, count)
-            self._photon_params.write(prm.tobytes())
-            self.photon_kernel.run(group_x=-(-count // 64))
-            first += count
+        count = min(PHOTONS_PER_DISPATCH, self.photons_per_iteration - first)
+        prm["photons"][:2] = (first, count)
+        self._photon_params.write(prm.tobytes())
+        self.photon_kernel.run(group_x=-(-count // 64))
+        return first + count
+
+    def end_photons(self) -> tuple[np.ndarray, np.ndarray]:
+        """The photon pass's deposits: flux Phi (N, 3) and photon counts M (N,)."""
         self.gl.memory_barrier()
         dep = np.frombuffer(self._deposits.read(), np.float32).reshape(-1, 4).astype(np.float64)
         head = np.frombuffer(self._records.read(pl.RECORD_HEADER_WORDS * 4), np.uint32)
@@ -298,10 +314,14 @@ class SppmRenderer:
         deposits = self.photon_pass(t, position, should_stop)
         if deposits is None:
             return False
+        self.finish_iteration(radiance, deposits)
+        return True
+
+    def finish_iteration(self, radiance: np.ndarray, deposits: tuple[np.ndarray, np.ndarray]) -> None:
+        """Adds an iteration's camera radiance and photon deposits to the state."""
         self.ld_sum += radiance
         self._update(*deposits)
         self.iterations += 1
-        return True
 
     def step(self, iterations: int, callback: Callable[[int, int], None] | None = None,
              should_stop: Callable[[], bool] | None = None) -> int:
@@ -405,6 +425,14 @@ class SppmRenderer:
     def _slices(self) -> list[tuple[int, int]]:
         """SPPM binds its per-pixel buffers whole: one slice."""
         return [self.rows]
+
+    def photon_stats(self) -> dict[str, Any]:
+        """What --stats reports of SPPM: photons per iteration, alpha, kernel, the radii
+        now (min, mean, max), the gathers' candidate counts and memory."""
+        return {"photons_per_iteration": self.photons_per_iteration, "alpha": float(self.sppm.alpha),
+                "kernel": self.sppm.kernel, "initial_radius": self.initial_radius,
+                "radius": [float(self.radius.min()), float(self.radius.mean()), float(self.radius.max())],
+                "gathers": dict(self.counters), "memory": self.memory()}
 
     def memory(self) -> dict[str, int]:
         """Device bytes per pixel and per photon (photons are not stored: deposited at once)."""

@@ -25,9 +25,10 @@ from ..scene import model as m
 from .camera import CameraController
 from .display import VIEWS, Display, DisplaySettings, fit_viewport
 from .keys import bindings, help_text
-from .progressive import Progressive
+from .progressive import Progressive, SppmProgressive
 
-INTEGRATOR_ORDER = tuple(k for k in m.INTEGRATORS if k != "sppm")   # SPPM has its own driver
+INTEGRATOR_ORDER = m.INTEGRATORS   # sppm: its own driver (SppmProgressive), iteration by iteration
+PREVIEW_PHOTONS = 1 << 17       # the photon integrator's global and caustic maps in the preview
 STRATEGY_ORDER = tuple(STRATEGIES)
 DEPTH_STEPS_MAX = 16            # ] past this goes to unbounded (-1)
 EXPOSURE_STEP = 0.5             # stops per key press
@@ -84,7 +85,7 @@ class PreviewApp:
         self.out = out
         integ = scene.integrator
         self.integrator = options.integrator or integ.kind
-        if self.integrator not in INTEGRATOR_ORDER:     # sppm: not a progressive kernel here
+        if self.integrator not in INTEGRATOR_ORDER:
             self.integrator = "path"
         self.strategy = options.strategy or integ.strategy
         self.max_depth = options.max_depth if options.max_depth is not None else integ.max_depth
@@ -126,6 +127,8 @@ class PreviewApp:
             return "ao"
         if self.integrator == "direct":
             return f"direct, {self.strategy}"
+        if self.integrator in ("sppm", "photon"):      # next-event estimation by light sampling
+            return f"{self.integrator}, depth {depth_label(self.max_depth)}"
         return f"{self.integrator}, {self.strategy}, depth {depth_label(self.max_depth)}"
 
     def _build(self) -> None:
@@ -142,8 +145,20 @@ class PreviewApp:
         if old is not None:
             self.display.hold(old, self.view)   # on screen until the new kernel's samples land
             old.release()
-        self.renderer = Renderer(self.scene, settings, ctx=self.ctx)
-        self.progressive = Progressive(self.renderer, self.options.spp)
+        if self.integrator == "photon":    # a Renderer whose photon maps are traced first
+            from ..photon import PhotonRenderer, PhotonSettings
+
+            self.renderer = PhotonRenderer(self.scene, settings, PhotonSettings(photons=PREVIEW_PHOTONS),
+                                           ctx=self.ctx)
+            self.progressive = Progressive(self.renderer, self.options.spp)
+        elif self.integrator == "sppm":    # iterations (one camera sample each) as spp
+            from ..photon import SppmRenderer
+
+            self.renderer = SppmRenderer(self.scene, replace(settings, aovs=False), ctx=self.ctx)
+            self.progressive = SppmProgressive(self.renderer, self.options.spp)
+        else:
+            self.renderer = Renderer(self.scene, settings, ctx=self.ctx)
+            self.progressive = Progressive(self.renderer, self.options.spp)
         self._generation += 1
         seconds = time.perf_counter() - t0
         self._compile_note = f" - built in {seconds:.2f} s"

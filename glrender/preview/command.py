@@ -42,7 +42,7 @@ def add_preview_parser(sub) -> None:
     g = p.add_argument_group("image and light transport")
     g.add_argument("--width", type=int, default=None, metavar="W", help="image width in pixels")
     g.add_argument("--height", type=int, default=None, metavar="H", help="image height in pixels")
-    g.add_argument("--integrator", choices=[k for k in INTEGRATORS if k != "sppm"], default=None,
+    g.add_argument("--integrator", choices=INTEGRATORS, default=None,
                    help="first integrator (default: the scene's; key I switches)")
     g.add_argument("--strategy", choices=tuple(STRATEGIES), default=None,
                    help="first direct-lighting strategy (default: the scene's; key M switches)")

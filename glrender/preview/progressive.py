@@ -24,6 +24,8 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
+
 from ..render.renderer import Renderer
 
 MAX_TILES_PER_DISPATCH = 65535   # GL's guaranteed work group count along x
@@ -117,3 +119,80 @@ class Progressive:
         every pixel then has ``spp`` samples)."""
         while self.pass_samples:
             self._dispatch(min(self.tiles - self.next_tile, MAX_TILES_PER_DISPATCH))
+
+
+class SppmProgressive:
+    """:class:`Progressive` for SPPM (glrender.photon.SppmRenderer): an iteration is its
+    camera pass, then its photon dispatches (PHOTONS_PER_DISPATCH photons each), spread
+    over as many calls as the budget asks, so the window keeps responding; the image (the
+    host's float64 estimate) is written into the inner renderer's accumulation buffer
+    after every iteration, where the display reads it (m2 stays zero: SPPM has no
+    per-sample variance). ``spp`` counts iterations."""
+
+    def __init__(self, renderer, target_spp: int | None = None):
+        self.renderer = renderer
+        self.target_spp = target_spp
+        self.samples_added = 0     # pixel samples (camera samples) since the last reset
+        self._stage: tuple | None = None   # (radiance, photon parameter block, next photon) mid-iteration
+        self._show()
+
+    def reset(self) -> None:
+        """Forget every iteration (radii back to the initial one)."""
+        self.renderer.reset()
+        self._stage = None
+        self.samples_added = 0
+        self._show()
+
+    @property
+    def spp(self) -> int:
+        return self.renderer.iterations
+
+    @property
+    def done(self) -> bool:
+        return self._stage is None and self.target_spp is not None and self.spp >= self.target_spp
+
+    def _show(self) -> None:
+        r = self.renderer
+        n = r.width * r.height
+        mean = np.zeros((n, 4), np.float32)
+        if r.iterations:
+            mean[:, :3] = r.radiance().reshape(n, 3)
+            mean[:, 3] = r.iterations
+        r.base._mean.write(mean.tobytes())
+        r.base._m2.write(np.zeros((n, 4), np.float32).tobytes())
+
+    def _step(self) -> None:
+        """One piece of work: a camera pass and the grid, or one photon dispatch (the
+        last one ends the iteration)."""
+        r = self.renderer
+        if self._stage is None:
+            position, radiance = r.camera_pass(r.iterations)
+            self._stage = (radiance.copy(), r.begin_photons(r.iterations, position), 0)
+            return
+        radiance, prm, first = self._stage
+        first = r.dispatch_photons(prm, first)
+        r.gl.finish()
+        if first < r.photons_per_iteration:
+            self._stage = (radiance, prm, first)
+            return
+        r.finish_iteration(radiance, r.end_photons())
+        self._stage = None
+        self.samples_added += r.width * r.height
+        self._show()
+
+    def advance(self, budget: float) -> bool:
+        """Work for about ``budget`` seconds (at least one piece, unless done); returns
+        whether anything was rendered."""
+        deadline = time.perf_counter() + budget
+        rendered = False
+        while not self.done:
+            self._step()
+            rendered = True
+            if time.perf_counter() >= deadline:
+                break
+        return rendered
+
+    def finish_pass(self) -> None:
+        """Complete the iteration in progress (before a screenshot)."""
+        while self._stage is not None:
+            self._step()

@@ -55,7 +55,7 @@ def settings_record(renderer) -> dict:
     s = renderer.settings
     return {"width": renderer.width, "height": renderer.height,
             "integrator": _json_safe(asdict(s.integrator)), "sampler": asdict(s.sampler),
-            "aovs": bool(s.aovs)}
+            "aovs": bool(s.aovs), "strategy_depth": int(s.strategy_depth)}
 
 
 def save_checkpoint(path, renderer, **info) -> None:
@@ -71,7 +71,9 @@ def save_checkpoint(path, renderer, **info) -> None:
         with open(tmp, "wb") as f:
             np.savez(f, meta=np.array(json.dumps(meta)),
                      **{name: np.ascontiguousarray(state[name], np.float32) for name in ARRAYS},
-                     splat=np.ascontiguousarray(state["splat"], np.uint32))
+                     splat=np.ascontiguousarray(state["splat"], np.uint32),
+                     **({"strategies": np.ascontiguousarray(state["strategies"], np.uint32)}
+                        if renderer.settings.strategy_depth else {}))
 
     atomic_write(path, write)
 
@@ -100,6 +102,8 @@ def load_checkpoint(path) -> Checkpoint:
                 state["rows"] = tuple(int(r) for r in meta["rows"])
             if "splat" in data:   # light tracing's and BDPT's fixed-point splat sums
                 state["splat"] = np.array(data["splat"], np.uint32)
+            if "strategies" in data:   # bdpt's strategy images (--strategy-images)
+                state["strategies"] = np.array(data["strategies"], np.uint32)
     except unreadable as exc:
         if isinstance(exc, UsageError):
             raise

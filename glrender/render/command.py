@@ -17,16 +17,18 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import DeviceError, UsageError
+from ..errors import DeviceError, SceneError, UsageError
 from ..gpu.layout import AOV_BYTES
+from ..scene.model import SPLIT_LIMIT, parse_rr
 
-AOV_NAMES = ("albedo", "normal", "depth", "emission", "variance", "radius", "photons")   # the last two: sppm
+AOV_NAMES = ("albedo", "normal", "depth", "emission", "variance", "radius", "photons")   # the last two: photon, sppm
 FIRST_HIT_AOVS = ("albedo", "normal", "depth", "emission")
 # sample indices are 32-bit on the device: the open-ended target of a time budget
 SPP_LIMIT = 1 << 31
 # the options a checkpoint remembers; --resume takes those not given again
 RESUMABLE = ("spp", "seed", "sampler", "integrator", "strategy", "max_depth", "width", "height",
-             "clamp", "crop")
+             "clamp", "crop", "strategy_images", "strategy_depth", "rr", "rr_depth",
+             "light_samples", "split")
 
 
 def parse_defines(items: list[str]) -> dict[str, str]:
@@ -68,6 +70,15 @@ def _check_options(args) -> None:
     need("--seed", args.seed, lambda v: 0 <= v < 1 << 32, "an integer in 0..2^32-1")
     need("--max-depth", args.max_depth, lambda v: v == -1 or v >= 1,
          "-1 (unbounded) or a number of path segments >= 1")
+    need("--rr-depth", args.rr_depth, lambda v: 1 <= v <= 1 << 20, "a number of path segments >= 1")
+    for name, value in (("--light-samples", args.light_samples), ("--split", args.split)):
+        need(name, value, lambda v: 1 <= v <= SPLIT_LIMIT, f"an integer in 1..{SPLIT_LIMIT}")
+    if args.rr is not None:
+        try:
+            parse_rr(args.rr)
+        except SceneError as exc:
+            want = str(exc).split("expected ", 1)[1].rsplit(", got", 1)[0]
+            raise UsageError(f"--rr {args.rr}: expected {want}") from None
     need("--clamp", args.clamp, lambda v: math.isfinite(v) and v > 0,
          "a positive number (the largest RGB component a sample keeps)")
     need("--noise-threshold", args.noise_threshold, lambda v: 0 < v < 1,
@@ -220,6 +231,30 @@ def _write_stats(path: Path, stats: dict) -> None:
     atomic_write(path, write)
 
 
+def _strategy_depth(options: dict, scene) -> int:
+    """--strategy-images' path length (0 without it): --strategy-depth, else 5 or the max
+    depth if smaller."""
+    from .strategies import DEFAULT_DEPTH
+
+    depth = options.get("strategy_depth")
+    folder = options.get("strategy_images")
+    if folder is None:
+        if depth is not None:
+            raise UsageError(f"--strategy-depth {depth}: only with --strategy-images DIR")
+        return 0
+    if Path(folder).exists() and not Path(folder).is_dir():
+        raise UsageError(f"--strategy-images {folder}: is a file, expected a folder (created if "
+                         f"missing)")
+    integrator = options.get("integrator") or scene.integrator.kind
+    if integrator != "bdpt":
+        raise UsageError(f"--strategy-images: only the bdpt integrator has strategies (s, t), "
+                         f"not {integrator} (add --integrator bdpt)")
+    if depth is None:
+        max_depth = options.get("max_depth", scene.integrator.max_depth)
+        depth = DEFAULT_DEPTH if max_depth < 0 else min(DEFAULT_DEPTH, max_depth)
+    return int(depth)
+
+
 def run_render(args, signals) -> int:
     """Run ``glrender render`` with parsed ``args``; ``signals`` is the command's
     :class:`~glrender.cli.StopSignals`. Returns the exit code."""
@@ -237,6 +272,9 @@ def run_render(args, signals) -> int:
     from ..distributed.command import run_distributed, uses_cluster
 
     if uses_cluster(args):          # --workers, --scheduler, --frames: on a Dask cluster
+        if getattr(args, "strategy_images", None):
+            raise UsageError("--strategy-images: not available on a cluster (render on one "
+                             "machine)")
         return run_distributed(args, signals)
     say = (lambda *a: None) if args.quiet else (lambda text: print(text, file=sys.stderr))
     timer = _Timer()
@@ -261,10 +299,13 @@ def run_render(args, signals) -> int:
                 raise UsageError(f"{path}: is a folder, expected a file name for the {what}")
     keep_checkpoint = bool(args.checkpoint or args.checkpoint_every or args.resume)
     ckpt = load_checkpoint(ckpt_path) if args.resume else None
-    options = {k: getattr(args, k) for k in RESUMABLE if getattr(args, k) is not None}
+    from ..photon.command import OPTIONS as PHOTON_OPTIONS
+
+    resumable = RESUMABLE + PHOTON_OPTIONS
+    options = {k: getattr(args, k) for k in resumable if getattr(args, k, None) is not None}
     if ckpt is not None:
         saved = ckpt.meta.get("options", {})
-        options = {**{k: v for k, v in saved.items() if k in RESUMABLE}, **options}
+        options = {**{k: v for k, v in saved.items() if k in resumable}, **options}
         if not args.define:
             params = dict(ckpt.meta.get("params", {}))
         if args.aov is None:
@@ -282,11 +323,19 @@ def run_render(args, signals) -> int:
                                    spp=options.get("spp"), seed=options.get("seed"),
                                    sampler=options.get("sampler"),
                                    max_depth=options.get("max_depth"),
+                                   rr=options.get("rr"), rr_depth=options.get("rr_depth"),
+                                   light_samples=options.get("light_samples"),
+                                   split=options.get("split"),
                                    strategy=options.get("strategy"), aovs=first_hit,
-                                   clamp=options.get("clamp"))
+                                   clamp=options.get("clamp"),
+                                   strategy_depth=_strategy_depth(options, scene))
     from ..photon.command import photon_settings
 
-    settings, sppm = photon_settings(args, settings)   # --integrator sppm: iterations as spp
+    for name in PHOTON_OPTIONS:       # a checkpoint's photon options, unless given again
+        if getattr(args, name, None) is None and name in options:
+            setattr(args, name, options[name])
+    settings, photon = photon_settings(args, settings)   # --integrator sppm: iterations as spp
+    sppm = photon if settings.integrator.kind == "sppm" else None
     if "spp" in options or args.time is None or sppm is not None:
         target = settings.sampler.spp
     else:
@@ -320,6 +369,10 @@ def run_render(args, signals) -> int:
             from ..photon import SppmRenderer
 
             renderer = SppmRenderer(scene, settings, sppm, ctx=ctx)
+        elif photon is not None:
+            from ..photon import PhotonRenderer
+
+            renderer = PhotonRenderer(scene, settings, photon, ctx=ctx)
         else:
             renderer = Renderer(scene, settings, ctx=ctx)
     except moderngl.Error as exc:
@@ -393,6 +446,13 @@ def run_render(args, signals) -> int:
                 denoised, denoise_info = _denoise(film, scene, settings, ctx, crop, say)
         with timer("write"):
             written = _write_outputs(film, output, aov_names, args, denoised)
+            if settings.strategy_depth:
+                from . import strategies
+
+                written += strategies.write(Path(options["strategy_images"]),
+                                            renderer.strategy_images(), settings.strategy_depth,
+                                            exposure=args.exposure, curve=args.tonemap,
+                                            srgb=args.srgb)
         if interrupted or keep_checkpoint:
             write_checkpoint()
             ckpt_written = str(ckpt_path)
@@ -435,6 +495,9 @@ def run_render(args, signals) -> int:
         "stderr_is_upper_bound": settings.sampler.kind != "independent",
         "mean": [float(v) for v in film.mean.reshape(-1, 3).mean(0)],
     }
+    if hasattr(renderer, "photon_stats"):     # photon, sppm: maps, radii, lookups, memory
+        stats["photon"] = renderer.photon_stats()
+        stats["biased"] = True
     if args.stats:
         _write_stats(Path(args.stats), stats)
     renderer.release()

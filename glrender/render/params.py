@@ -11,6 +11,7 @@ STRATEGIES = {"light": 0, "bsdf": 1, "mis-balance": 2, "mis-power": 3}
 LIGHT_SELECTION = {"uniform": 0, "power": 1}
 AREA_SAMPLING = {"area": 0, "solid-angle": 1}
 FILTERS = {"box": 0, "tent": 1, "gaussian": 2, "mitchell": 3}
+RR_RULES = {"throughput": 0, "fixed": 1, "off": 2}
 
 
 def kind_mask(kinds, table: dict[str, int]) -> int:
@@ -22,18 +23,27 @@ def kind_mask(kinds, table: dict[str, int]) -> int:
 
 def shader_defines(*, sampler: str = "independent", material_kinds=("diffuse",),
                    light_kinds=(), max_depth: int = -1, rr_depth: int = 5,
+                   rr: str = "throughput", light_samples: int = 1, split: int = 1,
                    strategy: str = "mis-power", emitter_samples: int = 1, bsdf_samples: int = 1,
                    hide_emitters: bool = False, light_selection: str = "power",
                    area_sampling: str = "solid-angle", filter: str = "box", aovs: bool = False,
-                   count_loops: bool = False, debug_nonfinite: int = 0,
-                   emission_only: bool = False) -> dict[str, object]:
-    """The full define set for params.glsl (defaults suit unit tests of shader code)."""
+                   count_loops: bool = False, count_rays: bool = False,
+                   debug_nonfinite: int = 0, emission_only: bool = False) -> dict[str, object]:
+    """The full define set for params.glsl (defaults suit unit tests of shader code).
+    ``rr``: the Russian roulette rule, ``throughput``, ``fixed:<q>`` or ``off``."""
+    from ..scene.model import parse_rr
+
+    rule, survival = parse_rr(rr)
     return {
         "GLRENDER_SAMPLER": SAMPLERS[sampler],
         "GLRENDER_MATERIAL_KINDS": kind_mask(material_kinds, layout.MATERIAL_KINDS),
         "GLRENDER_LIGHT_KINDS": kind_mask(light_kinds, layout.LIGHT_KINDS),
         "GLRENDER_MAX_DEPTH": int(max_depth),
         "GLRENDER_RR_DEPTH": int(rr_depth),
+        "GLRENDER_RR_RULE": RR_RULES[rule],
+        "GLRENDER_RR_SURVIVAL": float(survival),
+        "GLRENDER_LIGHT_SAMPLES": int(light_samples),
+        "GLRENDER_SPLIT": int(split),
         "GLRENDER_STRATEGY": STRATEGIES[strategy],
         "GLRENDER_EMITTER_SAMPLES": int(emitter_samples),
         "GLRENDER_BSDF_SAMPLES": int(bsdf_samples),
@@ -43,6 +53,7 @@ def shader_defines(*, sampler: str = "independent", material_kinds=("diffuse",),
         "GLRENDER_FILTER": FILTERS[filter],
         "GLRENDER_AOVS": bool(aovs),
         "GLRENDER_COUNT_LOOPS": bool(count_loops),
+        "GLRENDER_COUNT_RAYS": bool(count_rays),
         "GLRENDER_DEBUG_NONFINITE": int(debug_nonfinite),
         "GLRENDER_EMISSION_ONLY": bool(emission_only),
     }

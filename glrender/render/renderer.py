@@ -25,6 +25,7 @@ from ..gpu.pack import PackedScene, pack_scene
 from ..sampling.sequences import strata_columns
 from ..scene import model as m
 from ..film import Film
+from . import strategies
 from .params import shader_defines
 
 TILE = 8
@@ -34,6 +35,7 @@ INTEGRATOR_FILES = {"path": "integrators/path.glsl", "direct": "integrators/dire
 # integrators that splat light-path contributions onto the whole film (integrators/splat.glsl)
 SPLATTING = ("lighttrace", "bdpt")
 SPLAT_SCALE = 65536.0   # kSplatScale: fixed-point units per unit of splatted value
+BDPT_DEPTH_CAP = 16     # kBdptDepthCap: bdpt's longest path (integrators/bdpt_vertex.glsl)
 
 
 @dataclass
@@ -44,6 +46,7 @@ class RenderSettings:
     sampler: m.Sampler
     aovs: bool = False
     count_loops: bool = False
+    count_rays: bool = False              # count the rays traced per pixel (Renderer.rays)
     debug_nonfinite: int = 0              # tests: make sample index % 7 == value - 1 NaN
     samples_per_pass: int | None = None   # None: chosen from the scene
     time_target: float = 0.1              # seconds per dispatch
@@ -52,24 +55,31 @@ class RenderSettings:
     emission_only: bool = False           # path tracer: the emission the camera sees, alone
                                           # (directly and through delta surfaces: the
                                           # emission AOV; glrender.denoise renders it apart)
+    strategy_depth: int = 0               # bdpt: keep each strategy's image up to this path
+                                          # length (glrender/render/strategies.py; 0: none)
 
 
 def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: int | None = None,
                         sampler: str | None = None, seed: int | None = None,
                         max_depth: int | None = None, rr_depth: int | None = None,
+                        rr: str | None = None, light_samples: int | None = None,
+                        split: int | None = None,
                         strategy: str | None = None, light_selection: str | None = None,
                         area_sampling: str | None = None, hide_emitters: bool | None = None,
-                        aovs: bool = False, count_loops: bool = False,
+                        aovs: bool = False, count_loops: bool = False, count_rays: bool = False,
                         samples_per_pass: int | None = None, time_target: float = 0.1,
-                        clamp: float | None = None, emission_only: bool = False) -> RenderSettings:
+                        clamp: float | None = None, emission_only: bool = False,
+                        strategy_depth: int = 0) -> RenderSettings:
     """The scene's settings with the given overrides (None keeps the scene's value).
     ``clamp``: scale each camera sample whose largest RGB component exceeds it down to
     it (removes fireflies at the price of bias; None: off). ``emission_only`` (path
     tracer): the image is the emission the camera sees, directly or through mirrors,
     glass and null surfaces (the ``emission`` AOV's quantity): paths end at the first
-    surface that is not a delta one, without next-event estimation."""
+    surface that is not a delta one, without next-event estimation. ``strategy_depth``:
+    bdpt keeps the image of every strategy (s, t) of path lengths up to it (0: off)."""
     integ = scene.integrator
     overrides: dict[str, Any] = {k: v for k, v in dict(kind=integrator, max_depth=max_depth, rr_depth=rr_depth,
+                                       rr=rr, light_samples=light_samples, split=split,
                                        strategy=strategy, light_selection=light_selection,
                                        area_sampling=area_sampling,
                                        hide_emitters=hide_emitters).items() if v is not None}
@@ -85,10 +95,13 @@ def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: i
                          f"sample keeps), got {clamp!r}")
     if emission_only and integ.kind != "path":
         raise UsageError(f"emission_only: only with the path integrator, not {integ.kind}")
-    return RenderSettings(integ, samp, aovs=aovs, count_loops=count_loops,
+    if count_loops and count_rays:
+        raise UsageError("count_loops and count_rays share one debug counter: ask for one")
+    return RenderSettings(integ, samp, aovs=aovs, count_loops=count_loops, count_rays=count_rays,
                           samples_per_pass=samples_per_pass, time_target=time_target,
                           clamp=None if clamp is None else float(clamp),
-                          emission_only=bool(emission_only))
+                          emission_only=bool(emission_only),
+                          strategy_depth=int(strategy_depth))
 
 
 def camera_tangents(camera: m.Camera, width: int, height: int) -> tuple[float, float]:
@@ -112,6 +125,8 @@ class Renderer:
 
     ``step(spp)`` adds samples to every pixel; ``film()`` reads the image back.
     """
+
+    integrator_files = INTEGRATOR_FILES   # the render kernels' integrators (kind: file)
 
     def __init__(self, scene: m.Scene, settings: RenderSettings | None = None, *,
                  ctx: Context | None = None, device: str | int | None = None,
@@ -266,30 +281,35 @@ class Renderer:
         s = self.settings
         integ = s.integrator
         p = self.packed
-        if integ.kind not in INTEGRATOR_FILES:
+        files = self.integrator_files
+        if integ.kind not in files:
+            driver = "PhotonRenderer" if integ.kind == "photon" else "SppmRenderer"
             raise UsageError(f"integrator {integ.kind!r} has its own driver, not a render kernel: "
-                             f"use glrender.photon.SppmRenderer (or glrender render --integrator "
-                             f"{integ.kind}); Renderer takes {', '.join(INTEGRATOR_FILES)}")
-        infinite = sorted(p.light_kinds & {"directional", "constant", "envmap"})
-        if integ.kind == "bdpt" and infinite:
-            raise UsageError(f"bdpt: lights at infinity ({', '.join(infinite)}) are not supported "
-                             f"yet; render with path or lighttrace")
+                             f"use glrender.photon.{driver} (or glrender render --integrator "
+                             f"{integ.kind}); Renderer takes {', '.join(files)}")
         geometry = codegen.generate(p, has_bvh=p.has_bvh, lights=self.lights_final)
         library = shaders.ShaderLibrary().with_generated({codegen.GENERATED_PATH: geometry})
         self.defines = shader_defines(
             sampler=s.sampler.kind, material_kinds=p.material_kinds, light_kinds=p.light_kinds,
-            max_depth=integ.max_depth, rr_depth=integ.rr_depth, strategy=integ.strategy,
+            max_depth=integ.max_depth, rr_depth=integ.rr_depth, rr=integ.rr,
+            light_samples=integ.light_samples if integ.kind == "path" else 1,
+            split=integ.split if integ.kind == "path" else 1, strategy=integ.strategy,
             emitter_samples=integ.emitter_samples, bsdf_samples=integ.bsdf_samples,
             hide_emitters=integ.hide_emitters, light_selection=integ.light_selection,
             area_sampling=integ.area_sampling, filter=self.scene.film.filter, aovs=s.aovs,
-            count_loops=s.count_loops, debug_nonfinite=s.debug_nonfinite,
+            count_loops=s.count_loops, count_rays=s.count_rays, debug_nonfinite=s.debug_nonfinite,
             emission_only=s.emission_only)
         if p.has_bvh and codegen.has_alpha_cutouts(p):
             self.defines["GLRENDER_ALPHA_CUTOUTS"] = 1     # geometry/bvh.glsl asks the scene
-        self._source_fingerprint = (geometry, sorted(self.defines.items()), INTEGRATOR_FILES[integ.kind])
+        if codegen.has_normal_shadowing(p):
+            self.defines["GLRENDER_NORMAL_SHADOWING"] = 1  # bsdf/bsdf.glsl bsdf_normal_shadowing
+        if s.strategy_depth:
+            self._check_strategy_images()
+            self.defines["GLRENDER_STRATEGY_DEPTH"] = s.strategy_depth
+        self._source_fingerprint = (geometry, sorted(self.defines.items()), files[integ.kind])
         self.program: Any = shaders.compile_compute(
             self.ctx, "kernels/render.comp.glsl", defines=self.defines,
-            slots={"integrator": INTEGRATOR_FILES[integ.kind],
+            slots={"integrator": files[integ.kind],
                    "scene": codegen.GENERATED_PATH},
             library=library)
         if s.samples_per_pass is not None:
@@ -303,8 +323,36 @@ class Renderer:
             # samples per invocation and pass: measured loop counts stay in the hundreds per
             # sample (tests/render/test_determinism.py checks the worst scenes), far below
             # llvmpipe's cap; more samples per dispatch amortise its fixed cost and give path
-            # regeneration more to fill idle lanes with (8 measured best with and without a BVH)
-            self.samples_per_pass = 8
+            # regeneration more to fill idle lanes with (8 measured best with and without a BVH).
+            # Splitting multiplies a sample's work: fewer samples per invocation keep the
+            # product bounded (tests/render/test_splitting.py checks the largest settings).
+            work = integ.split * integ.light_samples if integ.kind == "path" else 1
+            self.samples_per_pass = max(1, 8 // work)
+
+    def _check_strategy_images(self) -> None:
+        s = self.settings
+        if s.integrator.kind != "bdpt":
+            raise UsageError(f"strategy images: only the bdpt integrator has strategies (s, t), "
+                             f"not {s.integrator.kind}")
+        strategies.check_depth(s.strategy_depth, s.integrator.max_depth, BDPT_DEPTH_CAP)
+        need, limit = strategies.buffer_bytes(s.strategy_depth, self.width, self.height), \
+            self._binding_limit()
+        if need > limit:
+            raise UsageError(f"strategy images of depth {s.strategy_depth} at {self.width}x"
+                             f"{self.height} need {need / 2**20:.0f} MiB, more than this device's "
+                             f"{limit / 2**20:.0f} MiB storage buffer: lower --strategy-depth or "
+                             f"--width/--height")
+
+    def strategy_images(self) -> dict[tuple[int, int], tuple[np.ndarray, np.ndarray]]:
+        """{(s, t): (weighted, unweighted)} images, (H, W, 3) float64, of every bdpt
+        strategy of path lengths 1 .. ``strategy_depth`` (glrender/render/strategies.py):
+        the weighted ones of all lengths add up to ``film().mean`` when the depth is the
+        render's max depth."""
+        if not self.settings.strategy_depth:
+            raise UsageError("strategy_images: render with strategy_depth >= 1 (bdpt)")
+        words = np.frombuffer(self._strategies.read(), np.uint32)
+        return strategies.read(words, self.settings.strategy_depth, self.width, self.height,
+                               self.spp_done, SPLAT_SCALE)
 
     def fingerprint(self) -> str:
         """A hash of everything that decides the value of each sample: the kernel's source
@@ -339,6 +387,7 @@ class Renderer:
                 "m2": np.frombuffer(self._m2.read(), np.float32).copy(),
                 "aov": np.frombuffer(self._aov.read(), np.float32).copy(),
                 "splat": np.frombuffer(self._splat.read(), np.uint32).copy(),
+                "strategies": np.frombuffer(self._strategies.read(), np.uint32).copy(),
                 "width": self.width, "height": self.height, "rows": self.rows}
 
     def restore(self, state: dict[str, Any]) -> None:
@@ -361,6 +410,12 @@ class Renderer:
             raise UsageError(f"the saved accumulation's splat image has {splat.nbytes} bytes, "
                              f"expected {self._splat.size}")
         self._splat.write(splat.tobytes())
+        if self.settings.strategy_depth:
+            words = np.ascontiguousarray(state.get("strategies", ()), np.uint32)
+            if words.nbytes != self._strategies.size:
+                raise UsageError(f"the saved accumulation's strategy images have {words.nbytes} "
+                                 f"bytes, expected {self._strategies.size}")
+            self._strategies.write(words.tobytes())
         self.spp_done = int(state["spp_done"])
 
     def _warm_up(self) -> None:
@@ -402,13 +457,19 @@ class Renderer:
         self._mean = self.gl.buffer(reserve=16 * n)
         self._m2 = self.gl.buffer(reserve=16 * n)
         self._aov = self.gl.buffer(reserve=layout.AOV_BYTES * n if self.settings.aovs else 16)
-        self._debug = self.gl.buffer(reserve=4 * n if self.settings.count_loops else 16)
+        counting = self.settings.count_loops or self.settings.count_rays
+        self._debug = self.gl.buffer(reserve=4 * n if counting else 16)
         # splats land anywhere on the film: the whole image, two words per pixel and channel
         if getattr(self, "_splat", None) is not None:
             self._splat.release()
         splats = self.settings.integrator.kind in SPLATTING
         self._splat: Any = self.gl.buffer(reserve=24 * self.width * self.height if splats else 16)
-        for buf in (self._mean, self._m2, self._aov, self._debug, self._splat):
+        if getattr(self, "_strategies", None) is not None:
+            self._strategies.release()
+        depth = self.settings.strategy_depth
+        self._strategies: Any = self.gl.buffer(
+            reserve=strategies.buffer_bytes(depth, self.width, self.height) if depth else 16)
+        for buf in self._accumulators():
             buf.clear()
         self.spp_done = int(start)
 
@@ -466,6 +527,8 @@ class Renderer:
         self._aov.bind_to_storage_buffer(layout.SSBO_AOV)
         self._debug.bind_to_storage_buffer(layout.SSBO_DEBUG)
         self._splat.bind_to_storage_buffer(layout.SSBO_SPLAT)
+        if self.settings.strategy_depth:
+            self._strategies.bind_to_storage_buffer(strategies.SSBO_STRATEGY_IMAGES)
         self._params.bind_to_uniform_block(layout.UBO_PARAMS)
         if getattr(self, "_env_texture", None) is not None:
             self._env_texture.use(layout.TEX_ENVMAP)
@@ -527,7 +590,7 @@ class Renderer:
         bufs = [(self._mean, 16, layout.SSBO_ACCUM_MEAN), (self._m2, 16, layout.SSBO_ACCUM_M2)]
         if self.settings.aovs:
             bufs.append((self._aov, layout.AOV_BYTES, layout.SSBO_AOV))
-        if self.settings.count_loops:
+        if self.settings.count_loops or self.settings.count_rays:
             bufs.append((self._debug, 4, layout.SSBO_DEBUG))
         return bufs
 
@@ -559,6 +622,8 @@ class Renderer:
         per = sum(bpp for _, bpp, _ in self._slice_bytes_per_pixel())
         if self.settings.integrator.kind in SPLATTING:
             per += 24
+        if self.settings.strategy_depth:
+            per += strategies.buffer_bytes(self.settings.strategy_depth, 1, 1)
         return 2 * per
 
     def _binding_limit(self) -> int:
@@ -578,7 +643,7 @@ class Renderer:
                                        size=rows * self.width * bpp)
 
     def _accumulators(self) -> tuple[Any, ...]:
-        return (self._mean, self._m2, self._aov, self._debug, self._splat)
+        return (self._mean, self._m2, self._aov, self._debug, self._splat, self._strategies)
 
     def _take_snapshot(self) -> None:
         if self._snapshot is None:
@@ -645,6 +710,13 @@ class Renderer:
                     nonfinite=m2[..., 3].copy(), spp=self.spp_done, aovs=aovs, loop_counts=debug,
                     sampler=self.settings.sampler.kind)
 
+    def rays(self) -> int:
+        """Rays traced since the last reset (camera, continuation and shadow rays, summed
+        over the pixels; path integrator, settings with count_rays=True)."""
+        if not self.settings.count_rays:
+            raise UsageError("Renderer.rays: render with count_rays=True to count rays")
+        return int(np.frombuffer(self._debug.read(), np.uint32).astype(np.int64).sum())
+
     def splat_image(self) -> np.ndarray:
         """The splatted part of the image (light tracing, BDPT's t = 1 strategies), (H, W, 3)
         float32: the fixed-point sums over the number of light paths, one per camera sample
@@ -653,16 +725,14 @@ class Renderer:
         independent renders)."""
         if self.settings.integrator.kind not in SPLATTING:
             return np.zeros((self.height, self.width, 3), np.float32)
-        words = np.frombuffer(self._splat.read(), np.uint32).reshape(-1, 2).astype(np.uint64)
-        sums = ((words[:, 1] << np.uint64(32)) | words[:, 0]).view(np.int64)
+        sums = strategies.fixed_sums(np.frombuffer(self._splat.read(), np.uint32))
         paths = max(self.spp_done, 1) * self.width * self.height
         image = sums.astype(np.float64) / (SPLAT_SCALE * paths)
         return image.reshape(self.height, self.width, 3).astype(np.float32)
 
     def release(self) -> None:
         """Free the device buffers (the renderer cannot render afterwards)."""
-        for buf in self._buffers + [self._mean, self._m2, self._aov, self._debug, self._splat,
-                                    self._params]:
+        for buf in self._buffers + [*self._accumulators(), self._params]:
             buf.release()
         self._release_snapshot()
         self._buffers = []

@@ -143,6 +143,10 @@ class Material:
     of +Y up in the image; ``normal_scale`` scales its x and y) and an ``opacity`` bitmap
     (its mean of RGB; BVH meshes only): where it is below ``alpha_cutoff`` the surface is
     a hole for every ray, camera, path and shadow rays alike (glTF's MASK mode).
+    With a normal map, ``normal_shadowing`` multiplies the BSDF by the shadowing term of
+    Conty Estevez et al. 2019 and ``normal_flip`` turns a map normal that hides the
+    arriving ray back round the unperturbed normal (Mitsuba's use_shadowing_function and
+    flip_invalid_normals; both off unless a scene asks).
     """
 
     kind: str = "diffuse"
@@ -160,6 +164,8 @@ class Material:
     name: str = ""
     normal_map: Optional[Texture] = None
     normal_scale: float = 1.0
+    normal_shadowing: bool = False
+    normal_flip: bool = False
     opacity: Optional[Texture] = None
     alpha_cutoff: float = 0.5
 
@@ -306,20 +312,45 @@ class Film:
         return {"box": 0.5, "tent": 1.0, "gaussian": 4.0 * self.gaussian_stddev, "mitchell": 2.0}[self.filter]
 
 
-INTEGRATORS = ("path", "direct", "ao", "lighttrace", "bdpt", "sppm")
+INTEGRATORS = ("path", "direct", "ao", "lighttrace", "bdpt", "sppm", "photon")
 STRATEGIES = ("light", "bsdf", "mis-balance", "mis-power")
+SPLIT_LIMIT = 16   # light samples per vertex and first-vertex branches of the path tracer
+
+
+def parse_rr(rule: str) -> tuple[str, float]:
+    """The path tracer's Russian roulette rule -> (kind, survival probability): ``throughput``
+    (survive with min(max(beta) eta^2, 0.95), Mitsuba's), ``fixed:<q>`` (survive with q in
+    (0, 1]) or ``off`` (no roulette)."""
+    text = str(rule).strip()
+    if text in ("throughput", "off"):
+        return text, 1.0
+    kind, sep, value = text.partition(":")
+    if kind == "fixed" and sep:
+        try:
+            q = float(value)
+        except ValueError:
+            q = float("nan")
+        if 0.0 < q <= 1.0:
+            return "fixed", q
+    raise SceneError(f"integrator.rr: expected throughput, off or fixed:<q> with q in (0, 1], "
+                     f"got {rule!r}")
 
 
 @dataclass
 class Integrator:
     """How radiance is estimated: ``kind`` path | direct | ao; ``max_depth`` in path
     segments (1 = emitters seen directly, 2 = direct lighting, -1 = unbounded); Russian
-    roulette from ``rr_depth`` segments; ``strategy`` weights light and BSDF samples;
+    roulette from ``rr_depth`` segments by the rule ``rr`` (:func:`parse_rr`); ``strategy``
+    weights light and BSDF samples; the path tracer takes ``light_samples`` light samples
+    at every vertex and splits the path into ``split`` BSDF branches at its first vertex;
     ``ao_distance`` in scene units (ambient occlusion)."""
 
     kind: str = "path"
     max_depth: int = -1
     rr_depth: int = 5
+    rr: str = "throughput"             # throughput | fixed:<q> | off (path tracer)
+    light_samples: int = 1             # path tracer: light samples per vertex
+    split: int = 1                     # path tracer: BSDF branches at the first vertex
     strategy: str = "mis-power"        # direct lighting / NEE weighting
     emitter_samples: int = 1           # direct integrator only
     bsdf_samples: int = 1
@@ -341,6 +372,12 @@ class Integrator:
         if self.area_sampling not in ("area", "solid-angle"):
             raise SceneError(f"integrator.area_sampling: expected area or solid-angle, "
                              f"got {self.area_sampling!r}")
+        parse_rr(self.rr)
+        for name in ("light_samples", "split"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or not 1 <= value <= SPLIT_LIMIT:
+                raise SceneError(f"integrator.{name}: expected an integer in 1..{SPLIT_LIMIT}, "
+                                 f"got {value!r}")
         if not isinstance(self.max_depth, int) or (self.max_depth < 1 and self.max_depth != -1):
             raise SceneError(f"integrator.max_depth: expected -1 (unbounded) or an integer >= 1, "
                              f"got {self.max_depth!r}")

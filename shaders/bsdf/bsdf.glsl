@@ -22,6 +22,7 @@
 #include "bsdf/roughdielectric.glsl"
 #include "bsdf/roughplastic.glsl"
 #include "bsdf/thindielectric.glsl"
+#include "common/frame.glsl"
 #include "common/params.glsl"
 
 bool material_present(uint kind) {
@@ -41,9 +42,53 @@ void bsdf_two_sided(Bsdf b, inout vec3 wo, inout vec3 wi) {
     }
 }
 
+// The shadowing term of Conty Estevez, Lecocq & Stein (2019, "A Microfacet-Based
+// Shadowing Function to Solve the Bump Terminator Problem", Ray Tracing Gems ch. 12),
+// Mitsuba 3's use_shadowing_function: the normal map's normals are read as microfacets
+// of a GGX-like surface whose roughness grows with their tilt, alpha^2 = min(tan^2
+// theta_n / 8, 1), and the light direction is shadowed by Smith's G1 of that surface,
+// 2 / (1 + sqrt(1 + alpha^2 tan^2 theta_l)). cos_tilt is the cosine between the map
+// normal and the unperturbed normal, cos_l that between the light direction and the
+// unperturbed normal. 1 for an untilted normal; 0 at grazing light over a tilted one.
+float normal_shadowing_term(float cos_tilt, float cos_l) {
+    float c2 = cos_tilt * cos_tilt;
+    float alpha2 = min(0.125 * max(1.0 - c2, 0.0) / c2, 1.0);
+    if (!(alpha2 > 0.0)) return 1.0;
+    float l2 = cos_l * cos_l;
+    if (!(l2 > 0.0)) return 0.0;
+    float tan2_l = max(1.0 - l2, 0.0) / l2;
+    return 2.0 / (1.0 + sqrt(1.0 + alpha2 * tan2_l));
+}
+
+// The normal map's shadowing term of b toward the light-side direction w (local frame):
+// wi for radiance, wo for importance transport, so that light and bidirectional paths
+// weight a path as the path tracer does (Mitsuba applies it to the sampled or
+// evaluated direction in either mode, which is not the adjoint of its radiance BSDF).
+// With it, as in Mitsuba, w must be on the same side of the unperturbed and the
+// perturbed normal. Compiled in only for scenes that ask for it (GLRENDER_NORMAL_SHADOWING).
+float bsdf_normal_shadowing(Bsdf b, vec3 w) {
+#ifdef GLRENDER_NORMAL_SHADOWING
+    if ((b.flags & kMaterialFlagNormalShadowing) == 0u) return 1.0;
+    float cos_l = dot(w, b.n0);
+    if (cos_l * w.z <= 0.0) return 0.0;
+    return normal_shadowing_term(b.n0.z, cos_l);
+#else
+    return 1.0;
+#endif
+}
+
+// Gives b the unperturbed shading normal ns0 (world) in the local frame `frame`, for
+// bsdf_normal_shadowing; a no-op unless a scene's normal map uses the term.
+void bsdf_normal_frame(inout Bsdf b, vec3 ns0, Frame frame) {
+#ifdef GLRENDER_NORMAL_SHADOWING
+    b.n0 = frame_to_local(frame, ns0);
+#endif
+}
+
 // f(wo, wi) |cos theta_i| of the non-delta lobes and (out) the solid-angle pdf with
 // which bsdf_sample returns wi; each model computes both from one half vector.
 vec3 bsdf_eval_pdf(Bsdf b, vec3 wo, vec3 wi, bool adjoint, out float pdf) {
+    float shadowing = bsdf_normal_shadowing(b, adjoint ? wo : wi);
     bsdf_two_sided(b, wo, wi);
     vec3 f = vec3(0.0);
     pdf = 0.0;
@@ -55,7 +100,7 @@ vec3 bsdf_eval_pdf(Bsdf b, vec3 wo, vec3 wi, bool adjoint, out float pdf) {
     if (material_is(b, kMaterialRoughDielectric)) f = roughdielectric_eval_pdf(b, wo, wi, adjoint, pdf);
     if (material_is(b, kMaterialPlastic)) f = plastic_eval_pdf(b, wo, wi, pdf);
     if (material_is(b, kMaterialRoughPlastic)) f = roughplastic_eval_pdf(b, wo, wi, pdf);
-    return f;
+    return f * shadowing;
 }
 
 // f(wo, wi) |cos theta_i| of the non-delta lobes (the pdf's code is dropped as dead).
@@ -87,7 +132,13 @@ BsdfSample bsdf_sample(Bsdf b, vec3 wo, float u_lobe, vec2 u, bool adjoint) {
     if (material_is(b, kMaterialRoughPlastic)) s = roughplastic_sample(b, wo, u_lobe, u);
     // null: the surface is not there (Mitsuba's null BSDF): continue straight on
     if (material_is(b, kMaterialNull)) s = BsdfSample(-wo, vec3(1.0), 1.0, 1.0, true, true);
-    if (flip) s.wi.z = -s.wi.z;
+    if (flip) {
+        wo.z = -wo.z;
+        s.wi.z = -s.wi.z;
+    }
+    float shadowing = bsdf_normal_shadowing(b, adjoint ? wo : s.wi);
+    if (!(shadowing > 0.0)) return bsdf_sample_invalid();
+    s.weight *= shadowing;
     return s;
 }
 

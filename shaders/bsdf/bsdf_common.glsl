@@ -23,6 +23,8 @@ const uint kMaterialNull = 8u;
 const uint kMaterialFlagTwoSided = 1u;
 const uint kMaterialFlagGgx = 2u;
 const uint kMaterialFlagNonlinear = 4u;
+const uint kMaterialFlagNormalShadowing = 8u;   // normal map shadowing term (bsdf/normal_map.glsl)
+const uint kMaterialFlagNormalFlip = 16u;       // normal map flip of invalid normals
 
 // A material at one surface point, its textures already looked up. The meaning of
 // c0, c1, c2 per kind is that of MaterialData (scene/layout.glsl).
@@ -35,6 +37,7 @@ struct Bsdf {
     vec2 alpha;   // microfacet roughness along local x and y
     float eta;    // interior IOR / exterior IOR
     uint material;  // index of the material record, for tabulated data (roughplastic)
+    vec3 n0;        // the shading normal before the normal map, in the local frame (bsdf_normal_frame)
 };
 
 // One sampled direction.

@@ -24,6 +24,7 @@ Bsdf bsdf_from_material(uint material, vec2 uv) {
     b.alpha = m.params.xy;
     b.eta = m.params.z;
     b.material = material;
+    b.n0 = vec3(0.0, 0.0, 1.0);
     return b;
 }
 

@@ -11,3 +11,13 @@ uint g_loop_count = 0u;
 #else
 #define LOOP_TICK()
 #endif
+
+// Rays traced (camera, continuation and shadow rays), with GLRENDER_COUNT_RAYS=1: the
+// path integrator calls RAY_TICK() before each and the render kernel adds g_ray_count to
+// the pixel's counter, the deterministic cost of an estimator (glrender.lab.roulette).
+uint g_ray_count = 0u;
+#if defined(GLRENDER_COUNT_RAYS) && GLRENDER_COUNT_RAYS
+#define RAY_TICK() (g_ray_count++)
+#else
+#define RAY_TICK()
+#endif

@@ -10,7 +10,9 @@
     !defined(GLRENDER_HIDE_EMITTERS) || !defined(GLRENDER_LIGHT_SELECTION) || \
     !defined(GLRENDER_AREA_SAMPLING) || !defined(GLRENDER_FILTER) || \
     !defined(GLRENDER_AOVS) || !defined(GLRENDER_COUNT_LOOPS) || \
-    !defined(GLRENDER_DEBUG_NONFINITE) || !defined(GLRENDER_EMISSION_ONLY)
+    !defined(GLRENDER_DEBUG_NONFINITE) || !defined(GLRENDER_EMISSION_ONLY) || \
+    !defined(GLRENDER_RR_RULE) || !defined(GLRENDER_RR_SURVIVAL) || \
+    !defined(GLRENDER_LIGHT_SAMPLES) || !defined(GLRENDER_SPLIT) || !defined(GLRENDER_COUNT_RAYS)
 #error "common/params.glsl: a host define is missing (see glrender/render/params.py)"
 #endif
 
@@ -28,6 +30,16 @@ const uint kLightKinds = uint(GLRENDER_LIGHT_KINDS);
 // seen directly, 2 = direct lighting; a negative value means unbounded.
 const int kMaxDepth = GLRENDER_MAX_DEPTH;
 const int kRrDepth = GLRENDER_RR_DEPTH;
+// Russian roulette from depth kRrDepth (path.glsl): survive with q = min(max(beta) eta^2,
+// 0.95) (throughput), with the fixed q = kRrSurvival, or never stop (off).
+const int kRrThroughput = 0;
+const int kRrFixed = 1;
+const int kRrOff = 2;
+const int kRrRule = GLRENDER_RR_RULE;
+const float kRrSurvival = GLRENDER_RR_SURVIVAL;
+// Splitting in the path tracer: light samples per vertex, BSDF branches at the first vertex.
+const int kLightSamples = GLRENDER_LIGHT_SAMPLES;
+const int kSplit = GLRENDER_SPLIT;
 const int kStrategyLight = 0;
 const int kStrategyBsdf = 1;
 const int kStrategyMisBalance = 2;
@@ -57,6 +69,8 @@ const bool kAovs = GLRENDER_AOVS != 0;
 const bool kEmissionOnly = GLRENDER_EMISSION_ONLY != 0;
 // Debug: count loop iterations per invocation (common/loop_counter.glsl).
 const bool kCountLoops = GLRENDER_COUNT_LOOPS != 0;
+// Count the rays traced per pixel, summed over its samples (common/loop_counter.glsl).
+const bool kCountRays = GLRENDER_COUNT_RAYS != 0;
 // Debug: every sample whose index is kDebugNonFinite - 1 modulo 7 returns NaN, to test that
 // the accumulation drops and counts non-finite samples (0: off).
 const uint kDebugNonFinite = uint(GLRENDER_DEBUG_NONFINITE);

@@ -16,7 +16,13 @@ struct SurfaceHit {
     uint light;     // index + 1 into lights[] of the area light on this surface, 0 if none
     uint prim;      // primitive id (compiled primitives first, then BVH triangles)
     vec3 dpdu;      // dp/du, the surface's tangent along u (not unit; zero where uv give none)
+    vec3 ns0;       // the shading normal before a normal map replaced ns (ns without one)
 };
+
+// True while the rays traced are a light path's (importance transport): a normal map's
+// flip of invalid normals, which Mitsuba decides by the direction toward the camera's side,
+// is then not applied (bsdf/normal_map.glsl apply_normal_map).
+bool g_light_path_rays = false;
 
 // The shading frame of a hit: z = the shading normal, x = dp/du made orthogonal to it, as
 // Mitsuba's SurfaceInteraction::initialize_sh_frame, so that anisotropic roughness (alpha_u

@@ -7,20 +7,31 @@
 // connected to the lens and splatted onto the film (integrators/splat.glsl); s, t >= 2,
 // a visibility ray between the two subpaths' ends. (s, t) = (1, 1), the lens connected
 // to a sampled light point, is left out: s = 0, t = 2 sees the lights. Each is
-// weighted by bdpt_mis_weight (balance or power heuristic, kStrategy). max_depth
-// counts the segments of a path (s + t - 1), at most kBdptDepthCap; the subpaths do
-// not use Russian roulette (the vertex storage bounds them). Lights at infinity
-// (directional, environment) are not supported (the renderer refuses them).
-// The emission AOV is the s = 0, t = 2 term: the area light the camera ray finds.
+// weighted by bdpt_mis_weight (balance or power heuristic, kStrategy); kernels built
+// for strategy images also keep each one's own image (integrators/strategy_images.glsl).
+// max_depth counts the segments of a path (s + t - 1), at most kBdptDepthCap (the
+// vertex storage bounds the subpaths; Russian roulette may end them sooner). Lights
+// at infinity (directional, constant and image environments) start light subpaths on a
+// disk of the scene's bounding radius facing their direction, and a camera subpath that
+// leaves the scene ends on a vertex at infinity (bdpt_vertex.glsl, kVertexInfinite).
+// The emission AOV is the s = 0, t = 2 term: the emitter the camera ray finds.
 #include "integrators/integrator_common.glsl"
 #include "integrators/shading.glsl"
 #include "integrators/pixel.glsl"
 #include "integrators/light_path.glsl"
 #include "integrators/splat.glsl"
 #include "integrators/bdpt_vertex.glsl"
+#include "integrators/strategy_images.glsl"
+// The strategies weigh with the densities of their own BSDF evaluations; tests define
+// BDPT_GENERIC_WEIGHTS to evaluate every density afresh instead (the same bits).
+#ifdef BDPT_GENERIC_WEIGHTS
+#define STRATEGY_WEIGHT(s, t, cp) bdpt_mis_weight(s, t)
+#else
+#define STRATEGY_WEIGHT(s, t, cp) bdpt_mis_weight_pdfs(s, t, cp)
+#endif
 
 Vertex vertex_from_hit(SurfaceHit hit, Frame frame, Bsdf b, vec3 beta) {
-    return Vertex(hit.p, hit.ng, frame.z, frame.x, beta, hit.uv, kVertexSurface, hit.material, hit.light,
+    return Vertex(hit.p, hit.ng, frame.z, VERTEX_NS0(hit.ns0) frame.x, beta, hit.uv, kVertexSurface, hit.material, hit.light,
                   false, !bsdf_is_delta(b), 0.0, 0.0);
 }
 
@@ -37,13 +48,29 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
     while (n < max_vertices) {
         LOOP_TICK();
         SurfaceHit hit;
-        if (!scene_intersect(o, d, t_max, g_time, hit)) break;
+        g_light_path_rays = light_path;   // a normal map's flip is for camera paths
+        if (!scene_intersect(o, d, t_max, g_time, hit)) {
+            // a camera subpath that leaves the scene ends on the environment (s = 0)
+            if (!light_path && u_params.counts.z != 0u) {
+                Vertex prev = g_camera[n - 1];
+                Vertex v = vertex_point(kVertexInfinite,
+                                        prev.p + kInfiniteVertexDistance * u_params.scene_sphere.w * d,
+                                        vec3(0.0), beta);
+                v.light = u_params.counts.z;
+                v.connectible = false;
+                v.pdf_fwd = pdf_sa;
+                g_camera[n] = v;
+                n += 1;
+            }
+            break;
+        }
         vec2 u_choice = sampler_2d(s);
         vec2 u_bsdf = sampler_2d(s);
         float u_rr = sampler_1d(s);
         Vertex prev = light_path ? g_light[n - 1] : g_camera[n - 1];
         Bsdf b = bsdf_from_material(hit.material, hit.uv);
         Frame frame = shading_frame(hit);
+        bsdf_normal_frame(b, hit.ns0, frame);
         Vertex v = vertex_from_hit(hit, frame, b, beta);
         v.pdf_fwd = solid_angle_to_area(pdf_sa, prev, v);
         if (!light_path && n == 1) record_aov(aov, hit);
@@ -87,12 +114,18 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
 }
 
 // f |cos| of a surface vertex v toward the world point `to`, reached from `from`
-// (importance transport with the shading-normal correction when adjoint).
-vec3 vertex_f(Vertex v, vec3 from, vec3 to, bool adjoint) {
+// (importance transport with the shading-normal correction when adjoint), and the
+// solid-angle densities with which v samples `to` coming from `from` (pdf_to) and
+// `from` coming from `to` (pdf_from): the MIS densities of the connection, from the
+// same BSDF (vertex_pdf would look the material up again for each).
+vec3 vertex_f(Vertex v, vec3 from, vec3 to, bool adjoint, out float pdf_to, out float pdf_from) {
     Frame frame = vertex_frame(v);
     vec3 wo_w = normalize(from - v.p), wi_w = normalize(to - v.p);
     vec3 wo = frame_to_local(frame, wo_w), wi = frame_to_local(frame, wi_w);
-    vec3 f = bsdf_eval(bsdf_from_material(v.material, v.uv), wo, wi, adjoint);
+    Bsdf b = bsdf_from_material(v.material, v.uv);
+    bsdf_normal_frame(b, vertex_ns0(v), frame);
+    vec3 f = bsdf_eval_pdf(b, wo, wi, adjoint, pdf_to);
+    pdf_from = bsdf_pdf(b, wi, wo);
     if (adjoint) f *= shading_normal_correction(wo_w, wi_w, v.ns, v.ng);
     return f;
 }
@@ -106,14 +139,19 @@ bool segment_visible(Vertex a, Vertex b, uint ignore) {
     return !scene_occluded(o, d, dist * (1.0 - kShadowEpsilon), g_time, ignore);
 }
 
-// s = 0: the camera subpath's vertex t - 1 lies on an area light.
+// s = 0: the camera subpath's vertex t - 1 lies on an area light or at infinity.
 vec3 strategy_emission(int t) {
     Vertex pt = g_camera[t - 1];
     if (pt.light == 0u || (t == 2 && kHideEmitters)) return vec3(0.0);
     LightData l = scene_light(pt.light - 1u);
-    vec3 L = pt.beta * area_light_radiance(l, pt.ng, normalize(g_camera[t - 2].p - pt.p));
+    vec3 wo = normalize(g_camera[t - 2].p - pt.p);
+    float unused;
+    vec3 L = pt.beta * (pt.kind == kVertexInfinite ? environment_radiance(l, -wo, unused)
+                                                   : area_light_radiance(l, pt.ng, wo));
     if (max_component(L) <= 0.0) return vec3(0.0);
-    return L * bdpt_mis_weight(0, t);
+    float w = bdpt_mis_weight(0, t);
+    strategy_record(0, t, L, w);
+    return L * w;
 }
 
 // s = 1: next-event estimation from camera vertex t - 1, a light point sampled afresh.
@@ -126,20 +164,26 @@ vec3 strategy_light_sample(int t, inout SamplerState smp) {
     LightData l = scene_light(choice.index);
     LightSample ls = sample_light(l, pt.p, u_light);
     if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return vec3(0.0);
-    vec3 q = pt.p + ls.dist * ls.wi;
-    vec3 L = pt.beta * vertex_f(pt, g_camera[t - 2].p, q, false) * ls.Le / (choice.pmf * ls.pdf);
+    bool infinite = light_is_infinite(l);
+    vec3 q = pt.p + (infinite ? kInfiniteVertexDistance * u_params.scene_sphere.w : ls.dist) * ls.wi;
+    Vertex pt_minus = g_camera[t - 2];
+    float pdf_light, pdf_back;
+    vec3 L = pt.beta * vertex_f(pt, pt_minus.p, q, false, pdf_light, pdf_back) * ls.Le / (choice.pmf * ls.pdf);
     if (max_component(L) <= 0.0) return vec3(0.0);
     vec3 o = offset_ray_origin(pt.p, pt.ng, ls.wi);
     if (scene_occluded(o, ls.wi, ls.dist * (1.0 - kShadowEpsilon), g_time, l.info.z)) return vec3(0.0);
     vec3 n = vec3(0.0);
     if (light_is_area(l)) n = l.info.x == kLightSphere ? normalize(q - l.p.xyz) : l.n.xyz;
-    Vertex light = vertex_point(kVertexLight, q, n, vec3(1.0));
+    Vertex light = vertex_point(infinite ? kVertexInfinite : kVertexLight, q, n, vec3(1.0));
     light.light = choice.index + 1u;
-    light.pdf_fwd = vertex_pdf_light_origin(light);
+    light.pdf_fwd = vertex_pdf_light_origin(light, pt);
+    ConnectionPdfs cp = ConnectionPdfs(vertex_pdf_light(light, pt), solid_angle_to_area(pdf_back, pt, pt_minus),
+                                       solid_angle_to_area(pdf_light, pt, light), 0.0);
     Vertex saved = g_light[0];
     g_light[0] = light;
-    float w = bdpt_mis_weight(1, t);
+    float w = STRATEGY_WEIGHT(1, t, cp);
     g_light[0] = saved;
+    strategy_record(1, t, L, w);
     return L * w;
 }
 
@@ -150,13 +194,18 @@ void strategy_lens(int s, inout SamplerState smp) {
     if (!qs.connectible) return;
     CameraConnection c = camera_connect(qs.p, u_lens, g_time);
     if (!c.valid) return;
-    vec3 L = qs.beta * vertex_f(qs, g_light[s - 2].p, c.p, true) * c.importance;
+    Vertex qs_minus = g_light[s - 2];
+    float pdf_lens, pdf_back;
+    vec3 L = qs.beta * vertex_f(qs, qs_minus.p, c.p, true, pdf_lens, pdf_back) * c.importance;
     Vertex lens = vertex_point(kVertexCamera, c.p, vec3(0.0), vec3(1.0));
     if (max_component(L) <= 0.0 || !segment_visible(qs, lens, kNoPrimitive)) return;
+    ConnectionPdfs cp = ConnectionPdfs(solid_angle_to_area(pdf_lens, qs, lens), 0.0, vertex_pdf(lens, lens, qs),
+                                       solid_angle_to_area(pdf_back, qs, qs_minus));
     Vertex saved = g_camera[0];
     g_camera[0] = lens;
-    float w = bdpt_mis_weight(s, 1);
+    float w = STRATEGY_WEIGHT(s, 1, cp);
     g_camera[0] = saved;
+    strategy_splat(s, c.film, L, w);
     splat_film(c.film, L * w);
 }
 
@@ -164,17 +213,26 @@ void strategy_lens(int s, inout SamplerState smp) {
 vec3 strategy_connect(int s, int t) {
     Vertex qs = g_light[s - 1], pt = g_camera[t - 1];
     if (!qs.connectible || !pt.connectible) return vec3(0.0);
+    Vertex qs_minus = g_light[s - 2], pt_minus = g_camera[t - 2];
     vec3 d = pt.p - qs.p;
-    vec3 L = qs.beta * vertex_f(qs, g_light[s - 2].p, pt.p, true) *
-             vertex_f(pt, g_camera[t - 2].p, qs.p, false) * pt.beta / dot(d, d);
+    float qs_to_pt, qs_to_minus, pt_to_qs, pt_to_minus;
+    vec3 L = qs.beta * vertex_f(qs, qs_minus.p, pt.p, true, qs_to_pt, qs_to_minus) *
+             vertex_f(pt, pt_minus.p, qs.p, false, pt_to_qs, pt_to_minus) * pt.beta / dot(d, d);
     if (max_component(L) <= 0.0 || !segment_visible(qs, pt, kNoPrimitive)) return vec3(0.0);
-    return L * bdpt_mis_weight(s, t);
+    ConnectionPdfs cp = ConnectionPdfs(solid_angle_to_area(qs_to_pt, qs, pt),
+                                       solid_angle_to_area(pt_to_minus, pt, pt_minus),
+                                       solid_angle_to_area(pt_to_qs, pt, qs),
+                                       solid_angle_to_area(qs_to_minus, qs, qs_minus));
+    float w = STRATEGY_WEIGHT(s, t, cp);
+    strategy_record(s, t, L, w);
+    return L * w;
 }
 
 // One sample: both subpaths, then every strategy; returns the camera-side radiance.
 vec3 bdpt_sample(uvec2 pixel, inout SamplerState s, inout Aov aov) {
     CameraSample c = camera_sample(pixel, s);
     g_time = c.time;
+    strategy_begin(pixel);
     // the lens point: the ray starts at the near clip plane
     vec3 axis = normalize(world_from_camera_at(c.time)[2].xyz);
     vec3 lens = c.o - (u_params.camera_clip.x / max(dot(c.d, axis), 1e-6)) * c.d;
@@ -190,9 +248,17 @@ vec3 bdpt_sample(uvec2 pixel, inout SamplerState s, inout Aov aov) {
         g_light[0] = vertex_point(kVertexLight, st.e.p, n, st.e.Le / (st.pmf * st.e.pdf_pos));
         g_light[0].light = st.light + 1u;
         g_light[0].pdf_fwd = st.pmf * st.e.pdf_pos;
+        bool infinite = light_is_infinite(l);
+        if (infinite) g_light[0].kind = kVertexInfinite;
         Aov unused = kNoAov;
         n_light = random_walk(true, 1, st.o, st.e.d, kInfinity, st.beta, st.e.pdf_dir,
                               kBdptMaxSegments, s, unused);
+        if (infinite) {
+            // densities of a light at infinity (pbrt-v3's BDPT): its direction per solid
+            // angle, the first hit per unit area through the emission disk
+            g_light[0].pdf_fwd = infinite_light_density(-st.e.d);
+            if (n_light > 1) g_light[1].pdf_fwd = st.e.pdf_pos * abs(dot(g_light[1].ng, st.e.d));
+        }
     }
 
     // Every strategy, one kind per loop (a loop body runs the same code on every SIMD

@@ -25,15 +25,24 @@ const int kBdptVertices = kBdptMaxSegments + 1;
 const uint kVertexCamera = 0u;
 const uint kVertexLight = 1u;
 const uint kVertexSurface = 2u;
+// A light at infinity (environment, directional): p lies a long way along the direction
+// toward it (kInfiniteVertexDistance scene radii from the vertex before it); its
+// densities are per unit solid angle, and the light-subpath vertex after it has the
+// density of the emission disk's point (pdf_pos |cos|, pbrt-v3's BDPT).
+const uint kVertexInfinite = 3u;
+const float kInfiniteVertexDistance = 2.0;
 
 struct Vertex {
     vec3 p;
     vec3 ng;        // geometric normal (0 for points off surfaces: pinhole, lens, point lights)
     vec3 ns;        // shading normal
+#ifdef GLRENDER_NORMAL_SHADOWING
+    vec3 ns0;       // the shading normal before a normal map (bsdf_normal_frame)
+#endif
     vec3 tangent;   // x axis of the shading frame (geometry/surface.glsl's shading_frame)
     vec3 beta;      // subpath throughput up to and including this vertex's arrival
     vec2 uv;
-    uint kind;      // kVertexCamera, kVertexLight, kVertexSurface
+    uint kind;      // kVertexCamera, kVertexLight, kVertexSurface, kVertexInfinite
     uint material;
     uint light;     // index + 1 of the light at p (light vertices, emitting surfaces), else 0
     bool delta;     // a Dirac lobe was sampled here (no strategy may end a subpath here)
@@ -42,12 +51,29 @@ struct Vertex {
     float pdf_rev;  // area density of this vertex from the other direction
 };
 
+// Vertex's constructor argument ns0 (n), in scenes with a normal map's shadowing term only:
+// the others keep no copy of it in their subpaths.
+#ifdef GLRENDER_NORMAL_SHADOWING
+#define VERTEX_NS0(n) n,
+#else
+#define VERTEX_NS0(n)
+#endif
+
+// The shading normal before a normal map at v (its shading normal where none keeps it).
+vec3 vertex_ns0(Vertex v) {
+#ifdef GLRENDER_NORMAL_SHADOWING
+    return v.ns0;
+#else
+    return v.ns;
+#endif
+}
+
 Vertex g_camera[kBdptVertices];
 Vertex g_light[kBdptVertices];
 float g_time;   // the sample's shutter time
 
 Vertex vertex_point(uint kind, vec3 p, vec3 ng, vec3 beta) {
-    return Vertex(p, ng, ng, vec3(0.0), beta, vec2(0.0), kind, 0u, 0u, false, true, 0.0, 0.0);
+    return Vertex(p, ng, ng, VERTEX_NS0(ng) vec3(0.0), beta, vec2(0.0), kind, 0u, 0u, false, true, 0.0, 0.0);
 }
 
 // The shading frame of a surface vertex, as its hit's shading_frame gave it.
@@ -59,8 +85,10 @@ bool vertex_on_surface(Vertex v) {
     return dot(v.ng, v.ng) > 0.0;
 }
 
-// The area density at `next` of a solid-angle density pdf_sa at v toward it.
+// The area density at `next` of a solid-angle density pdf_sa at v toward it (a vertex at
+// infinity keeps the solid-angle density).
 float solid_angle_to_area(float pdf_sa, Vertex v, Vertex next) {
+    if (next.kind == kVertexInfinite) return pdf_sa;
     vec3 w = next.p - v.p;
     float d2 = dot(w, w);
     if (!(d2 > 0.0)) return 0.0;
@@ -69,10 +97,25 @@ float solid_angle_to_area(float pdf_sa, Vertex v, Vertex next) {
     return pdf;
 }
 
-// Area density at `next` of light paths leaving v, a point on a light.
+// Solid-angle density of the direction w (toward the light) for a vertex at infinity:
+// the environment's, times its selection probability (directional lights: 0, a delta).
+float infinite_light_density(vec3 w) {
+    uint env = u_params.counts.z;
+    if (env == 0u) return 0.0;
+    float pdf;
+    environment_radiance(scene_light(env - 1u), w, pdf);
+    return light_selection_pmf(env - 1u) * pdf;
+}
+
+// Area density at `next` of light paths leaving v, a point on a light (a light at
+// infinity: the emission disk's density, projected onto next's surface).
 float vertex_pdf_light(Vertex v, Vertex next) {
-    LightData l = scene_light(v.light - 1u);
     vec3 w = normalize(next.p - v.p);
+    if (v.kind == kVertexInfinite) {
+        float r = u_params.scene_sphere.w;
+        return vertex_on_surface(next) ? abs(dot(next.ng, w)) / (kPi * r * r) : 1.0 / (kPi * r * r);
+    }
+    LightData l = scene_light(v.light - 1u);
     vec3 n = v.ng;
     if ((l.info.y & kLightFlagTwoSided) != 0u && dot(n, w) < 0.0) n = -n;
     float pdf_pos, pdf_dir;
@@ -80,8 +123,10 @@ float vertex_pdf_light(Vertex v, Vertex next) {
     return solid_angle_to_area(pdf_dir, v, next);
 }
 
-// Area density of v, a point on a light, as the start of a light path.
-float vertex_pdf_light_origin(Vertex v) {
+// Area density of v, a point on a light, as the start of a light path toward `next`
+// (a light at infinity: the solid-angle density of its direction).
+float vertex_pdf_light_origin(Vertex v, Vertex next) {
+    if (v.kind == kVertexInfinite) return infinite_light_density(normalize(v.p - next.p));
     LightData l = scene_light(v.light - 1u);
     float pdf_pos, pdf_dir;
     light_emission_pdf(l, v.p, v.ng, v.ng, u_params.scene_sphere, pdf_pos, pdf_dir);
@@ -90,7 +135,7 @@ float vertex_pdf_light_origin(Vertex v) {
 
 // Area density at `next` with which vertex v samples it, v having been reached from prev.
 float vertex_pdf(Vertex v, Vertex prev, Vertex next) {
-    if (v.kind == kVertexLight) return vertex_pdf_light(v, next);
+    if (v.kind == kVertexLight || v.kind == kVertexInfinite) return vertex_pdf_light(v, next);
     vec3 wn = normalize(next.p - v.p);
     if (v.kind == kVertexCamera) return solid_angle_to_area(camera_pdf_dir(wn, g_time), v, next);
     Frame f = vertex_frame(v);
@@ -99,10 +144,11 @@ float vertex_pdf(Vertex v, Vertex prev, Vertex next) {
     return solid_angle_to_area(pdf, v, next);
 }
 
-// Whether v, a light vertex, lies on a point or spot light (a delta position).
-bool light_is_delta_position(Vertex v) {
+// Whether v, a light vertex, lies on a point or spot light (a delta position) or a
+// directional light (a delta direction): no camera subpath can reach it.
+bool light_is_delta(Vertex v) {
     uint kind = scene_light(v.light - 1u).info.x;
-    return kind == kLightPoint || kind == kLightSpot;
+    return kind == kLightPoint || kind == kLightSpot || kind == kLightDirectional;
 }
 
 // One factor of the recurrence: (pdf_rev / pdf_fwd)^e, zeros counting as 1.
@@ -111,28 +157,26 @@ float mis_ratio(float pdf_rev, float pdf_fwd) {
     return kStrategy == kStrategyMisBalance ? r : r * r;
 }
 
-// MIS weight of strategy (s, t) for the path g_light[0, s) + g_camera[0, t) (for s = 1
-// or t = 1 the caller has put the sampled light or lens vertex at index 0).
-float bdpt_mis_weight(int s, int t) {
-    if (s + t == 2) return 1.0;
-    // the densities the connection changes (restored below)
-    Vertex pt = g_camera[t - 1];
-    bool has_pt_minus = t > 1, has_qs = s > 0, has_qs_minus = s > 1;
-    Vertex pt_minus = g_camera[max(t - 2, 0)];
-    Vertex qs = g_light[max(s - 1, 0)];
-    Vertex qs_minus = g_light[max(s - 2, 0)];
-    float pt_rev = has_qs ? vertex_pdf(qs, qs_minus, pt) : vertex_pdf_light_origin(pt);
-    float pt_minus_rev = !has_pt_minus ? 0.0
-                       : (has_qs ? vertex_pdf(pt, qs, pt_minus) : vertex_pdf_light(pt, pt_minus));
-    float qs_rev = has_qs ? vertex_pdf(pt, pt_minus, qs) : 0.0;
-    float qs_minus_rev = has_qs_minus ? vertex_pdf(qs, pt, qs_minus) : 0.0;
+// The densities a connection changes: of pt = g_camera[t - 1] and qs = g_light[s - 1]
+// from the other subpath's side, and of the vertices before them (pt_minus, qs_minus)
+// from the connection's side; per unit area (solid angle toward a vertex at infinity).
+struct ConnectionPdfs {
+    float pt_rev;
+    float pt_minus_rev;
+    float qs_rev;
+    float qs_minus_rev;
+};
 
+// MIS weight of strategy (s, t) given the densities its connection changes (the
+// strategies get them from their own BSDF evaluations).
+float bdpt_mis_weight_pdfs(int s, int t, ConnectionPdfs c) {
+    if (s + t == 2) return 1.0;
     float sum = 0.0;
     // strategies with fewer camera vertices: walk the camera subpath back from the connection
     float r = 1.0;
     for (int i = t - 1; i > 0; --i) {
         LOOP_TICK();
-        float rev = i == t - 1 ? pt_rev : (i == t - 2 ? pt_minus_rev : g_camera[i].pdf_rev);
+        float rev = i == t - 1 ? c.pt_rev : (i == t - 2 ? c.pt_minus_rev : g_camera[i].pdf_rev);
         r *= mis_ratio(rev, g_camera[i].pdf_fwd);
         bool delta_i = i == t - 1 ? false : g_camera[i].delta;
         if (!delta_i && !g_camera[i - 1].delta) sum += r;
@@ -141,12 +185,31 @@ float bdpt_mis_weight(int s, int t) {
     r = 1.0;
     for (int i = s - 1; i >= 0; --i) {
         LOOP_TICK();
-        float rev = i == s - 1 ? qs_rev : (i == s - 2 ? qs_minus_rev : g_light[i].pdf_rev);
+        float rev = i == s - 1 ? c.qs_rev : (i == s - 2 ? c.qs_minus_rev : g_light[i].pdf_rev);
         r *= mis_ratio(rev, g_light[i].pdf_fwd);
         bool delta_i = i == s - 1 ? false : g_light[i].delta;
         // a delta light's own point cannot be found by the camera subpath
-        bool delta_before = i > 0 ? g_light[i - 1].delta : light_is_delta_position(g_light[0]);
+        bool delta_before = i > 0 ? g_light[i - 1].delta : light_is_delta(g_light[0]);
         if (!delta_i && !delta_before) sum += r;
     }
     return 1.0 / (1.0 + sum);
+}
+
+// MIS weight of strategy (s, t) for the path g_light[0, s) + g_camera[0, t) (for s = 1
+// or t = 1 the caller has put the sampled light or lens vertex at index 0), every
+// density evaluated afresh.
+float bdpt_mis_weight(int s, int t) {
+    if (s + t == 2) return 1.0;
+    Vertex pt = g_camera[t - 1];
+    bool has_pt_minus = t > 1, has_qs = s > 0, has_qs_minus = s > 1;
+    Vertex pt_minus = g_camera[max(t - 2, 0)];
+    Vertex qs = g_light[max(s - 1, 0)];
+    Vertex qs_minus = g_light[max(s - 2, 0)];
+    ConnectionPdfs c;
+    c.pt_rev = has_qs ? vertex_pdf(qs, qs_minus, pt) : vertex_pdf_light_origin(pt, pt_minus);
+    c.pt_minus_rev = !has_pt_minus ? 0.0
+                   : (has_qs ? vertex_pdf(pt, qs, pt_minus) : vertex_pdf_light(pt, pt_minus));
+    c.qs_rev = has_qs ? vertex_pdf(pt, pt_minus, qs) : 0.0;
+    c.qs_minus_rev = has_qs_minus ? vertex_pdf(qs, pt, qs_minus) : 0.0;
+    return bdpt_mis_weight_pdfs(s, t, c);
 }

@@ -26,6 +26,7 @@ vec3 integrator_li(vec3 o, vec3 d, float t_max, float time, inout SamplerState s
     vec3 p = hit.p;
     Bsdf b = bsdf_from_material(hit.material, hit.uv);
     Frame frame = shading_frame(hit);
+    bsdf_normal_frame(b, hit.ns0, frame);
     vec3 wo = frame_to_local(frame, -d);
     bool use_light = kStrategy != kStrategyBsdf;
     bool use_bsdf = kStrategy != kStrategyLight;

@@ -43,6 +43,7 @@ void light_trace(inout SamplerState s) {
     for (int segments = 1; segments + 1 <= max_segments; ++segments) {
         LOOP_TICK();
         SurfaceHit hit;
+        g_light_path_rays = true;     // a normal map's flip is for camera paths
         if (!scene_intersect(o, d, kInfinity, st.time, hit)) break;
         vec2 u_lens = sampler_2d(s);
         vec2 u_choice = sampler_2d(s);
@@ -50,6 +51,7 @@ void light_trace(inout SamplerState s) {
         float u_rr = sampler_1d(s);
         Bsdf b = bsdf_from_material(hit.material, hit.uv);
         Frame frame = shading_frame(hit);
+        bsdf_normal_frame(b, hit.ns0, frame);
         vec3 wo = frame_to_local(frame, -d);
 
         // Connect the vertex to the lens

@@ -5,8 +5,14 @@
 // is weighted against the light-sampling pdf (Veach 1997, ch. 9; the heuristic is
 // kStrategy: mis-power, the default as in Mitsuba, or mis-balance; `light` counts only
 // light samples and `bsdf` only BSDF hits). Depth counts segments as in Mitsuba.
-// Russian roulette from depth kRrDepth on: survive with q = min(max(beta) eta^2, 0.95)
-// (Mitsuba's rule; eta^2 keeps paths alive inside refractive media) and divide by q.
+// Russian roulette from depth kRrDepth on (kRrRule): survive with q = min(max(beta) eta^2,
+// 0.95) (throughput: Mitsuba's rule; eta^2 keeps paths alive inside refractive media), or
+// with a fixed q = kRrSurvival, and divide by q; or never (off).
+// Splitting: kLightSamples light samples at every vertex (each weighted 1/n, and MIS
+// counts them: Veach's heuristic with n_light = n), and kSplit BSDF branches at the
+// camera ray's hit (the first vertex, when it is not specular), each carrying 1/kSplit
+// of its throughput. Both are compile-time settings: with 1 and 1 the code and the
+// random numbers are exactly those of the plain path tracer. RAY_TICK counts the rays.
 // The albedo and normal AOVs are those of the first non-delta hit: through mirrors,
 // glass and null surfaces the path is followed to the surface seen in them
 // (record_aov_through in shading.glsl); depth is the first hit's. The emission AOV
@@ -38,11 +44,62 @@ struct PathState {
     Aov aov;
     bool aov_open;       // the AOVs so far are a delta surface's: follow the path further
     vec3 aov_weight;     // product of the delta surfaces' sampled weights so far
+    int split_left;      // BSDF branches still to start at the split vertex (kSplit > 1)
+    SurfaceHit split_hit;  // the split vertex, the direction it was reached along, and the
+    vec3 split_d;          // throughput (over kSplit) and eta product each branch starts from
+    vec3 split_beta;
+    float split_eta;
 };
 
 PathState path_start(vec3 o, vec3 d, float t_max, float time) {
-    return PathState(o, d, t_max, time, vec3(0.0), vec3(1.0), 1.0, 0.0, true, o, 0,
-                     kNoAov, true, vec3(1.0));
+    PathState st;
+    st.o = o;
+    st.d = d;
+    st.t_max = t_max;
+    st.time = time;
+    st.L = vec3(0.0);
+    st.beta = vec3(1.0);
+    st.eta_product = 1.0;
+    st.prev_pdf = 0.0;
+    st.prev_delta = true;
+    st.prev_p = o;
+    st.depth = 0;
+    st.aov = kNoAov;
+    st.aov_open = true;
+    st.aov_weight = vec3(1.0);
+    st.split_left = 0;
+    return st;
+}
+
+// Continues the path from the vertex `hit` (reached after `depth` segments) by sampling
+// its BSDF, then plays Russian roulette; false when the path ends there.
+bool path_continue(inout PathState st, SurfaceHit hit, Bsdf b, Frame frame, vec3 wo, int depth,
+                   float u_lobe, vec2 u_bsdf, float u_rr) {
+    BsdfSample bs = bsdf_sample(b, wo, u_lobe, u_bsdf, false);
+    if (!bs.valid) return false;
+    vec3 wi = frame_from_local(frame, bs.wi);
+    // a direction on the wrong side of the geometric surface leaks light: end the path
+    if (dot(wi, hit.ng) * bs.wi.z <= 0.0) return false;
+    st.beta *= bs.weight;
+    if (kAovs && st.aov_open) st.aov_weight *= bs.weight;
+    st.eta_product *= bs.eta;
+    st.prev_pdf = bs.pdf;
+    st.prev_delta = bs.delta;
+    st.prev_p = hit.p;
+
+    // Possibly terminate the path with Russian roulette
+    if (kRrRule != kRrOff && depth + 1 >= kRrDepth) {
+        float q = kRrRule == kRrFixed
+                ? kRrSurvival
+                : min(max_component(st.beta) * st.eta_product * st.eta_product, 0.95);
+        if (!(u_rr < q)) return false;
+        st.beta /= q;
+    }
+    if (max_component(st.beta) <= 0.0) return false;
+    st.o = offset_ray_origin(hit.p, hit.ng, wi);
+    st.d = wi;
+    st.t_max = kInfinity;
+    return true;
 }
 
 // Traces one segment of the path and shades its end; false when the path has ended.
@@ -51,8 +108,10 @@ bool path_segment(inout PathState st, inout SamplerState s) {
     int depth = st.depth;
     st.depth += 1;
     SurfaceHit hit;
+    RAY_TICK();
     if (!scene_intersect(st.o, st.d, st.t_max, st.time, hit)) {
-        vec3 Le = environment_contribution(st.d, depth, st.prev_p, st.prev_pdf, st.prev_delta);
+        vec3 Le = environment_contribution_n(st.d, depth, st.prev_p, st.prev_pdf,
+                                             st.prev_delta, 1.0, float(kLightSamples));
         st.L += st.beta * Le;
         // seen through a delta surface, the environment is what a camera ray that misses
         // records: no albedo, no normal, its radiance as emission
@@ -69,7 +128,8 @@ bool path_segment(inout PathState st, inout SamplerState s) {
 
     // Emission of an area light found by the camera ray or by BSDF sampling
     if (hit.light != 0u) {
-        vec3 Le = emitter_hit_contribution(hit, st.d, depth, st.prev_p, st.prev_pdf, st.prev_delta);
+        vec3 Le = emitter_hit_contribution_n(hit, st.d, depth, st.prev_p, st.prev_pdf,
+                                             st.prev_delta, 1.0, float(kLightSamples));
         st.L += st.beta * Le;
         if (kAovs && seen) st.aov.emission += st.beta * Le;
     }
@@ -81,6 +141,7 @@ bool path_segment(inout PathState st, inout SamplerState s) {
     // only the emission seen directly or through delta surfaces
     if (kEmissionOnly && !bsdf_is_delta(b)) return false;
     Frame frame = shading_frame(hit);
+    bsdf_normal_frame(b, hit.ns0, frame);
     vec3 wo = frame_to_local(frame, -st.d);
 
     // Next-event estimation (its numbers are drawn even when unused, so that later
@@ -89,40 +150,71 @@ bool path_segment(inout PathState st, inout SamplerState s) {
     vec2 u_light = sampler_2d(s);
     vec2 u_bsdf = sampler_2d(s);
     float u_rr = sampler_1d(s);
-    if (kStrategy != kStrategyBsdf && !bsdf_is_delta(b))
-        st.L += st.beta * next_event(p, hit, b, frame, wo, st.time, u_choice.x, u_light,
-                                     kStrategy != kStrategyLight);
-
-    // Sample the BSDF to continue the path
-    BsdfSample bs = bsdf_sample(b, wo, u_choice.y, u_bsdf, false);
-    if (!bs.valid) return false;
-    vec3 wi = frame_from_local(frame, bs.wi);
-    // a direction on the wrong side of the geometric surface leaks light: end the path
-    if (dot(wi, hit.ng) * bs.wi.z <= 0.0) return false;
-    st.beta *= bs.weight;
-    if (kAovs && st.aov_open) st.aov_weight *= bs.weight;
-    st.eta_product *= bs.eta;
-    st.prev_pdf = bs.pdf;
-    st.prev_delta = bs.delta;
-    st.prev_p = p;
-
-    // Possibly terminate the path with Russian roulette
-    if (depth + 1 >= kRrDepth) {
-        float q = min(max_component(st.beta) * st.eta_product * st.eta_product, 0.95);
-        if (!(u_rr < q)) return false;
-        st.beta /= q;
+    bool delta = bsdf_is_delta(b);
+    bool use_light = kStrategy != kStrategyBsdf && !delta;
+    if (kLightSamples == 1) {
+        if (use_light)
+            st.L += st.beta * next_event(p, hit, b, frame, wo, st.time, u_choice.x, u_light,
+                                         kStrategy != kStrategyLight);
+    } else {
+        float n = float(kLightSamples);
+        vec3 Ld = use_light ? next_event_n(p, hit, b, frame, wo, st.time, u_choice.x, u_light,
+                                           kStrategy != kStrategyLight, n, 1.0) : vec3(0.0);
+        for (int k = 1; k < kLightSamples; ++k) {
+            vec2 u_select = sampler_2d(s);
+            vec2 u_more = sampler_2d(s);
+            if (use_light)
+                Ld += next_event_n(p, hit, b, frame, wo, st.time, u_select.x, u_more,
+                                   kStrategy != kStrategyLight, n, 1.0);
+        }
+        st.L += st.beta * Ld / n;
     }
-    if (max_component(st.beta) <= 0.0) return false;
-    st.o = offset_ray_origin(p, hit.ng, wi);
-    st.d = wi;
-    st.t_max = kInfinity;
-    return true;
+
+    // Split into kSplit branches at the first vertex: this sample starts the first
+    if (kSplit > 1 && depth == 0 && !delta) {
+        st.beta /= float(kSplit);
+        st.split_left = kSplit - 1;
+        st.split_hit = hit;
+        st.split_d = st.d;
+        st.split_beta = st.beta;
+        st.split_eta = st.eta_product;
+    }
+    // Sample the BSDF to continue the path
+    return path_continue(st, hit, b, frame, wo, depth, u_choice.y, u_bsdf, u_rr);
+}
+
+// Starts the next BSDF branch at the split vertex (fresh numbers for it); false when that
+// branch ends at once (path_step then tries the next one).
+bool path_branch(inout PathState st, inout SamplerState s) {
+    st.split_left -= 1;
+    vec2 u_lobe = sampler_2d(s);
+    vec2 u_bsdf = sampler_2d(s);
+    float u_rr = sampler_1d(s);
+    SurfaceHit hit = st.split_hit;
+    st.beta = st.split_beta;
+    st.eta_product = st.split_eta;
+    st.depth = 1;
+    Bsdf b = bsdf_from_material(hit.material, hit.uv);
+    Frame frame = shading_frame(hit);
+    vec3 wo = frame_to_local(frame, -st.split_d);
+    return path_continue(st, hit, b, frame, wo, 0, u_lobe.x, u_bsdf, u_rr);
+}
+
+// One segment of the sample; when its current branch ends, the next branch starts.
+// False when the whole sample (every branch) has ended.
+bool path_step(inout PathState st, inout SamplerState s) {
+    if (path_segment(st, s)) return true;
+    while (kSplit > 1 && st.split_left > 0) {
+        LOOP_TICK();
+        if (path_branch(st, s)) return true;
+    }
+    return false;
 }
 
 // The radiance of one camera ray, segment by segment.
 vec3 integrator_li(vec3 o, vec3 d, float t_max, float time, inout SamplerState s, inout Aov aov) {
     PathState st = path_start(o, d, t_max, time);
-    while (path_segment(st, s)) {
+    while (path_step(st, s)) {
         LOOP_TICK();
     }
     aov = st.aov;
@@ -138,7 +230,7 @@ void integrator_pixel(uvec2 pixel, uint pixel_hash, uint first, uint count, inou
     PathState st = path_start(c.o, c.d, c.t_max, c.time);
     while (true) {
         LOOP_TICK();
-        if (!path_segment(st, s)) {
+        if (!path_step(st, s)) {
             accumulate(acc, c.weight * st.L, aov_scaled(st.aov, c.weight), first + k);
             k += 1u;
             if (k >= count) break;

@@ -89,6 +89,7 @@ vec3 next_event_n(vec3 p, SurfaceHit hit, Bsdf b, Frame frame, vec3 wo, float ti
     if (max_component(f) <= 0.0) return vec3(0.0);
     vec3 o = offset_ray_origin(p, hit.ng, ls.wi);
     float t_max = isinf(ls.dist) ? kInfinity : ls.dist * (1.0 - kShadowEpsilon);
+    RAY_TICK();
     if (scene_occluded(o, ls.wi, t_max, time, light.info.z)) return vec3(0.0);
     float pdf_light = choice.pmf * ls.pdf;
     float w = (ls.delta || !use_mis) ? 1.0 : mis_weight_n(n_light, pdf_light, n_bsdf, pdf_bsdf);

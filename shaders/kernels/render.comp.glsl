@@ -42,4 +42,5 @@ void main() {
         accum_aov[kAovVec4s * idx + 2u] = acc.emission;
     }
     if (kCountLoops) debug_counters[idx] = max(debug_counters[idx], g_loop_count);
+    if (kCountRays) debug_counters[idx] += g_ray_count;
 }

@@ -11,7 +11,7 @@ layout(std140, binding = 1) uniform PhotonParams {
     uvec4 options;        // x: deposit from this photon segment on (2: skip direct light),
                           // y: camera segments allowed (max depth), z: record emission (1),
                           // w: splat the photon-map view into storage block 7 (1)
-    uvec4 estimate;       // x: density kernel (kKernel*, photon/sppm_deposit.glsl), yzw: unused
+    uvec4 estimate;       // x: density kernel (kKernel*, photon/density.glsl), yzw: unused
 } u_photon;
 
 // ---- storage blocks (std430) ----------------------------------------------------------
@@ -22,8 +22,26 @@ layout(std430, binding = 8) buffer VisiblePositions { vec4 vp_position[]; };
 //   [2 i]     = (wo xyz toward the camera, material index as float bits)
 //   [2 i + 1] = (shading normal xyz, uv.x); uv.y, geometric normal and beta follow in vp_extra
 layout(std430, binding = 9) buffer VisibleShading { vec4 vp_shading[]; };
-//   [2 i] = (geometric normal xyz, uv.y), [2 i + 1] = (beta rgb, -)
+//   [2 i] = (geometric normal xyz, uv.y), [2 i + 1] = (beta rgb, the BSDF's n0: vp_pack_unit)
 layout(std430, binding = 10) buffer VisibleExtra { vec4 vp_extra[]; };
+
+// A unit vector in one float: its octahedral map (Meyer et al. 2010) quantized to 11 bits
+// per coordinate, stored as an integer below 2^22, exact in a float (about 1e-3 rad).
+float vp_pack_unit(vec3 n) {
+    n /= abs(n.x) + abs(n.y) + abs(n.z);
+    vec2 e = n.z >= 0.0 ? n.xy : (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
+    vec2 q = round(clamp(e * 0.5 + 0.5, 0.0, 1.0) * 2047.0);
+    return q.x * 2048.0 + q.y;
+}
+
+vec3 vp_unpack_unit(float code) {
+    float qx = floor(code / 2048.0);
+    vec2 e = vec2(qx, code - qx * 2048.0) / 2047.0 * 2.0 - 1.0;
+    vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    float t = max(-n.z, 0.0);
+    n.xy += vec2(n.x >= 0.0 ? -t : t, n.y >= 0.0 ? -t : t);
+    return normalize(n);
+}
 
 // 11: the camera pass's own radiance per pixel this iteration (emission seen through
 // specular chains, direct light at the visible point): rgb, w unused.

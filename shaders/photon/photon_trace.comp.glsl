@@ -16,15 +16,7 @@ layout(local_size_x = 64) in;
 #include "photon/layout.glsl"
 #include "photon/photon_tracer.glsl"
 #include "photon/sppm_deposit.glsl"
-#include "integrators/splat.glsl"
-
-// The photon-map view (options.w = 1): every photon hit at a non-delta surface seen by
-// the camera adds the photon's power to the pixel it projects to (the splat image,
-// storage block 7), so the picture shows where the photons are, coloured by power.
-void splat_photon_view(SurfaceHit hit, Photon ph, vec2 u_lens) {
-    CameraConnection c = camera_connect(hit.p, u_lens, ph.time);
-    if (c.valid && camera_visible(hit.p, hit.ng, c, ph.time, kNoPrimitive)) splat_film(c.film, ph.beta);
-}
+#include "photon/photon_view.glsl"
 
 void main() {
     uint j = u_photon.photons.x + gl_GlobalInvocationID.x;
@@ -44,19 +36,14 @@ void main() {
     uint budget = kCandidateBudget, visited = 0u;
     for (int segments = 1; segments <= max_segments && ph.alive; ++segments) {
         LOOP_TICK();
-        SurfaceHit hit;
-        if (!scene_intersect(ph.o, ph.d, kInfinity, ph.time, hit)) break;
-        vec2 u_choice = sampler_2d(s);
-        vec2 u_bsdf = sampler_2d(s);
-        float u_rr = sampler_1d(s);
-        vec2 u_lens = sampler_2d(s);
-        Bsdf b = bsdf_from_material(hit.material, hit.uv);
-        if (!bsdf_is_delta(b) && segments >= int(u_photon.options.x)) {
-            sppm_deposit(hit.p, hit.ng, -ph.d, ph.beta, segments, budget, visited);
-            if (u_photon.options.w != 0u) splat_photon_view(hit, ph, u_lens);
+        PhotonHit h;
+        if (!photon_next_hit(ph, s, h)) break;
+        if (!bsdf_is_delta(h.b) && segments >= int(u_photon.options.x)) {
+            sppm_deposit(h.hit.p, h.hit.ng, -ph.d, ph.beta, segments, budget, visited);
+            if (u_photon.options.w != 0u) splat_photon_view(h.hit, ph, h.u_lens);
         }
         if (segments + 1 > max_segments) break;
-        photon_scatter(ph, hit, b, u_choice.y, u_bsdf, u_rr);
+        photon_scatter(ph, h.hit, h.b, h.u_choice.y, h.u_bsdf, h.u_rr);
     }
     if (visited > 0u) {
         atomicAdd(photon_records[1], visited);

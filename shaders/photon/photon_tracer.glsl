@@ -33,6 +33,7 @@ Photon photon_start(inout SamplerState s) {
 // ph.alive = false when it is absorbed or leaves through the wrong side of a surface.
 void photon_scatter(inout Photon ph, SurfaceHit hit, Bsdf b, float u_lobe, vec2 u_dir, float u_rr) {
     Frame frame = frame_from_z(hit.ns);
+    bsdf_normal_frame(b, hit.ns0, frame);
     vec3 wo = frame_to_local(frame, -ph.d);
     BsdfSample bs = bsdf_sample(b, wo, u_lobe, u_dir, true);
     ph.alive = false;
@@ -48,4 +49,27 @@ void photon_scatter(inout Photon ph, SurfaceHit hit, Bsdf b, float u_lobe, vec2 
     ph.o = offset_ray_origin(hit.p, hit.ng, wi);
     ph.d = wi;
     ph.alive = true;
+}
+
+// The next surface a photon reaches, its BSDF and the numbers scattering there takes
+// (the same sampler dimensions in every photon kernel).
+struct PhotonHit {
+    SurfaceHit hit;
+    Bsdf b;
+    vec2 u_choice;   // .y picks the BSDF lobe
+    vec2 u_bsdf;
+    float u_rr;
+    vec2 u_lens;     // the photon-map view's camera connection
+};
+
+// Follows photon ph to its next surface: false when it leaves the scene.
+bool photon_next_hit(Photon ph, inout SamplerState s, out PhotonHit h) {
+    g_light_path_rays = true;     // a normal map's flip is for camera paths
+    if (!scene_intersect(ph.o, ph.d, kInfinity, ph.time, h.hit)) return false;
+    h.u_choice = sampler_2d(s);
+    h.u_bsdf = sampler_2d(s);
+    h.u_rr = sampler_1d(s);
+    h.u_lens = sampler_2d(s);
+    h.b = bsdf_from_material(h.hit.material, h.hit.uv);
+    return true;
 }

@@ -17,6 +17,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "integrators/integrator_common.glsl"
 #include "integrators/shading.glsl"
 #include "integrators/pixel.glsl"
+#include "photon/camera_path.glsl"
 
 void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
@@ -39,6 +40,7 @@ void main() {
         if (hit.light != 0u) L += beta * emitter_hit_contribution(hit, d, depth, o, 1.0, true);
         Bsdf b = bsdf_from_material(hit.material, hit.uv);
         Frame frame = frame_from_z(hit.ns);
+        bsdf_normal_frame(b, hit.ns0, frame);
         vec3 wo = frame_to_local(frame, -d);
         vec2 u_choice = sampler_2d(s);
         vec2 u_light = sampler_2d(s);
@@ -51,17 +53,10 @@ void main() {
             vp_shading[2u * i] = vec4(-d, uintBitsToFloat(hit.material));
             vp_shading[2u * i + 1u] = vec4(hit.ns, hit.uv.x);
             vp_extra[2u * i] = vec4(hit.ng, hit.uv.y);
-            vp_extra[2u * i + 1u] = vec4(beta, 0.0);
+            vp_extra[2u * i + 1u] = vec4(beta, vp_pack_unit(b.n0));
             break;
         }
-        BsdfSample bs = bsdf_sample(b, wo, u_choice.y, u_bsdf, false);
-        if (!bs.valid) break;
-        vec3 wi = frame_from_local(frame, bs.wi);
-        if (dot(wi, hit.ng) * bs.wi.z <= 0.0) break;
-        beta *= bs.weight;
-        if (!(max_component(beta) > 0.0)) break;
-        o = offset_ray_origin(hit.p, hit.ng, wi);
-        d = wi;
+        if (!continue_camera_path(hit, b, frame, wo, u_choice.y, u_bsdf, beta, o, d)) break;
         t_max = kInfinity;
     }
     if (!is_finite(L) || !is_finite(beta)) {

@@ -17,23 +17,11 @@
 #include "integrators/integrator_common.glsl"
 #include "bsdf/bsdf.glsl"
 #include "bsdf/material.glsl"
+#include "photon/density.glsl"
 
 const uint kMaxCellCandidates = 4096u;
 
-// Density estimation kernels over the disk of radius r, as functions of q = d / r,
-// normalized so that their mean over the disk is 1 (the estimate stays Phi / (pi r^2)):
-// uniform 1; cone (Jensen 2001, k = 1) 3 (1 - q); Epanechnikov 2 (1 - q^2).
-const uint kKernelUniform = 0u;
-const uint kKernelCone = 1u;
-const uint kKernelEpanechnikov = 2u;
-
-float density_kernel(uint kernel, float q2) {
-    if (kernel == kKernelCone) return 3.0 * (1.0 - sqrt(q2));
-    if (kernel == kKernelEpanechnikov) return 2.0 * (1.0 - q2);
-    return 1.0;
-}
 const uint kCandidateBudget = 16384u;
-const float kNormalAgreement = 0.5;   // cos 60 degrees
 
 // Deposits a photon of power beta that reached surface point p (geometric normal ng)
 // from the unit direction wi (pointing back toward where it came from), after
@@ -60,12 +48,13 @@ void sppm_deposit(vec3 p, vec3 ng, vec3 wi, vec3 beta, int segments, inout uint 
         vec4 s0 = vp_shading[2u * i], s1 = vp_shading[2u * i + 1u];
         Bsdf b = bsdf_from_material(floatBitsToUint(s0.w), vec2(s1.w, extra.w));
         Frame frame = frame_from_z(s1.xyz);
-        vec3 wo_l = frame_to_local(frame, s0.xyz), wi_l = frame_to_local(frame, wi);
-        // the photon arrives on the geometric side its shading direction claims
-        if (!(abs(wi_l.z) > 0.0) || dot(wi, extra.xyz) * wi_l.z <= 0.0) continue;
-        // bsdf_eval includes |cos theta_i|; the photon density already accounts for it
+#ifdef GLRENDER_NORMAL_SHADOWING
+        b.n0 = vp_unpack_unit(vp_extra[2u * i + 1u].w);   // bsdf_normal_frame's, in this frame
+#endif
+        vec3 f;
+        if (!photon_bsdf(b, frame, frame_to_local(frame, s0.xyz), extra.xyz, wi, f)) continue;
         float w = density_kernel(u_photon.estimate.x, dot(dp, dp) / vp_radius2[i]);
-        vec3 phi = vp_extra[2u * i + 1u].rgb * (w * bsdf_eval(b, wo_l, wi_l, false) / abs(wi_l.z)) * beta;
+        vec3 phi = vp_extra[2u * i + 1u].rgb * w * f * beta;
         if (!is_finite(phi)) continue;
         atomicAdd(deposit_flux[4u * i], phi.r);
         atomicAdd(deposit_flux[4u * i + 1u], phi.g);

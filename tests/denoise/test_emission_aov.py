@@ -113,8 +113,8 @@ def test06_pass_settings():
     assert s.sampler.spp == emission_spp(16) == 64 and s.sampler.seed == 9
     assert s.integrator.max_depth == 5
     assert emission_spp(1) == EMISSION_SPP_MIN and emission_spp(64) == 256
-    # the direct integrator and BDPT record the first hit: the pass stops there too
-    for kind in ("direct", "bdpt"):
+    # the direct, photon and BDPT integrators record the first hit: the pass stops there too
+    for kind in ("direct", "bdpt", "photon"):
         s = emission_settings(settings_from_scene(scene, spp=4, integrator=kind))
         assert s.integrator.kind == "path" and s.integrator.max_depth == 1
     # nothing to render again: no emission AOV, or a clamp that scales it per sample
@@ -123,3 +123,25 @@ def test06_pass_settings():
     assert emission_settings(settings_from_scene(scene, spp=4, clamp=10.0)) is None
     with pytest.raises(glrender.UsageError, match="emission_only: only with the path"):
         settings_from_scene(scene, integrator="direct", emission_only=True)
+
+
+def test07_photon_integrator_records_the_first_hit(gl_ctx):
+    """The photon integrator's emission AOV is the first hit's emitted radiance: the
+    seen-emission pass of emission_settings (the path tracer stopped at the first hit, at
+    the render's own spp and seed) gives it bitwise."""
+    from glrender.photon import PhotonRenderer
+    from glrender.photon.photon import PhotonSettings
+
+    s = _small_cornell()
+    r = PhotonRenderer(s, photon=PhotonSettings(photons=1 << 12), ctx=gl_ctx, seed=4, spp=4,
+                       aovs=True)
+    try:
+        r.step(4)
+        emission = r.film().aov("emission")
+    finally:
+        r.release()
+    assert emission.max() > 0
+    pass_settings = emission_settings(settings_from_scene(s, spp=4, seed=4, integrator="photon"))
+    assert pass_settings.integrator.max_depth == 1
+    alone = glrender.render(s, spp=4, seed=4, emission_only=True, max_depth=1)
+    np.testing.assert_array_equal(alone.mean, emission)

@@ -92,6 +92,8 @@ def test04_bad_input_is_one_line(tmp_path):
     assert "--tls-ca" in one_error_line(r)
     r = run("render", CORNELL, *SMALL, "-o", out, "--workers", 2, "--integrator", "sppm")
     assert "sppm does not run on a cluster" in one_error_line(r)
+    r = run("render", CORNELL, *SMALL, "-o", out, "--workers", 2, "--integrator", "photon")
+    assert "photon does not run on a cluster" in one_error_line(r)
     assert list(tmp_path.glob("*.exr")) == [] and list(tmp_path.glob("*.ckpt")) == []
 
 

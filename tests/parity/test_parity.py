@@ -4,17 +4,25 @@ Each scene ``scenes/NAME.xml`` is loaded with glrender's Mitsuba loader and rend
 ``seeds`` independent seeds of ``spp`` samples per pixel; the spread between them gives each
 pixel's error. The sampler is the independent one: with Sobol' the coverage of a pixel by a
 straight emitter edge takes one of two values and 4 seeds often agree exactly, so the spread
-says "no error" where there is one (seen on the focal-length scene's light). The reference
+says "no error" where there is one (seen on the focal-length scene's light). A case with
+``integrator`` renders with that glrender integrator (light tracing, BDPT) the scene and
+reference of the case named by ``scene``: Mitsuba's path tracer. The reference
 ``refs/NAME.npy`` (Mitsuba 3, rendered by tools/make_parity_refs.py in independent passes;
 versions in refs/manifest.json) carries its own error ``refs/NAME-stderr.npy``. ``compare_images`` tests every block x channel and the image
 mean, with sigma combining both images' errors, at one Šidák-corrected threshold over all the
 scenes' comparisons together: a correct renderer fails the whole suite with probability 0.01.
 
 Power: every scene states and asserts the smallest bias it can detect: at most 2% of the
-image mean, and at most 5% on the typical block that carries the image (the median over the
-block-channels whose reference is at least a quarter of the image mean). The worst such block
-is printed too: blocks of caustics seen through glass stay noisier than 5% at this budget, and
-there the image-mean and (one-sided) MSE tests bound what a bias can hide.
+image mean, and at most 5% on every block that carries the image (the block-channels whose
+reference is at least a quarter of the image mean: the worst of them is asserted). Where a
+scene's worst blocks are caustics (light reached only by BSDF sampling through or off smooth
+surfaces, a heavy-tailed estimate) or signed filter weights, 5% would take 2.5-100x the
+samples (together past the suite's five minutes on 2 cores: 197 s as it is, with the machine's
+load at 10); the catalog states that scene's bound (``block_power``) and why
+(``block_power_why``), the test prints and asserts it, and the image-mean and (one-sided) MSE
+tests bound what a bias there can hide. The references' error is at most 6% of the variance
+of any scene's worst bright block (at most 4% of its median one): more reference samples
+would not help.
 
 Where glrender deliberately differs (catalog keys ``difference``, where it is documented, and
 ``tolerance``, the documented size), the test says so and checks that difference instead: every
@@ -45,21 +53,29 @@ SCENES = {name: {**CATALOG["defaults"], **entry} for name, entry in CATALOG["sce
 FIRST_SEED = 7
 ALPHA = 0.01
 MAX_MEAN_BIAS = 0.02          # detectable bias of the image mean, relative
-MAX_BLOCK_BIAS = 0.05         # detectable bias of the median bright block, relative
+MAX_BLOCK_BIAS = 0.05         # detectable bias of every bright block, relative, unless the
+                              # scene states more (catalog: block_power, with block_power_why)
 BRIGHT = 0.25                 # bright block-channels: reference >= BRIGHT x image mean
 
 
+def source(name: str) -> str:
+    """The scene file and reference a case uses: its own, or those of the scene it names
+    (an integrator checked against Mitsuba's path tracer on another case's scene)."""
+    return SCENES[name].get("scene", name)
+
+
 def reference(name: str) -> tuple[np.ndarray, np.ndarray]:
+    name = source(name)
     return np.load(HERE / "refs" / f"{name}.npy"), np.load(HERE / "refs" / f"{name}-stderr.npy")
 
 
 def comparisons(name: str) -> int:
     """The number of tests compare_images makes for a scene: block-channels, mean, MSE."""
-    path = HERE / "refs" / f"{name}.npy"
+    path = HERE / "refs" / f"{source(name)}.npy"
     if path.exists():
         h, w, c = np.load(path, mmap_mode="r").shape
     else:                        # that scene's test fails; the others keep their threshold
-        film = glrender.load(HERE / "scenes" / f"{name}.xml").film
+        film = glrender.load(HERE / "scenes" / f"{source(name)}.xml").film
         h, w, c = film.height, film.width, 3
     b = SCENES[name]["block"]
     return (h // b) * (w // b) * c + 2
@@ -121,8 +137,9 @@ def test_parity(gl_ctx, parity_dir, name):
     entry = SCENES[name]
     feature = entry["feature"]
     ref, ref_stderr = reference(name)
-    scene = glrender.load(HERE / "scenes" / f"{name}.xml")
-    renders = np.stack([glrender.render(scene, spp=entry["spp"], seed=FIRST_SEED + i, sampler="independent").mean
+    scene = glrender.load(HERE / "scenes" / f"{source(name)}.xml")
+    renders = np.stack([glrender.render(scene, spp=entry["spp"], seed=FIRST_SEED + i, sampler="independent",
+                                        integrator=entry.get("integrator")).mean
                         for i in range(entry["seeds"])]).astype(np.float64)
     assert renders.shape[1:] == ref.shape, f"{feature}: image {renders.shape[1:]} vs reference {ref.shape}"
 
@@ -151,8 +168,10 @@ def test_parity(gl_ctx, parity_dir, name):
     median_block_bias, p90, worst = np.percentile(block_bias[bright], [50, 90, 100])
     if difference:
         feature += f"; documented difference, checked within {tolerance:.1%}: {difference}"
+    block_power = entry.get("block_power", MAX_BLOCK_BIAS)
+    stated = f" (stated {block_power:.0%}: {entry['block_power_why']})" if "block_power" in entry else ""
     report = (f"{name} ({feature}): {c.summary()}; detectable bias of bright blocks: median "
-              f"{median_block_bias * 100:.2f}%, 90% {p90 * 100:.2f}%, worst {worst * 100:.2f}%")
+              f"{median_block_bias * 100:.2f}%, 90% {p90 * 100:.2f}%, worst {worst * 100:.2f}%{stated}")
     print(report)
     if not c.passed:
         sigma = np.sqrt(renders.var(axis=0, ddof=1) / len(renders) + ref_stderr.astype(np.float64) ** 2)
@@ -161,4 +180,4 @@ def test_parity(gl_ctx, parity_dir, name):
         f" (heat map: {parity_dir / (name + '.png')})"
     # power: the test could see a bias this small
     assert c.detectable_bias <= MAX_MEAN_BIAS, f"{feature}: too noisy to detect a 2% bias of the mean ({report})"
-    assert median_block_bias <= MAX_BLOCK_BIAS, f"{feature}: too noisy to detect a 5% bias per block ({report})"
+    assert worst <= block_power, f"{feature}: too noisy to detect a {block_power:.0%} bias per block ({report})"

@@ -48,3 +48,67 @@ def test03_resume_continues_the_sppm_state(tmp_path):
     a, b = read_exr(tmp_path / "a.exr"), read_exr(tmp_path / "b.exr")
     np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-6)
     assert a.mean() > 0.1
+
+
+@pytest.mark.parametrize("args, message", [
+    (("--photons", 0), "--photons"),
+    (("--caustic-photons", 0), "--caustic-photons"),
+    (("--radius", -0.1), "--radius"),
+    (("--knn", 0), "--knn"),
+    (("--radius", 0.1, "--knn", 8), "--radius and --knn"),
+    (("--alpha", 0.5), "--alpha"),
+    (("--aov", "radius"), "--aov radius"),
+])
+def test04_photon_integrator_bad_parameters_one_line_exit_2(tmp_path, args, message):
+    line = one_error_line(glrender("render", CORNELL, "-o", tmp_path / "x.exr", "--integrator", "photon",
+                                   *SMALL, *args))
+    assert message in line
+
+
+def test05_photon_map_options_need_photon(tmp_path):
+    line = one_error_line(glrender("render", CORNELL, "-o", tmp_path / "x.exr", "--integrator", "sppm",
+                                   "--final-gather", *SMALL))
+    assert "--final-gather" in line and "photon" in line
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("integrator, options", [
+    ("photon", ("--photons", 20000, "--knn", 16, "--kernel", "cone", "--final-gather")),
+    ("sppm", ("--photons", 4096, "--alpha", 0.5, "--initial-radius", 0.04)),
+])
+def test06_resume_keeps_the_photon_options(tmp_path, integrator, options):
+    """A checkpoint saves the photon options: --resume without them continues the same
+    render (the fingerprint would refuse other options), equal to one uninterrupted run."""
+    ckpt = tmp_path / "a.ckpt"
+    first = glrender("render", CORNELL, "-o", tmp_path / "a.exr", "--spp", 4, "--checkpoint", ckpt,
+                     "--integrator", integrator, *options, *SMALL)
+    assert first.returncode == 0, first.stderr
+    second = glrender("render", CORNELL, "-o", tmp_path / "a.exr", "--spp", 8, "--resume",
+                      "--checkpoint", ckpt)
+    assert second.returncode == 0, second.stderr
+    whole = glrender("render", CORNELL, "-o", tmp_path / "b.exr", "--spp", 8, "--integrator", integrator,
+                     *options, *SMALL)
+    assert whole.returncode == 0, whole.stderr
+    a, b = read_exr(tmp_path / "a.exr"), read_exr(tmp_path / "b.exr")
+    np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-6)
+    assert a.mean() > 0.1
+
+
+def test07_photon_integrator_writes_the_photon_view(tmp_path):
+    """--integrator photon --aov photons: the image and the photon-map view, both lit;
+    --stats names the maps (photons emitted and stored, radii, lookups, bytes)."""
+    import json
+
+    out = tmp_path / "p.exr"
+    run = glrender("render", CORNELL, "-o", out, "--integrator", "photon", "--photons", 20000,
+                   "--spp", 2, "--aov", "photons", "--stats", tmp_path / "s.json", *SMALL)
+    assert run.returncode == 0, run.stderr
+    stats = json.loads((tmp_path / "s.json").read_text())
+    ph = stats["photon"]
+    assert stats["biased"] and ph["photons_emitted"] == [20000, 20000]
+    assert ph["photons_stored"][0] > 20000 and ph["radius"][0] > 0 and ph["lookups"]["visited"] > 0
+    assert ph["memory"]["bytes_per_photon"] == 48
+    from glrender.film.io import read_exr_layers
+
+    layers = read_exr_layers(out)
+    assert layers["RGB"].mean() > 0.1 and layers["photons"].mean() > 0

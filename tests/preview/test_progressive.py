@@ -120,3 +120,38 @@ def test04_reset_mid_pass_starts_clean(gl_ctx, small):
     finally:
         r.release()
         fresh.release()
+
+
+def test05_sppm_iterations_spread_over_frames(gl_ctx):
+    """SPPM in the preview (SppmProgressive): with a zero budget every call does one
+    piece of work (a camera pass, or one photon dispatch), so an iteration of 3
+    dispatches takes 4 calls; after 5 iterations the image is SppmRenderer.step(5)'s
+    (deposits are float atomics: equal to their summation order), and the buffer the
+    display reads holds it with the iteration count."""
+    from glrender.photon import SppmRenderer, SppmSettings
+    from glrender.photon.sppm import PHOTONS_PER_DISPATCH
+    from glrender.preview.progressive import SppmProgressive
+
+    scene = _scene(32, 24)
+    sppm = SppmSettings(photons_per_iteration=2 * PHOTONS_PER_DISPATCH + 100)
+    whole = SppmRenderer(scene, sppm=sppm, ctx=gl_ctx, seed=3)
+    cut = SppmRenderer(scene, sppm=sppm, ctx=gl_ctx, seed=3)
+    try:
+        whole.step(5)
+        p = SppmProgressive(cut, target_spp=5)
+        calls = 0
+        while not p.done:
+            assert p.advance(0.0)
+            calls += 1
+        assert calls == 5 * 4 and p.spp == 5 and not p.advance(0.0)
+        a, b = whole.radiance(), cut.radiance()
+        np.testing.assert_allclose(b, a, rtol=1e-5, atol=1e-7)
+        shown = np.frombuffer(cut._mean.read(), np.float32).reshape(24, 32, 4)
+        np.testing.assert_allclose(shown[..., :3], b, rtol=1e-6, atol=1e-7)
+        assert (shown[..., 3] == 5).all() and b.mean() > 0.05
+        assert p.samples_added == 5 * 32 * 24
+        p.reset()
+        assert p.spp == 0 and not np.frombuffer(cut._mean.read(), np.float32).any()
+    finally:
+        whole.release()
+        cut.release()

@@ -11,7 +11,7 @@ import numpy as np
 import glrender
 from glrender.scene import model as m
 
-from render_scenes import enclosure, plane_under_light
+from render_scenes import base, enclosure, plane_under_light
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -76,3 +76,37 @@ def renders(scene: m.Scene, integrator: str, spp: int, seeds, **options) -> np.n
     return np.stack([glrender.render(scene, spp=spp, integrator=integrator, seed=seed,
                                      sampler="independent", progress=False, **options).mean
                      for seed in seeds])
+
+
+def _floor_and_spheres(scene: m.Scene) -> None:
+    """A diffuse floor (z = 0, 6x6) with a diffuse sphere and a rough plastic one on it."""
+    floor = scene.add_material(m.Material("diffuse", reflectance=(0.6, 0.55, 0.5)))
+    white = scene.add_material(m.Material("diffuse", reflectance=(0.8, 0.8, 0.8)))
+    plastic = scene.add_material(m.Material("roughplastic", reflectance=(0.2, 0.3, 0.7),
+                                            alpha=(0.15, 0.15), distribution="ggx"))
+    scene.shapes.append(m.Shape("rectangle", material=floor, world_from_object=m.scale(3.0)))
+    scene.shapes.append(m.Shape("sphere", material=white, center=(-0.6, 0.2, 0.7), radius=0.7))
+    scene.shapes.append(m.Shape("sphere", material=plastic, center=(0.8, -0.5, 0.45), radius=0.45))
+    scene.camera = m.Camera(world_from_camera=m.look_at((0.5, -5.0, 3.2), (0, 0, 0.4), (0, 0, 1)), fov=45)
+
+
+def environment(size=32) -> m.Scene:
+    """The floor and spheres under an image environment: a sky gradient and a small bright
+    patch (a sun of finite size, importance sampled)."""
+    scene = base(size, size, max_depth=4)
+    _floor_and_spheres(scene)
+    h, w = 16, 32
+    v = (np.arange(h)[:, None] + 0.5) / h
+    image = np.zeros((h, w, 3), np.float32)
+    image[...] = np.stack([0.3 + 0.5 * (1 - v), 0.4 + 0.5 * (1 - v), 0.9 * np.ones_like(v)], -1)[:, :1]
+    image[3:5, 9:11] = (30.0, 28.0, 24.0)
+    scene.lights.append(m.Light("envmap", image=image, world_from_light=m.rotate((1, 0, 0), 90)))
+    return scene
+
+
+def directional(size=32) -> m.Scene:
+    """The floor and spheres under a sun (a directional light) and nothing else."""
+    scene = base(size, size, max_depth=4)
+    _floor_and_spheres(scene)
+    scene.lights.append(m.Light("directional", direction=(-0.5, 0.6, -0.7), irradiance=(3.0, 2.8, 2.5)))
+    return scene

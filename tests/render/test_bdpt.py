@@ -3,7 +3,8 @@ per 16x16 block (4x4 on the small analytic scenes) at a Šidák-corrected alpha 
 over every block, channel and scene of this file (glrender.testing.images, sigma from
 four independent seeds of each integrator), under both MIS heuristics; and the same
 seed gives the same image bitwise however a pass is split into dispatches (integer
-fixed-point splats for the t = 1 strategies).
+fixed-point splats for the t = 1 strategies). Lights at infinity: an image environment
+(importance sampled, seen directly and through the scene) and a directional light.
 """
 import numpy as np
 import pytest
@@ -11,8 +12,8 @@ import pytest
 from glrender.render.renderer import Renderer, settings_from_scene
 from glrender.testing.images import compare_images
 
-from bidir_scenes import (caustic, closed_enclosure, cornell, glossy, point_light, renders,
-                          thin_lens)
+from bidir_scenes import (caustic, closed_enclosure, cornell, directional, environment, glossy,
+                          point_light, renders, thin_lens)
 
 SEEDS_PATH, SEEDS_BDPT = (11, 12, 13, 14), (31, 32, 33, 34)
 # name: (scene, block, path spp, bdpt spp)
@@ -23,6 +24,8 @@ SCENES = {
     "point-light": (point_light, 4, 16, 16),
     "enclosure": (closed_enclosure, 4, 16, 8),
     "caustic": (caustic, 8, 256, 64),
+    "environment": (environment, 8, 64, 16),
+    "directional": (directional, 8, 64, 16),
 }
 CASES = [(name, "mis-power") for name in SCENES] + [("cornell", "mis-balance")]
 
@@ -97,10 +100,24 @@ def test03_loop_counts_far_below_the_cap(gl_ctx, make):
     assert 0 < worst < 30_000, worst
 
 
-def test04_lights_at_infinity_refused(gl_ctx):
-    from glrender.errors import UsageError
 
-    from render_scenes import sphere_in_environment
-    scene = sphere_in_environment(width=8, height=8)
-    with pytest.raises(UsageError, match="bdpt: lights at infinity"):
-        Renderer(scene, settings_from_scene(scene, integrator="bdpt", spp=1), ctx=gl_ctx)
+@pytest.mark.parametrize("make", [glossy, caustic, environment])
+def test06_connection_densities_are_the_fresh_ones(gl_ctx, monkeypatch, make):
+    """The strategies take the MIS densities of the connection from their own BSDF
+    evaluations (no second material lookup): the image is bitwise the one whose weights
+    evaluate every density afresh (BDPT_GENERIC_WEIGHTS)."""
+    from glrender.render import renderer as renderer_module
+
+    scene = make(16)
+    images = []
+    for generic in (False, True):
+        defines = renderer_module.shader_defines
+        if generic:
+            monkeypatch.setattr(renderer_module, "shader_defines",
+                                lambda **kw: {**defines(**kw), "BDPT_GENERIC_WEIGHTS": 1})
+        r = Renderer(scene, settings_from_scene(scene, integrator="bdpt", spp=4, seed=8), ctx=gl_ctx)
+        r.step(4)
+        images.append(r.film().mean)
+        assert ("BDPT_GENERIC_WEIGHTS" in r.defines) == generic
+        r.release()
+    assert np.array_equal(images[0], images[1]) and images[0].max() > 0

@@ -8,7 +8,8 @@ vertices) as that strategy would have stored it. bdpt_mis_weight(s, t) summed ov
 strategies that can make the path (no connection at a specular vertex or a delta
 light, s = 0 only on an area light, t >= 1, (1, 1) left out) must be 1 to float32
 precision, under the balance and the power heuristic, on scenes with glass, a
-roughplastic and a point light (paths with delta vertices included).
+roughplastic, a point light, an image environment and a directional light (paths with
+delta vertices and vertices at infinity included).
 """
 import numpy as np
 import pytest
@@ -18,7 +19,7 @@ from glrender.gpu import codegen
 from glrender.render.params import STRATEGIES
 from glrender.render.renderer import Renderer, settings_from_scene
 
-from bidir_scenes import caustic, glossy, point_light
+from bidir_scenes import caustic, directional, environment, glossy, point_light
 
 KERNEL = """#version 450
 layout(local_size_x = 64) in;
@@ -43,12 +44,14 @@ void main() {
     Aov aov = kNoAov;
     int n_camera = random_walk(false, 1, c.o, c.d, c.t_max, vec3(1.0), camera_pdf_dir(c.d, c.time),
                                kBdptMaxSegments + 1, s, aov);
+    if (g_camera[n_camera - 1].kind == kVertexInfinite) n_camera -= 1;   // join its last surface vertex
     LightPathStart st = light_path_start(s);
     results[i] = vec4(0.0);
     if (!st.valid) return;
     LightData l = scene_light(st.light);
     g_light[0] = vertex_point(kVertexLight, st.e.p, light_is_area(l) ? st.e.n : vec3(0.0), vec3(1.0));
     g_light[0].light = st.light + 1u;
+    if (light_is_infinite(l)) g_light[0].kind = kVertexInfinite;
     int n_light = random_walk(true, 1, st.o, st.e.d, kInfinity, st.beta, st.e.pdf_dir,
                               kBdptMaxSegments, s, aov);
     // the whole path, if its two ends can be joined and it is not too long
@@ -61,20 +64,21 @@ void main() {
     bool any_delta = false;
     for (int j = 0; j < k; ++j) {
         any_delta = any_delta || g_path[j].delta || !g_path[j].connectible;
-        if (j == 0) g_p_light[j] = vertex_pdf_light_origin(g_path[0]);
+        if (j == 0) g_p_light[j] = vertex_pdf_light_origin(g_path[0], g_path[1]);
         else if (j == 1) g_p_light[j] = vertex_pdf_light(g_path[0], g_path[1]);
         else g_p_light[j] = g_path[j - 1].delta ? 0.0 : vertex_pdf(g_path[j - 1], g_path[j - 2], g_path[j]);
         if (j == k - 1) g_p_camera[j] = 0.0;
         else if (j == k - 2) g_p_camera[j] = vertex_pdf(g_path[k - 1], g_path[k - 1], g_path[j]);
         else g_p_camera[j] = g_path[j + 1].delta ? 0.0 : vertex_pdf(g_path[j + 1], g_path[j + 2], g_path[j]);
     }
-    bool delta_light = light_is_delta_position(g_path[0]);
+    bool delta_light = light_is_delta(g_path[0]);
     float sum = 0.0;
     int strategies = 0;
     for (int sl = 0; sl < k; ++sl) {
         int t = k - sl;
         bool valid;
-        if (sl == 0) valid = !delta_light && g_path[0].light != 0u && light_is_area(l);
+        if (sl == 0) valid = !delta_light && g_path[0].light != 0u &&
+                             (light_is_area(l) || light_is_infinite(l));
         else valid = !(sl == 1 && t == 1) && !g_path[sl - 1].delta && !g_path[sl].delta &&
                      g_path[sl - 1].connectible && g_path[sl].connectible &&
                      !(t == 1 && sl < 2);
@@ -89,7 +93,8 @@ void main() {
             g_camera[j].pdf_fwd = g_p_camera[k - 1 - j];
             g_camera[j].pdf_rev = g_p_light[k - 1 - j];
         }
-        if (sl == 0) g_camera[t - 1].kind = kVertexSurface;   // the light's point, reached by the camera
+        // the light's point, reached by the camera (a light at infinity stays one)
+        if (sl == 0 && !light_is_infinite(l)) g_camera[t - 1].kind = kVertexSurface;
         sum += bdpt_mis_weight(sl, t);
         strategies += 1;
     }
@@ -119,7 +124,7 @@ def weight_sums(gl_ctx, scene, heuristic, n=1 << 14):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("heuristic", ["mis-power", "mis-balance"])
-@pytest.mark.parametrize("make", [glossy, caustic, point_light])
+@pytest.mark.parametrize("make", [glossy, caustic, point_light, environment, directional])
 def test01_weights_sum_to_one(gl_ctx, make, heuristic):
     res = weight_sums(gl_ctx, make(16), heuristic)
     made = res[:, 1] > 0

@@ -71,6 +71,58 @@ def test03_normal_map_shades(gl_ctx):
         np.testing.assert_allclose(got, 0.5 / np.pi * 2.0 * factor, rtol=2e-3)
 
 
+def shadowing_term(cos_tilt: float, cos_l: float) -> float:
+    """Conty Estevez et al. (2019): alpha^2 = min(tan^2 tilt / 8, 1), G1 of the light."""
+    alpha2 = min((1 - cos_tilt ** 2) / cos_tilt ** 2 / 8, 1.0)
+    return 2 / (1 + np.sqrt(1 + alpha2 * (1 - cos_l ** 2) / cos_l ** 2))
+
+
+@pytest.mark.parametrize("kind", ["mesh", "rectangle"])
+def test03b_shadowing_term_shades(gl_ctx, kind):
+    """The same plane lit from 50 degrees off its normal, the map tilted by 60 toward the
+    light: albedo/pi * E * cos(light, map normal) * the shadowing term of the light's
+    angle to the unperturbed normal (the camera's direction plays no part)."""
+    tilt, light = np.radians(60), np.radians(50)
+    normal_map = flat_map((np.sin(tilt), 0, np.cos(tilt)))
+    scene = quad_scene(m.Material("diffuse", reflectance=(0.5,) * 3, normal_map=normal_map,
+                                  normal_shadowing=True), kind)
+    scene.lights = [m.Light("directional", direction=(-np.sin(light), 0, -np.cos(light)),
+                            irradiance=(2.0,) * 3)]
+    got = glrender.render(scene, spp=4, seed=1).mean[2:6, 2:6]
+    g = shadowing_term(np.cos(tilt), np.cos(light))
+    assert 0.85 < g < 0.9
+    np.testing.assert_allclose(got, 0.5 / np.pi * 2.0 * np.cos(tilt - light) * g, rtol=3e-3)
+
+
+def test03c_term_compiled_in_only_when_asked(gl_ctx):
+    from glrender.render.renderer import Renderer, settings_from_scene
+
+    for shadowing in (False, True):
+        scene = quad_scene(m.Material("diffuse", normal_map=flat_map((1, 0, 1)),
+                                      normal_shadowing=shadowing), "mesh")
+        r = Renderer(scene, settings_from_scene(scene, spp=1), ctx=gl_ctx)
+        try:
+            assert ("GLRENDER_NORMAL_SHADOWING" in r.defines) == shadowing
+        finally:
+            r.release()
+
+
+@pytest.mark.parametrize("flip", [False, True])
+def test03d_flip_invalid_normals(gl_ctx, flip):
+    """Seen from 72 degrees off the plane's normal on the -x side, a map normal tilted 79
+    degrees toward +x hides the camera: the flip turns it round the unperturbed normal."""
+    n = np.array([1.0, 0.0, 0.2]) / np.hypot(1.0, 0.2)
+    scene = quad_scene(m.Material("diffuse", normal_map=flat_map(n), normal_flip=flip), "mesh")
+    scene.camera = m.Camera(world_from_camera=m.look_at((-3, 0, 1), (0, 0, 0), (0, 1, 0)), fov=10)
+    film = glrender.render(scene, spp=4, seed=1, aovs=True)
+    normals = film.aov("normal").reshape(-1, 3)
+    on_quad = np.linalg.norm(normals, axis=1) > 0.999     # every sample of the pixel hit it
+    assert on_quad.sum() >= 8
+    want = n * (-1, -1, 1) if flip else n
+    np.testing.assert_allclose(normals[on_quad], np.broadcast_to(want, normals[on_quad].shape),
+                               atol=3e-3)
+
+
 def half_cut_opacity() -> m.Texture:
     """Opacity 0 on the left half of the image (u < 1/2), 1 on the right half."""
     image = np.zeros((4, 4, 3), np.float32)

@@ -30,6 +30,7 @@ raw = true
 reflectance = 0.5
 normal_map = "bumps"
 normal_scale = 0.5
+normal_shadowing = true
 opacity = { file = "rgba.png", raw = true }
 alpha_cutoff = 0.25
 
@@ -40,6 +41,7 @@ material = "leaf"
     mat = glrender.load(path).materials[0]
     np.testing.assert_allclose(mat.normal_map.image, NORMAL / 255.0, atol=1e-6)   # raw
     assert mat.normal_scale == 0.5 and mat.alpha_cutoff == 0.25
+    assert mat.normal_shadowing and not mat.normal_flip     # the flip stays off unless asked
     assert mat.opacity.image.shape == (1, 2, 3)
 
 
@@ -47,6 +49,8 @@ material = "leaf"
     ("normal_map", "3", "materials.leaf.normal_map: expected a texture"),
     ("opacity", '"nothing"', "materials.leaf.opacity: no texture named 'nothing'"),
     ("alpha_cutoff", "2", "materials.leaf.alpha_cutoff"),
+    ("normal_flip", "true", "materials.leaf.normal_flip: applies to a normal map"),
+    ("normal_shadowing", "1", "materials.leaf.normal_shadowing"),
 ])
 def test02_toml_errors(write, field, value, message):
     path = write("s.toml", f"[materials.leaf]\n{field} = {value}\n")
@@ -63,6 +67,7 @@ def test03_obj_mtl(write, tmp_path):
     mat = scene.materials[scene.shapes[0].material]
     np.testing.assert_allclose(mat.opacity.image[..., 0], [[0.0, 1.0]])      # the alpha channel
     np.testing.assert_allclose(mat.normal_map.image, NORMAL / 255.0, atol=1e-6)
+    assert not mat.normal_shadowing and not mat.normal_flip
 
 
 def test04_gltf_normal_texture_and_mask(write, tmp_path):
@@ -82,6 +87,7 @@ def test04_gltf_normal_texture_and_mask(write, tmp_path):
     mat = scene.materials[scene.shapes[0].material]
     np.testing.assert_allclose(mat.normal_map.image, NORMAL / 255.0, atol=1e-6)
     assert mat.normal_scale == 0.75 and mat.alpha_cutoff == pytest.approx(0.3)
+    assert not mat.normal_shadowing and not mat.normal_flip      # glTF's plain normal map
     np.testing.assert_allclose(mat.opacity.image[..., 0], [[0.0, 0.5]])    # alpha x factor
     # the base colour stays sRGB-decoded colour, not the alpha
     assert mat.reflectance.image[0, 0, 0] > 0.5
@@ -156,3 +162,29 @@ def test06_mitsuba_normalmap_and_mask(write, tmp_path, caught):
                          '<bsdf type="diffuse"/></bsdf></shape></scene>')
     with pytest.raises(SceneError, match=r'b.xml:1: .*needs a <texture name="normalmap">'):
         glrender.load(bad)
+
+
+@pytest.mark.parametrize("flags, shadowing, flip", [
+    ("", True, True),
+    ('<boolean name="use_shadowing_function" value="false"/>', False, True),
+    ('<boolean name="use_shadowing_function" value="false"/>'
+     '<boolean name="flip_invalid_normals" value="false"/>', False, False),
+])
+def test07_mitsuba_normalmap_terminator_options(write, tmp_path, caught, flags, shadowing, flip):
+    """Mitsuba 3.7.1 on multiplies a normal map by a shadowing term and flips normals that
+    hide wi, both by default: the loader maps both with those defaults, silently (the parity
+    scenes bsdf-normalmap, both off, and bsdf-normalmap-mitsuba-defaults match Mitsuba)."""
+    images(tmp_path)
+    path = write("s.xml", f"""<scene version="3.0.0"><shape type="rectangle">
+      <bsdf type="normalmap">{flags}
+        <texture name="normalmap" type="bitmap">
+          <string name="filename" value="n.png"/><boolean name="raw" value="true"/>
+        </texture>
+        <bsdf type="diffuse"/>
+      </bsdf></shape></scene>""")
+    with caught as messages:
+        scene = glrender.load(path)
+    mat = scene.materials[scene.shapes[0].material]
+    assert mat.normal_map is not None
+    assert (mat.normal_shadowing, mat.normal_flip) == (shadowing, flip)
+    assert not [w for w in messages if "shadowing" in w or "flip_invalid" in w], messages

@@ -510,7 +510,11 @@ class _Builder:
             from dataclasses import replace
 
             if t == "normalmap":
-                return replace(mat, normal_map=self.texture(textures[key]))
+                # Mitsuba 3.7.1 on also multiplies by a shadowing term (Conty Estevez et al.
+                # 2019) and flips a normal that hides wi: both on by default, as here
+                return replace(mat, normal_map=self.texture(textures[key]),
+                               normal_shadowing=self.prop(node, "use_shadowing_function", "bool", True),
+                               normal_flip=self.prop(node, "flip_invalid_normals", "bool", True))
             self.r.notes.add("mask (read as an opacity cutout at 0.5)", node.line)
             return replace(mat, opacity=self.texture(textures[key]))
         if t == "bumpmap":

@@ -202,13 +202,22 @@ def _integrator(ctx, t) -> m.Integrator:
     t = ctx.table(t, "integrator")
     _check_keys(ctx, t, "integrator", {"type", "max_depth", "rr_depth", "strategy", "emitter_samples",
                                        "bsdf_samples", "light_selection", "area_sampling",
-                                       "hide_emitters", "ao_distance"})
+                                       "hide_emitters", "ao_distance", "rr", "light_samples",
+                                       "split"})
     i = m.Integrator()
     i.kind = ctx.string(t.get("type", i.kind), "integrator.type", m.INTEGRATORS)
     i.max_depth = ctx.number(t.get("max_depth", i.max_depth), "integrator.max_depth", -1, 1 << 20, integer=True)
     if i.max_depth == 0:
         ctx.fail("integrator.max_depth", "expected -1 (unbounded) or an integer >= 1, got 0")
     i.rr_depth = ctx.number(t.get("rr_depth", i.rr_depth), "integrator.rr_depth", 1, 1 << 20, integer=True)
+    i.rr = ctx.string(t.get("rr", i.rr), "integrator.rr")
+    try:
+        m.parse_rr(i.rr)
+    except m.SceneError as exc:
+        ctx.fail("integrator.rr", str(exc).split(": ", 1)[1])
+    i.light_samples = ctx.number(t.get("light_samples", 1), "integrator.light_samples", 1,
+                                 m.SPLIT_LIMIT, integer=True)
+    i.split = ctx.number(t.get("split", 1), "integrator.split", 1, m.SPLIT_LIMIT, integer=True)
     i.strategy = ctx.string(t.get("strategy", i.strategy), "integrator.strategy", m.STRATEGIES)
     i.emitter_samples = ctx.number(t.get("emitter_samples", 1), "integrator.emitter_samples", 0, 64, integer=True)
     i.bsdf_samples = ctx.number(t.get("bsdf_samples", 1), "integrator.bsdf_samples", 0, 64, integer=True)
@@ -284,7 +293,8 @@ def _texture(ctx, key: str, t) -> m.Texture:
 
 _MATERIAL_FIELDS = {"type", "reflectance", "specular_reflectance", "specular_transmittance", "eta",
                     "k", "int_ior", "ext_ior", "alpha", "distribution", "nonlinear", "two_sided",
-                    "material", "normal_map", "normal_scale", "opacity", "alpha_cutoff"}
+                    "material", "normal_map", "normal_scale", "normal_shadowing", "normal_flip",
+                    "opacity", "alpha_cutoff"}
 # Mitsuba's default interior IOR per kind ("bk7" for dielectrics, "polypropylene" for plastics)
 _DEFAULT_INT_IOR = {"plastic": "polypropylene", "roughplastic": "polypropylene"}
 
@@ -347,6 +357,11 @@ def _material(ctx, name: str, t) -> m.Material:
             setattr(mat, field_name, ctx.spectrum(value, f"{key}.{field_name}"))
     if "normal_scale" in t:
         mat.normal_scale = ctx.number(t["normal_scale"], f"{key}.normal_scale", -100, 100)
+    for field_name in ("normal_shadowing", "normal_flip"):
+        if field_name in t:
+            if "normal_map" not in t:
+                ctx.fail(f"{key}.{field_name}", "applies to a normal map: give normal_map too")
+            setattr(mat, field_name, ctx.boolean(t[field_name], f"{key}.{field_name}"))
     if "alpha_cutoff" in t:
         mat.alpha_cutoff = ctx.number(t["alpha_cutoff"], f"{key}.alpha_cutoff", 0, 1)
     return mat

@@ -1,0 +1,293 @@
+"""Photon mapping, the classic two-pass method (Jensen 2001), on the device.
+
+A photon pass (``shaders/photon/photon_store.comp.glsl``) traces photons from the lights
+(chosen by power) and stores them at non-delta surfaces in two maps: the global map
+(every photon hit, tagged direct, caustic or indirect) and the caustic map (a pass of its
+own that keeps only photons reaching a non-delta surface through delta surfaces alone,
+L S+ D). Each map is sorted into a hash grid in numpy (:func:`build_point_grid`). The
+camera pass is a render kernel (``shaders/integrators/photon.glsl``) accumulated by
+:class:`Renderer` like any other: direct light by next-event estimation, caustics from
+the caustic map, the rest from the global map at the first non-delta surface or through
+a one-bounce final gather. Its progress, checkpoints, ``--time`` and the preview are the
+Renderer's; the maps depend on the scene and seed only, so they are traced again (the
+same photons) when a render resumes.
+
+The estimate is biased (consistent only as photons grow and the radius shrinks): the
+sources are listed in README.md ("Photon mapping").
+"""
+from __future__ import annotations
+
+import hashlib
+import math
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import UsageError
+from ..film import Film
+from ..gl import shaders
+from ..gpu import codegen
+from ..gpu import layout as scene_layout
+from ..render.renderer import SPLAT_SCALE, Renderer
+from . import layout as pl
+from .grid import PointGrid, build_point_grid, typical_radius
+
+PHOTONS_PER_DISPATCH = 1 << 16   # photons per tracing dispatch (64 per work group)
+MAX_KNN = 64                     # kMaxKnn in shaders/photon/photon_gather.glsl
+DEFAULT_PHOTONS = 1 << 18
+DEFAULT_PHOTONS_PER_DISK = 64    # the default radius holds this many photons around a typical one
+KNN_REACH = 1.5                  # the kNN search's largest radius over a typical k-th distance
+
+
+@dataclass(frozen=True)
+class PhotonSettings:
+    """The photon integrator's parameters: ``photons`` for the global map,
+    ``caustic_photons`` for the caustic map (None: as many), a fixed lookup ``radius``
+    in scene units or ``knn`` nearest neighbours (not both; neither: a radius that
+    holds DEFAULT_PHOTONS_PER_DISK photons where they spread evenly), the density
+    ``kernel`` and ``final_gather``; ``direct``: direct light by next-event estimation
+    (``nee``) or from the global map's direct photons (``photons``: tests of the
+    density estimate)."""
+
+    photons: int = DEFAULT_PHOTONS
+    caustic_photons: int | None = None
+    radius: float | None = None
+    knn: int | None = None
+    kernel: str = "uniform"
+    final_gather: bool = False
+    photon_view: bool = False        # also splat the global map's photons (the "photons" AOV)
+    direct: str = "nee"              # direct light by next-event estimation, or "photons" (tests)
+
+    def __post_init__(self) -> None:
+        for name in ("photons", "caustic_photons"):
+            v = getattr(self, name)
+            if v is None and name == "caustic_photons":
+                continue
+            if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or not 1 <= v < 1 << 31:
+                raise UsageError(f"{name.replace('_', ' ')}: expected a positive integer, got {v!r}")
+        r = self.radius
+        if r is not None and not (isinstance(r, (int, float)) and math.isfinite(r) and r > 0):
+            raise UsageError(f"radius: expected a positive number of scene units, got {r!r}")
+        k = self.knn
+        if k is not None and (not isinstance(k, (int, np.integer)) or not 1 <= k <= MAX_KNN):
+            raise UsageError(f"knn: expected an integer in [1, {MAX_KNN}], got {k!r}")
+        if r is not None and k is not None:
+            raise UsageError("radius and knn: give one of them (a fixed radius or k nearest photons)")
+        if self.kernel not in pl.KERNELS:
+            raise UsageError(f"kernel: expected one of {', '.join(pl.KERNELS)}, got {self.kernel!r}")
+        if self.direct not in ("nee", "photons"):
+            raise UsageError(f"direct: expected nee or photons, got {self.direct!r}")
+
+
+class PhotonRenderer(Renderer):
+    """A scene on the device rendered by photon mapping: :class:`Renderer` with the
+    photon integrator's camera kernel and the two photon maps, traced at construction."""
+
+    integrator_files = {"photon": "integrators/photon.glsl"}
+
+    def __init__(self, scene: Any, settings: Any = None, photon: PhotonSettings | None = None, *,
+                 ctx: Any = None, device: Any = None, **overrides: Any) -> None:
+        self.photon = photon or PhotonSettings()
+        if settings is None:
+            overrides.setdefault("integrator", "photon")
+        super().__init__(scene, settings, ctx=ctx, device=device, **overrides)
+        t0 = time.perf_counter()
+        self.counters: dict[str, list[Any]] = {"stored": [0, 0], "traced_twice": [False, False]}
+        self.grids: list[PointGrid] = []
+        self._trace_maps()
+        self.timings["photons"] = time.perf_counter() - t0
+
+    # -- setup -------------------------------------------------------------------------------
+    def _compile(self) -> None:
+        super()._compile()
+        # a sample makes two lookups (caustic map, and the global map or a gather ray's) of
+        # at most 4096 candidates, or 2048 with the kNN heap's up to 6 steps each
+        # (photon/photon_gather.glsl): 2 samples ~16k, 1 kNN sample ~29k loop iterations
+        # at worst, below llvmpipe's silent 65,535 (tests/photon/test_photon.py test04)
+        if self.settings.samples_per_pass is None:
+            self.samples_per_pass = 2 if self.photon.knn is None else 1
+        p = self.packed
+        geometry = codegen.generate(p, has_bvh=p.has_bvh, lights=self.lights_final)
+        library = shaders.ShaderLibrary().with_generated({codegen.GENERATED_PATH: geometry})
+        slots = {"scene": codegen.GENERATED_PATH}
+        self.store_kernel: Any = shaders.compile_compute(
+            self.ctx, "photon/photon_store.comp.glsl", defines=self.defines, slots=slots,
+            library=library)
+        source = shaders.preprocess("photon/photon_store.comp.glsl", defines=self.defines,
+                                    slots=slots, library=library).source
+        self._store_hash = hashlib.sha256(source.encode()).hexdigest()
+        gl = self.gl
+        self._maps = [gl.buffer(reserve=16), gl.buffer(reserve=16)]
+        self._cells = [gl.buffer(reserve=16), gl.buffer(reserve=16)]
+        self._counters = gl.buffer(reserve=4 * pl.MAP_COUNTER_WORDS)
+        self._counters.clear()
+        self._map_params = gl.buffer(reserve=pl.PHOTON_MAP_PARAMS.itemsize)
+        self._view = gl.buffer(reserve=24 * self.width * self.height if self.photon.photon_view else 16)
+        self._view.clear()
+        self._block = np.zeros(1, pl.PHOTON_MAP_PARAMS)[0]
+        self._map_params.write(self._block.tobytes())
+
+    @property
+    def photons(self) -> tuple[int, int]:
+        """Photons emitted for the global and the caustic map."""
+        p = self.photon
+        return p.photons, p.caustic_photons if p.caustic_photons is not None else p.photons
+
+    def lookup_radius(self, which: int) -> float:
+        """The global (0) or caustic (1) map's lookup radius: the fixed radius; or for
+        kNN the search's largest, KNN_REACH times the radius holding k photons around a
+        typical photon of the map; or by default the radius holding
+        DEFAULT_PHOTONS_PER_DISK photons around a typical photon (of each map)."""
+        if self.photon.radius is not None:
+            return float(self.photon.radius)
+        return self._radii[which]
+
+    def _estimate_radius(self, positions: np.ndarray) -> float:
+        if self.photon.radius is not None:
+            return float(self.photon.radius)
+        k = self.photon.knn or DEFAULT_PHOTONS_PER_DISK
+        r = typical_radius(positions, k)
+        if not r > 0:      # an empty map: any radius finds nothing
+            r = 1e-3 * float(self.packed.sphere_bounds[1])
+        return r * (KNN_REACH if self.photon.knn else 1.0)
+
+    def _limit_photons(self) -> int:
+        return int(self.gl.info["GL_MAX_SHADER_STORAGE_BLOCK_SIZE"]) // pl.BYTES_PER_PHOTON
+
+    def _trace(self, which: int, capacity: int) -> int:
+        """Traces map ``which`` into a buffer of ``capacity`` photons: the photons it
+        stored (more than ``capacity`` when they did not fit)."""
+        buf = self.gl.buffer(reserve=max(16, pl.BYTES_PER_PHOTON * capacity))
+        old = self._maps[which]
+        old.release()
+        self._maps[which] = buf
+        self._counters.clear()
+        prm = self._param_block(0, 0)
+        self._bind()
+        self._params.write(prm.tobytes())
+        buf.bind_to_storage_buffer(pl.SSBO_GLOBAL_PHOTONS)
+        self._view.bind_to_storage_buffer(scene_layout.SSBO_SPLAT)
+        block = self._block.copy()
+        total = self.photons[which]
+        max_depth = self.settings.integrator.max_depth
+        block["store"] = (capacity, 256 if max_depth < 0 else max_depth,
+                          int(self.photon.photon_view and which == 0), 0)
+        first = 0
+        while first < total:
+            count = min(PHOTONS_PER_DISPATCH, total - first)
+            block["trace"] = (first, count, total, which)
+            self._map_params.write(block.tobytes())
+            self.store_kernel.run(group_x=-(-count // 64))
+            first += count
+        self.gl.finish()
+        self._bind()
+        return int(np.frombuffer(self._counters.read(4), np.uint32)[0])
+
+    def _trace_maps(self) -> None:
+        limit = self._limit_photons()
+        self._radii = [0.0, 0.0]
+        for which in (0, 1):
+            # a first guess of the photons stored; traced again at the exact size if short
+            capacity = min(limit, 4 * self.photons[which] if which == 0 else self.photons[which])
+            stored = self._trace(which, capacity)
+            if stored > capacity:
+                if stored > limit:
+                    name = ("--photons", "--caustic-photons")[which]
+                    raise UsageError(f"{name} {self.photons[which]}: the {('global', 'caustic')[which]} "
+                                     f"map stores {stored} photons, above the device's "
+                                     f"{limit} per storage buffer: trace fewer")
+                self.counters["traced_twice"][which] = True
+                if self.photon.photon_view and which == 0:
+                    self._view.clear()
+                self._trace(which, stored)
+            self.counters["stored"][which] = stored
+            records = np.zeros((0, 12), np.float32)
+            if stored:
+                data = self._maps[which].read(pl.BYTES_PER_PHOTON * stored)
+                records = np.frombuffer(data, np.float32).reshape(stored, 12)
+                # atomics store photons in any order: a canonical one (by the bits of x and
+                # y; photons at the same x and y are as good as never) makes the radius
+                # estimate and the grid, hence the image, repeatable
+                bits = records[:, :2].copy().view(np.uint32).astype(np.uint64)
+                records = records[np.argsort((bits[:, 0] << np.uint64(32)) | bits[:, 1])]
+            self._radii[which] = self._estimate_radius(records[:, :3])
+            grid = build_point_grid(records[:, :3], self._radii[which])
+            self.grids.append(grid)
+            if stored:
+                self._maps[which].write(np.ascontiguousarray(records[grid.order]).tobytes())
+            self._cells[which].release()
+            self._cells[which] = self.gl.buffer(grid.offsets.tobytes() if grid.table_size else b"\0" * 16)
+            size = "global_size" if which == 0 else "caustic_size"
+            lo = "global_lo" if which == 0 else "caustic_lo"
+            self._block[size] = (*grid.size, grid.table_size)
+            self._block[lo] = (*grid.lo, grid.cell)
+        self._block["radius"] = (self.lookup_radius(0), self.lookup_radius(1),
+                                 1.0 / self.photons[0], 1.0 / self.photons[1])
+        self._block["mode"] = (pl.KERNELS[self.photon.kernel], self.photon.knn or 0,
+                               int(self.photon.final_gather), int(self.photon.direct == "photons"))
+        self._block["trace"] = 0
+        self._block["store"] = 0
+        self._map_params.write(self._block.tobytes())
+        self._counters.clear()
+
+    def _bind(self) -> None:
+        super()._bind()
+        for binding, buf in ((pl.SSBO_GLOBAL_PHOTONS, self._maps[0]), (pl.SSBO_GLOBAL_CELLS, self._cells[0]),
+                             (pl.SSBO_CAUSTIC_PHOTONS, self._maps[1]), (pl.SSBO_CAUSTIC_CELLS, self._cells[1]),
+                             (pl.SSBO_MAP_COUNTERS, self._counters)):
+            buf.bind_to_storage_buffer(binding)
+        self._map_params.bind_to_uniform_block(pl.UBO_PHOTON)
+
+    def fingerprint(self) -> str:
+        """The Renderer's fingerprint with the photon maps' parameters and kernel."""
+        h = hashlib.sha256(super().fingerprint().encode())
+        p = self.photon
+        h.update(repr(("photon", self.photons, p.radius, p.knn, p.kernel, p.final_gather, p.direct)).encode())
+        h.update(self._store_hash.encode())
+        return h.hexdigest()
+
+    # -- outputs -----------------------------------------------------------------------------
+    def lookup_counters(self) -> dict[str, int]:
+        """Lookup candidates since the maps were built: ``skipped`` by the bound,
+        ``visited``, and the most one lookup visited (``max_visited``)."""
+        c = np.frombuffer(self._counters.read(), np.uint32)
+        return {"skipped": int(c[1]), "visited": int(c[2]), "max_visited": int(c[3])}
+
+    def film(self) -> Film:
+        """The Renderer's film; with ``photon_view`` its ``photons`` AOV: the global map's
+        photon hits the camera sees, power per emitted photon in each pixel."""
+        film = super().film()
+        if self.photon.photon_view:
+            words = np.frombuffer(self._view.read(), np.uint32).reshape(-1, 2).astype(np.uint64)
+            sums = ((words[:, 1] << np.uint64(32)) | words[:, 0]).view(np.int64).astype(np.float64)
+            view = (sums / (SPLAT_SCALE * self.photons[0])).reshape(self.height, self.width, 3)
+            first = 8 * self.rows[0]
+            film.aovs["photons"] = view[first:first + self.band_height].astype(np.float32)
+        return film
+
+    def photon_stats(self) -> dict[str, Any]:
+        """What --stats reports of the photon maps: photons emitted and stored per map,
+        lookup radii (the kNN search's largest), the settings, the lookups' candidate
+        counts, memory and the seconds spent tracing and sorting the maps."""
+        p = self.photon
+        return {"photons_emitted": list(self.photons), "photons_stored": list(self.counters["stored"]),
+                "radius": [self.lookup_radius(0), self.lookup_radius(1)], "knn": p.knn,
+                "kernel": p.kernel, "final_gather": p.final_gather,
+                "largest_cell": [g.max_cell_entries for g in self.grids],
+                "lookups": self.lookup_counters(), "memory": self.memory(),
+                "seconds": self.timings.get("photons", 0.0)}
+
+    def memory(self) -> dict[str, int]:
+        """Device bytes per photon stored, photons stored per map and the maps' bytes."""
+        stored = self.counters["stored"]
+        return {"bytes_per_photon": pl.BYTES_PER_PHOTON, "global_photons": stored[0],
+                "caustic_photons": stored[1],
+                "map_bytes": sum(pl.BYTES_PER_PHOTON * s + 4 * (g.table_size + 1)
+                                 for s, g in zip(stored, self.grids))}
+
+    def release(self) -> None:
+        for buf in (*self._maps, *self._cells, self._counters, self._map_params, self._view):
+            buf.release()
+        super().release()

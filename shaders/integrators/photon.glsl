@@ -1,0 +1,96 @@
+// Photon mapping's camera pass (Jensen 2001, ch. 9; the two-pass method): the camera
+// ray follows delta surfaces (mirrors, glass) to its first non-delta surface x, picking
+// up emission seen directly or through them; at x
+//   - direct light by next-event estimation (light sampling, no MIS: photons carry none of it),
+//   - caustics (L S+ D) from the caustic map,
+//   - the rest of the indirect light from the global map: at x itself (its indirect
+//     photons), or with --final-gather through one BSDF-sampled gather ray, followed
+//     through delta surfaces to a non-delta surface x', where the global map's photons
+//     of every type estimate the light leaving x' toward x (emission the gather ray
+//     meets is not counted: direct light and caustics at x have their own terms).
+// (mode.w = 1, tests: direct light from the global map's direct photons instead of NEE.)
+// Depth counts segments as Mitsuba's max_depth: a photon counts only where the camera's
+// and the photon's segments together stay within it.
+#include "integrators/integrator_common.glsl"
+#include "integrators/shading.glsl"
+#include "photon/photon_gather.glsl"
+#include "photon/camera_path.glsl"
+#include "integrators/pixel_loop.glsl"
+
+GatherPoint gather_point(SurfaceHit hit, Bsdf b, vec3 d) {
+    Frame frame = shading_frame(hit);
+    bsdf_normal_frame(b, hit.ns0, frame);
+    return GatherPoint(hit.p, hit.ng, b, frame, frame_to_local(frame, -d));
+}
+
+// One gather ray from g (camera segments to g: `segments`): the global map's estimate at
+// the first non-delta surface it reaches, times the path's BSDF weights.
+vec3 final_gather(GatherPoint g, SurfaceHit hit, float time, int segments, int max_segments,
+                  inout SamplerState s) {
+    vec2 u_lobe = sampler_2d(s);
+    vec2 u_bsdf = sampler_2d(s);
+    BsdfSample bs = bsdf_sample(g.b, g.wo_l, u_lobe.x, u_bsdf, false);
+    if (!bs.valid) return vec3(0.0);
+    vec3 d = frame_from_local(g.frame, bs.wi);
+    if (dot(d, hit.ng) * bs.wi.z <= 0.0) return vec3(0.0);
+    vec3 beta = bs.weight, o = offset_ray_origin(hit.p, hit.ng, d);
+    for (int k = segments + 1; k < max_segments; ++k) {
+        LOOP_TICK();
+        SurfaceHit h;
+        if (!scene_intersect(o, d, kInfinity, time, h)) break;
+        Bsdf b = bsdf_from_material(h.material, h.uv);
+        if (!bsdf_is_delta(b)) {
+            uint all_types = (1u << kPhotonDirect) | (1u << kPhotonCaustic) | (1u << kPhotonIndirect);
+            return beta * photon_estimate(kGlobalMap, gather_point(h, b, d), all_types, max_segments - k);
+        }
+        Frame frame = shading_frame(h);
+        bsdf_normal_frame(b, h.ns0, frame);
+        vec2 u_l = sampler_2d(s);
+        vec2 u_d = sampler_2d(s);
+        if (!continue_camera_path(h, b, frame, frame_to_local(frame, -d), u_l.x, u_d, beta, o, d)) break;
+    }
+    return vec3(0.0);
+}
+
+vec3 integrator_li(vec3 o, vec3 d, float t_max, float time, inout SamplerState s, inout Aov aov) {
+    int max_segments = kMaxDepth < 0 ? kUnboundedDepthCap : kMaxDepth;
+    vec3 L = vec3(0.0), beta = vec3(1.0);
+    for (int depth = 0; depth < max_segments; ++depth) {
+        LOOP_TICK();
+        SurfaceHit hit;
+        if (!scene_intersect(o, d, t_max, time, hit)) {
+            vec3 Le = environment_contribution(d, depth, o, 1.0, true);
+            L += beta * Le;
+            if (kAovs && depth == 0) aov.emission = Le;   // the emission AOV: the first hit's
+            break;
+        }
+        if (depth == 0) record_aov(aov, hit);
+        if (hit.light != 0u) {
+            vec3 Le = emitter_hit_contribution(hit, d, depth, o, 1.0, true);
+            L += beta * Le;
+            if (kAovs && depth == 0) aov.emission = Le;
+        }
+        Bsdf b = bsdf_from_material(hit.material, hit.uv);
+        GatherPoint g = gather_point(hit, b, d);
+        vec2 u_choice = sampler_2d(s);
+        vec2 u_light = sampler_2d(s);
+        vec2 u_bsdf = sampler_2d(s);
+        if (!bsdf_is_delta(b)) {
+            int segments = depth + 1;     // camera segments to x
+            if (segments + 1 > max_segments) break;
+            bool gather = u_map.mode.z != 0u;
+            uint types = gather ? 0u : 1u << kPhotonIndirect;
+            if (u_map.mode.w != 0u)
+                types |= 1u << kPhotonDirect;   // direct light from the photons too (tests)
+            else
+                L += beta * next_event(hit.p, hit, b, g.frame, g.wo_l, time, u_choice.x, u_light, false);
+            L += beta * photon_estimate(kCausticMap, g, 1u << kPhotonCaustic, max_segments - segments);
+            if (types != 0u) L += beta * photon_estimate(kGlobalMap, g, types, max_segments - segments);
+            if (gather) L += beta * final_gather(g, hit, time, segments, max_segments, s);
+            break;
+        }
+        if (!continue_camera_path(hit, b, g.frame, g.wo_l, u_choice.y, u_bsdf, beta, o, d)) break;
+        t_max = kInfinity;
+    }
+    return L;
+}

@@ -1,0 +1,33 @@
+// Density estimation shared by SPPM's deposits (photon/sppm_deposit.glsl) and the
+// photon integrator's lookups (photon/photon_gather.glsl).
+#include "bsdf/bsdf.glsl"
+
+// Density estimation kernels over the disk of radius r, as functions of q = d / r,
+// normalized so that their mean over the disk is 1 (the estimate stays Phi / (pi r^2)):
+// uniform 1; cone (Jensen 2001, k = 1) 3 (1 - q); Epanechnikov 2 (1 - q^2).
+const uint kKernelUniform = 0u;
+const uint kKernelCone = 1u;
+const uint kKernelEpanechnikov = 2u;
+
+float density_kernel(uint kernel, float q2) {
+    if (kernel == kKernelCone) return 3.0 * (1.0 - sqrt(q2));
+    if (kernel == kKernelEpanechnikov) return 2.0 * (1.0 - q2);
+    return 1.0;
+}
+// Surface density estimation: a photon counts at a point only where the two geometric
+// normals agree (a photon on the far side of a thin wall, or on the other wall of a
+// corner, belongs to another surface).
+const float kNormalAgreement = 0.5;   // cos 60 degrees
+
+// What a photon arriving from the unit direction wi (pointing back where it came from)
+// contributes toward wo_l (in `frame`, the point's shading frame; ng its geometric
+// normal) per unit power: the BSDF over |cos theta_i| (bsdf_eval includes the cosine; the
+// photon density already accounts for it). False (the photon does not count) unless it
+// arrives on the geometric side its shading direction claims.
+bool photon_bsdf(Bsdf b, Frame frame, vec3 wo_l, vec3 ng, vec3 wi, out vec3 f) {
+    vec3 wi_l = frame_to_local(frame, wi);
+    f = vec3(0.0);
+    if (!(abs(wi_l.z) > 0.0) || dot(wi, ng) * wi_l.z <= 0.0) return false;
+    f = bsdf_eval(b, wo_l, wi_l, false) / abs(wi_l.z);
+    return true;
+}

@@ -1,0 +1,169 @@
+// The photon integrator's density estimate: radiance leaving a surface point toward wo
+// from the photons of a map around it (Jensen 2001, ch. 7),
+//     L = 1 / (pi r^2) sum_p K(d_p / r) f(wo, wi_p) Phi_p,
+// with Phi_p = beta_p / (photons emitted) and K a kernel of mean 1 over the disk
+// (photon/density.glsl). Either a fixed radius r, or the k nearest photons within the
+// map's largest radius (r: the k-th's distance; the largest radius and all photons
+// found when fewer lie within it).
+//
+// The map's grid has cells of twice the largest radius, each photon listed once in its
+// cell (glrender/photon/grid.py build_point_grid): the lookup visits the 2 x 2 x 2
+// cells around the point, each hash bucket once, and at most kRadiusCandidates
+// (kKnnCandidates for kNN, whose max-heap adds up to log2 k steps a candidate) entries
+// in all, far below llvmpipe's silent ~65,535-iteration cap; skipped entries are
+// counted (map_counters[1]).
+//
+// Surface density estimation: photons count only within a disk, |n . (x_p - x)| below
+// kDiscThickness r, with geometric normals that agree (kNormalAgreement), so a photon
+// across a thin wall or on the other wall of a corner does not leak in.
+#include "photon/map_layout.glsl"
+#include "photon/density.glsl"
+#include "integrators/integrator_common.glsl"
+
+const uint kRadiusCandidates = 4096u;
+const uint kKnnCandidates = 2048u;
+const int kMaxKnn = 64;               // the largest k (glrender/photon/photon.py MAX_KNN)
+const float kDiscThickness = 0.25;    // the disk's half thickness over its radius
+const uint kGlobalMap = 0u;
+const uint kCausticMap = 1u;
+
+vec4 map_photon(uint map, uint k) {
+    return map == kGlobalMap ? global_photons[k] : caustic_photons[k];
+}
+
+uint map_cell(uint map, uint h) {
+    return map == kGlobalMap ? global_cells[h] : caustic_cells[h];
+}
+
+// What the lookup needs of a surface point: position, geometric normal, BSDF and the
+// outgoing direction in its shading frame.
+struct GatherPoint {
+    vec3 p;
+    vec3 ng;
+    Bsdf b;
+    Frame frame;
+    vec3 wo_l;
+};
+
+// Whether photon k of `map` counts at point g within squared radius r2 (disk, normal,
+// type in `types` (a bit per kPhoton* type), at most `segments` light segments): its
+// squared distance in d2.
+bool photon_candidate(uint map, uint k, GatherPoint g, float r2, uint types, float segments, out float d2) {
+    vec4 a = map_photon(map, k);
+    d2 = 0.0;
+    if ((types & (1u << floatBitsToUint(a.w))) == 0u) return false;
+    vec3 dp = a.xyz - g.p;
+    d2 = dot(dp, dp);
+    if (d2 > r2) return false;
+    float h = dot(dp, g.ng);
+    if (h * h > kDiscThickness * kDiscThickness * r2) return false;
+    vec4 b = map_photon(map, k + 1u);
+    if (dot(unpackSnorm4x8(floatBitsToUint(b.w)).xyz, g.ng) < kNormalAgreement) return false;
+    return map_photon(map, k + 2u).w <= segments;
+}
+
+// The photon's contribution (kernel weight w) at g: f Phi w.
+vec3 photon_term(uint map, uint k, GatherPoint g, float w) {
+    vec3 f;
+    if (!photon_bsdf(g.b, g.frame, g.wo_l, g.ng, map_photon(map, k + 1u).xyz, f)) return vec3(0.0);
+    return f * map_photon(map, k + 2u).rgb * w;
+}
+
+// The 8 hash buckets around g.p, each once (0xffffffff: a cell outside the grid or a
+// bucket seen already).
+void gather_buckets(uint map, vec3 p, out uint buckets[8]) {
+    uvec4 size = map == kGlobalMap ? u_map.global_size : u_map.caustic_size;
+    vec4 lo = map == kGlobalMap ? u_map.global_lo : u_map.caustic_lo;
+    ivec3 base = ivec3(floor((p - lo.xyz) / lo.w - 0.5));
+    for (int i = 0; i < 8; ++i) {
+        ivec3 c = base + ivec3(i & 1, (i >> 1) & 1, i >> 2);
+        buckets[i] = 0xffffffffu;
+        if (size.w == 0u || any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(size.xyz))))
+            continue;
+        uvec3 u = uvec3(c);
+        uint h = ((u.x * 73856093u) ^ (u.y * 19349663u) ^ (u.z * 83492791u)) % size.w;
+        for (int j = 0; j < i; ++j)
+            if (buckets[j] == h) h = 0xffffffffu;
+        buckets[i] = h;
+    }
+}
+
+// The estimate from photons of `map` of the types in `types` that took at most
+// `segments` segments from their light.
+vec3 photon_estimate(uint map, GatherPoint g, uint types, int segments) {
+    uint buckets[8];
+    gather_buckets(map, g.p, buckets);
+    float r_max = map == kGlobalMap ? u_map.radius.x : u_map.radius.y;
+    float inv_photons = map == kGlobalMap ? u_map.radius.z : u_map.radius.w;
+    float r2 = r_max * r_max, seg = float(segments);
+    uint knn = u_map.mode.y;
+    uint budget = knn == 0u ? kRadiusCandidates : kKnnCandidates, visited = 0u, skipped = 0u;
+    vec3 sum = vec3(0.0);
+    float heap_d2[kMaxKnn];
+    uint heap_k[kMaxKnn];
+    uint found = 0u;
+    for (int i = 0; i < 8; ++i) {
+        if (buckets[i] == 0xffffffffu) continue;
+        uint begin = map_cell(map, buckets[i]), end = map_cell(map, buckets[i] + 1u);
+        uint visit = min(end - begin, budget - visited);
+        skipped += end - begin - visit;
+        for (uint e = begin; e < begin + visit; ++e) {
+            LOOP_TICK();
+            uint k = 3u * e;
+            float d2;
+            if (!photon_candidate(map, k, g, r2, types, seg, d2)) continue;
+            if (knn == 0u) {
+                sum += photon_term(map, k, g, density_kernel(u_map.mode.x, d2 / r2));
+                continue;
+            }
+            // a max-heap of the knn nearest by squared distance
+            uint at;
+            if (found < knn) {
+                at = found++;
+                while (at > 0u && heap_d2[(at - 1u) / 2u] < d2) {
+                    LOOP_TICK();
+                    heap_d2[at] = heap_d2[(at - 1u) / 2u];
+                    heap_k[at] = heap_k[(at - 1u) / 2u];
+                    at = (at - 1u) / 2u;
+                }
+            } else {
+                if (d2 >= heap_d2[0]) continue;
+                at = 0u;
+                for (;;) {
+                    LOOP_TICK();
+                    uint c = 2u * at + 1u;
+                    if (c >= knn) break;
+                    if (c + 1u < knn && heap_d2[c + 1u] > heap_d2[c]) c += 1u;
+                    if (heap_d2[c] <= d2) break;
+                    heap_d2[at] = heap_d2[c];
+                    heap_k[at] = heap_k[c];
+                    at = c;
+                }
+            }
+            heap_d2[at] = d2;
+            heap_k[at] = k;
+        }
+        visited += visit;
+    }
+    if (knn != 0u) {
+        // the k-th nearest sets the radius and is left out: (k - 1) / (pi r_k^2) is unbiased
+        // for an even density (counting it too is k / (k - 1) too bright with the uniform kernel)
+        uint first = 0u;
+        if (found == knn) {
+            r2 = heap_d2[0];
+            first = 1u;
+        }
+        for (uint i = first; i < found; ++i) {
+            LOOP_TICK();
+            sum += photon_term(map, heap_k[i], g, density_kernel(u_map.mode.x, heap_d2[i] / r2));
+        }
+    }
+    if (skipped > 0u) atomicAdd(map_counters[1], skipped);
+    if (visited > 0u) {
+        atomicAdd(map_counters[2], visited);
+        atomicMax(map_counters[3], visited);
+    }
+    if (!(r2 > 0.0)) return vec3(0.0);
+    vec3 L = sum * inv_photons / (kPi * r2);
+    return is_finite(L) ? L : vec3(0.0);
+}

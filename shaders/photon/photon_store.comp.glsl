@@ -1,0 +1,56 @@
+#version 450
+// The photon integrator's photon pass: one photon per invocation, photons [first, first +
+// count) of the pass. Each photon is traced from a light (photon/photon_tracer.glsl:
+// lights chosen by power, Russian roulette by albedo) and stored at every non-delta
+// surface it reaches (photon/map_layout.glsl): its position, geometric normal, the
+// direction it came from, its power and type (direct: the first surface; caustic:
+// reached through delta surfaces only, L S+ D; indirect: the rest) and the segments it
+// took. The caustic map's pass (trace.w = 1) keeps caustic photons only and ends each
+// photon at its first non-delta surface. Photons beyond the map's capacity are counted
+// and not stored (the host sizes the map from the count and traces again).
+// Photon j draws its numbers as sample j of a sequence scrambled by (seed, map).
+layout(local_size_x = 64) in;
+
+#include "common/params.glsl"
+#include "common/loop_counter.glsl"
+#include "scene/layout.glsl"
+#include "photon/map_layout.glsl"
+#include "photon/photon_tracer.glsl"
+#include "photon/photon_view.glsl"
+
+void store_photon(SurfaceHit hit, Photon ph, uint type, int segments) {
+    uint k = atomicAdd(map_counters[0], 1u);
+    if (k >= u_map.store.x) return;
+    global_photons[3u * k] = vec4(hit.p, uintBitsToFloat(type));
+    global_photons[3u * k + 1u] = vec4(-ph.d, uintBitsToFloat(packSnorm4x8(vec4(hit.ng, 0.0))));
+    global_photons[3u * k + 2u] = vec4(ph.beta, float(segments));
+}
+
+void main() {
+    if (gl_GlobalInvocationID.x >= u_map.trace.y) return;
+    uint j = u_map.trace.x + gl_GlobalInvocationID.x;
+    uint hash = sampler_pixel_hash(uvec2(u_map.trace.w, 0xfffffffeu), u_params.dispatch.z);
+    SamplerState s = sampler_start(hash, j, u_map.trace.z, 1u);
+    Photon ph = photon_start(s);
+    bool caustic_map = u_map.trace.w == 1u;
+    // a photon path of k segments meets a camera path of at least one
+    int max_segments = int(u_map.store.y) - 1;
+    bool delta_only = true;
+    for (int segments = 1; segments <= max_segments && ph.alive; ++segments) {
+        LOOP_TICK();
+        PhotonHit h;
+        if (!photon_next_hit(ph, s, h)) break;
+        if (!bsdf_is_delta(h.b)) {
+            uint type = segments == 1 ? kPhotonDirect : (delta_only ? kPhotonCaustic : kPhotonIndirect);
+            if (!caustic_map || type == kPhotonCaustic) {
+                store_photon(h.hit, ph, type, segments);
+                if (u_map.store.z != 0u) splat_photon_view(h.hit, ph, h.u_lens);
+            }
+            if (caustic_map) break;
+            delta_only = false;
+        }
+        if (segments + 1 > max_segments) break;
+        photon_scatter(ph, h.hit, h.b, h.u_choice.y, h.u_bsdf, h.u_rr);
+    }
+    if (kCountLoops) atomicMax(debug_counters[0], g_loop_count);
+}
