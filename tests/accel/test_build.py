@@ -174,3 +174,29 @@ def test09_options():
         build_bvh(v, f, method="sweep")
     with pytest.raises(ValueError, match="max_leaf_size must be 1..4"):
         build_bvh(v, f, max_leaf_size=5)
+
+
+def test10_morton_order_is_the_stable_argsort_of_the_codes():
+    """morton_order sorts unstably and then puts equal codes in index order: the same as a
+    stable argsort, on inputs with many ties (points on a coarse grid) and without."""
+    from glrender.accel.morton import morton_codes, morton_order
+
+    rng = np.random.default_rng(4)
+    for n, levels in [(1, 1), (2, 1), (500, 2), (3000, 7), (3000, 10**6)]:
+        points = rng.integers(0, levels, (n, 3)).astype(np.float32)
+        np.testing.assert_array_equal(morton_order(points),
+                                      np.argsort(morton_codes(points), kind="stable"))
+
+
+def test11_a_soup_and_the_same_mesh_indexed_build_the_same_tree():
+    """A soup (indices 0..3T-1, the renderer's layout) and the same triangles indexed give
+    the same tree, duplicates and degenerate triangles removed alike."""
+    v, f = icosphere(3)
+    f = np.concatenate([f, f[:40][:, [1, 2, 0]], f[:5], [[0, 0, 1]]])
+    soup = v[f].reshape(-1, 3)
+    a = build_bvh(v, f)
+    b = build_bvh(soup, np.arange(len(soup)).reshape(-1, 3))
+    assert a.stats()["removed_duplicates"] == b.stats()["removed_duplicates"] == 45
+    for key in ("nodes", "triangles", "instances"):
+        np.testing.assert_array_equal(a.pack()[key], b.pack()[key])
+    np.testing.assert_array_equal(a.prim_order, b.prim_order)

@@ -140,10 +140,113 @@ def test09_bulk_parser_agrees_with_the_general_one(write, monkeypatch):
         lines.append(f"f {a}/{b}/{c} {b}/{c}/{a} {c}/{a}/{b}")
     path = write("big.obj", "\n".join(lines) + "\n")
     assert path.stat().st_size > obj_module.FAST_PATH_BYTES
-    assert obj_module._read_obj_fast(path.read_text(), path) is not None   # the bulk path runs
+    assert obj_module._read_obj_fast(path.read_bytes(), path) is not None   # the bulk path runs
     fast = read_obj(path)
     monkeypatch.setattr(obj_module, "FAST_PATH_BYTES", 1 << 40)
     slow = read_obj(path)
     for name in ("positions", "texcoords", "normals", "corners", "triangles", "tri_material", "tri_object"):
         np.testing.assert_array_equal(getattr(fast, name), getattr(slow, name), err_msg=name)
     assert fast.material_names == slow.material_names and fast.object_names == slow.object_names
+
+
+def _same_obj(fast, slow):
+    """The bulk parser's result read as the general parser's: the same meshes (corners may
+    differ by unused vertices, see obj._corners), materials, objects and per-triangle ids."""
+    assert fast.material_names == slow.material_names and fast.object_names == slow.object_names
+    np.testing.assert_array_equal(fast.tri_material, slow.tri_material)
+    np.testing.assert_array_equal(fast.tri_object, slow.tri_object)
+    for name in ("positions", "texcoords", "normals"):
+        np.testing.assert_array_equal(getattr(fast, name), getattr(slow, name), err_msg=name)
+    np.testing.assert_array_equal(fast.corners[fast.triangles], slow.corners[slow.triangles])
+
+
+def _general(path):
+    from glrender.scene.loaders import obj as obj_module
+
+    size = obj_module.FAST_PATH_BYTES
+    obj_module.FAST_PATH_BYTES = 1 << 40
+    try:
+        return read_obj(path, read_materials=False)
+    finally:
+        obj_module.FAST_PATH_BYTES = size
+
+
+_BULK_LINES = [
+    "v 0 0 0", "v 1 0 0", "v 0 1 0", "v 0 0 1 1", "v 1e39 0 0", "v nan 0 0", "v 1", "v\t0 1 1",
+    "vt 0.5 0.5", "vt 0.25", "vt 0.1 0.2 0.3", "vn 0 0 1", "vn 0 1", "f 1 2 3", "f -1 -2 -3",
+    "f 1/1 2/1 3/1", "f 1//1 2//1 3//1", "f 1/1/1 2/1/1 3/1/1", "f 1 2", "f 0 1 2", "f 9 1 2",
+    "f 1/2/3/4 1 1", "f 1/1 2 3//1", "f 1/1/1 2/1 3//1//", "f /1 2 3", "f 1/ 2/ 3/", "f -9 1 2",
+    "usemtl x", "usemtl y z", "mtllib none.mtl", "mtllib a/b.mtl", "o thing", "g", "s off", "vp 1",
+    "f 1 1 1", "f 1 2 3 4 5 6", "f 1 2 3 #", "#", "# a/b 1 2", "", "\t", "  v 1 1 1", "vt",
+    "f a b c", "f 1.0 2 3", "f +1 2 3", "v 1_0 0 0", "v nan(1) 0 0", "vn inf 0 0", "\u00a0",
+    "g caf\u00e9", "v 0x1 0 0", "f 99999999999999999999 1 2",
+]
+
+
+def test10_bulk_parser_equals_the_general_one_or_declines(tmp_path):
+    """On the fuzzed inputs (the OBJ lines of tests/scene/test_toml.py and more), forced
+    whatever the size: the bulk parser returns what the general parser returns, or None
+    (declines) wherever the general parser reports an error."""
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    from glrender.scene.loaders import obj as obj_module
+
+    path = tmp_path / "f.obj"
+    accepted, loaded = [], []
+
+    common = st.sampled_from(["v 0 0 1", "v 1 0 0.5", "v 0 1 0", "vt 0.5 0.5", "vn 0 0 1",
+                              "f 1 2 3", "f -1 -2 -3", "f 3 1 2", "usemtl x", "o thing", "#", ""])
+
+    @settings(max_examples=400, deadline=None, derandomize=True,
+              suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @given(head=st.sampled_from(["", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 1\nvn 0 0 1\n"]),
+           lines=st.lists(st.one_of(common, common, common, common, st.sampled_from(_BULK_LINES)),
+                          max_size=20),
+           eol=st.sampled_from(["\n", "\r\n"]),
+           noise=st.one_of(st.just(""), st.just(""), st.text(max_size=8)))
+    def check(head, lines, eol, noise):
+        data = (head.replace("\n", eol) + eol.join(lines) + eol + noise).encode("utf-8", errors="replace")
+        path.write_bytes(data)
+        fast = obj_module._read_obj_fast(data, path)
+        try:
+            slow = _general(path)
+        except SceneError:
+            assert fast is None, data
+            return
+        loaded.append(1)
+        if fast is not None:
+            accepted.append(1)
+            _same_obj(fast[0], slow)
+
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        check()
+    assert len(accepted) > 20 and 3 * len(accepted) > len(loaded)   # a good share of those that load
+
+
+def test11_bulk_parser_on_the_shared_and_test_obj_files(write):
+    """Every OBJ file the tests read (the shared scenes where present, a generated mixed
+    file with relative indices, quads and groups): the bulk parser (forced) equals the general one."""
+    from glrender.scene.loaders import obj as obj_module
+
+    rng = np.random.default_rng(5)
+    lines = ["mtllib none.mtl", "o a"]
+    for block in range(3):
+        lines += [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in rng.random((200, 3))]
+        lines += [f"vn {x:.4f} {y:.4f} {z:.4f}" for x, y, z in rng.normal(size=(200, 3))]
+        lines += [f"usemtl m{block % 2}", f"g part{block}", "s 1"]
+        lines += ["f " + " ".join(f"{a}//{b}" for a, b in zip(q, rng.integers(-200, 0, 4)))
+                  for q in rng.integers(-200, 0, (300, 4))]
+    paths = [write("mixed.obj", "\n".join(lines) + "\n")]
+    paths += sorted(SCENES.glob("**/*.obj")) if SCENES.is_dir() else []
+    taken = 0
+    for path in paths:
+        fast = obj_module._read_obj_fast(path.read_bytes(), path)
+        if fast is not None:
+            taken += 1
+            _same_obj(fast[0], _general(path))
+    assert obj_module._read_obj_fast(paths[0].read_bytes(), paths[0]) is not None
+    assert taken >= 1

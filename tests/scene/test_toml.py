@@ -3,6 +3,7 @@ expectation, includes, parameters, textures, disks; fuzzing of TOML and OBJ inpu
 import string
 from pathlib import Path
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -139,3 +140,21 @@ def test08_include_depth_is_bounded_and_paths_outside_are_reported(write, caught
     with caught as messages:
         glrender.load(inner)
     assert any(f"resolves to {outer}" in w and "outside the scene's folder" in w for w in messages)
+
+
+def test10_translation_only_transforms_equal_the_matrix_product_bitwise():
+    """transform_points / transform_normals skip the product for translation-only matrices;
+    the result is the product's, bit for bit (signed zeros, tiny and huge values)."""
+    rng = np.random.default_rng(0)
+    p = rng.choice([0.0, -0.0, 1.5, -2.0, 1e-300, -3e300], size=(5000, 3))
+    for t in ([0.0, 0.0, 0.0], [-0.0, -0.0, 0.0], [1.0, -0.0, 2.0]):
+        M = np.eye(4)
+        M[:3, 3] = t
+        expected = p @ M[:3, :3].T + M[:3, 3]
+        assert np.array_equal(m.transform_points(M, p).view(np.uint64), expected.view(np.uint64))
+        with np.errstate(over="ignore"):
+            n = p @ np.linalg.inv(M[:3, :3])
+            length = np.linalg.norm(n, axis=-1, keepdims=True)
+            expected = n / np.where(length > 0, length, 1.0)
+            got = m.transform_normals(M, p)
+        assert np.array_equal(got.view(np.uint64), expected.view(np.uint64))

@@ -110,21 +110,6 @@ def _statements(text: str):
             yield lineno, line, line.split()
 
 
-def _numbers(text: str, dtype) -> np.ndarray:
-    """Whitespace-separated numbers parsed in C; ValueError unless every token is one."""
-    import warnings
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")      # numpy warns (DeprecationWarning) on a bad token
-        try:
-            arr = np.fromstring(text, dtype=dtype, sep=" ")
-        except (DeprecationWarning, ValueError):
-            raise ValueError("not a number") from None
-    if arr.size != len(text.split()):
-        raise ValueError("not a number")
-    return arr
-
-
 def _unique_corners(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Distinct (v, vt, vn) rows and the index of each input row among them, through one
     int64 key per row (sorting rows of a (C, 3) array directly is 20x slower)."""
@@ -157,91 +142,166 @@ def _corners(flat: np.ndarray, nv: int, nvt: int, nvn: int) -> tuple[np.ndarray,
     return corners, flat[:, 0].copy()
 
 
-def _read_obj_fast(text: str, path: Path):
-    """Large files, the common shape: every ``v`` has 3 numbers and every face has the same
-    number of corners in the same format with positive indices. Lines are sorted by kind in
-    one pass and each kind is parsed by numpy in bulk; anything else returns None (the
-    general parser then reads the file and reports errors with their line numbers)."""
-    import re
+_MARKERS = ("usemtl", "mtllib", "o", "g", "s", "vp")
 
-    if re.search(r"^(?![ \t]*$|v |f |vt |vn |usemtl\b|mtllib\b|[ogs]\b|#)", text, re.M):
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """[first, end) of each run of consecutive True entries."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[False], mask, [False]]).view(np.int8)))
+    return list(zip(edges[0::2].tolist(), edges[1::2].tolist()))
+
+
+def _read_obj_fast(data: bytes, path: Path):
+    """Large files, the common shape, parsed by numpy over the whole file: ``v`` lines with
+    the same count (>= 3) of numbers, ``vt`` lines with the same count, ``vn`` with 3,
+    faces all with the same number of corners in the same ``v``, ``v/vt``, ``v//vn`` or
+    ``v/vt/vn`` form (relative indices resolved as the general parser does), comments,
+    blank lines and ``usemtl``/``mtllib``/``o``/``g``/``s``. The lines are classified by
+    their first bytes, their tokens counted per line and per face corner, and every kind
+    parsed in bulk from the file's own bytes (the keywords blanked). Anything else returns
+    None: the general parser then reads the file and reports errors with line numbers."""
+    buf = np.frombuffer(data, np.uint8)
+    n = len(buf)
+    if n == 0:
         return None
-    v = re.findall(r"^v (.*)$", text, re.M)
-    f = re.findall(r"^f (.*)$", text, re.M)
-    vt = re.findall(r"^vt (.*)$", text, re.M) if "vt " in text else []
-    vn = re.findall(r"^vn (.*)$", text, re.M) if "vn " in text else []
+    if np.count_nonzero(buf < 32) != data.count(b"\n") + data.count(b"\t") + data.count(b"\r") or \
+            data.count(b"\r") != data.count(b"\r\n"):
+        return None     # other line breaks or whitespace of str.splitlines / str.split
+    if (buf >= 0x80).any() and any(s in data for s in (b"\xc2\x85", b"\xe2\x80\xa8", b"\xe2\x80\xa9")):
+        return None
+    starts = np.concatenate([[0], np.flatnonzero(buf == 10) + 1])
+    if starts[-1] == n:
+        starts = starts[:-1]
+    padded = np.concatenate([buf, np.zeros(2, np.uint8)])
+    b0, b1, b2 = padded[starts], padded[starts + 1], padded[starts + 2]
+    sep1, sep2 = b1 <= 32, b2 <= 32                  # whitespace (or the end of the file)
+    is_v = (b0 == ord("v")) & sep1
+    is_vt = (b0 == ord("v")) & (b1 == ord("t")) & sep2
+    is_vn = (b0 == ord("v")) & (b1 == ord("n")) & sep2
+    is_f = (b0 == ord("f")) & sep1
+    # tokens: [first, last] bytes of every run of non-whitespace (the only bytes <= 32 left
+    # are tab, CR, LF and space)
+    ws = buf <= 32
+    token_first = np.flatnonzero(np.concatenate([[not ws[0]], ws[:-1] > ws[1:]]))
+    token_last = np.flatnonzero(np.concatenate([ws[:-1] < ws[1:], [not ws[-1]]]))
+    del ws
+    line_token = np.searchsorted(token_first, np.append(starts, n))   # first token of each line
+    per_line = np.diff(line_token)
+    rest = ~(is_v | is_vt | is_vn | is_f) & (b0 != ord("#")) & (per_line > 0)
+    marks = []                                         # (line index, keyword, name)
+    for i in np.flatnonzero(rest).tolist():
+        end = starts[i + 1] if i + 1 < len(starts) else n
+        line = data[starts[i]:end].decode("utf-8", errors="replace").strip()
+        if not line:
+            continue        # blank by str.strip (non-ASCII spaces)
+        key = line.split()[0]
+        if key not in _MARKERS:
+            return None
+        marks.append((i, key, line[len(key):].strip()))
+    if not is_f.any() or not is_v.any():
+        return None
+    if per_line[is_vn].size and (per_line[is_vn] != 4).any():
+        return None
+    widths = []
+    for mask in (is_v, is_vt, is_f):
+        counts = per_line[mask]
+        widths.append(int(counts[0]) - 1 if counts.size else 0)
+        if counts.size and (counts != counts[0]).any():
+            return None
+    v_width, vt_width, k = widths
+    if v_width < 3 or (is_vt.any() and vt_width < 1) or k < 3:
+        return None
+    # face corners: each the same count of '/' and of '//' as the first one
+    f_lines = np.flatnonzero(is_f)
+    corner_tokens = (line_token[f_lines][:, None] + np.arange(1, k + 1)).reshape(-1)  # not "f"
+    first, last = token_first[corner_tokens], token_last[corner_tokens] + 1
+    slash_at = np.flatnonzero(buf == ord("/"))
+    slashes = np.searchsorted(slash_at, last) - np.searchsorted(slash_at, first)
+    doubles = np.zeros_like(slashes)
+    if b"//" in data:
+        double_at = slash_at[:-1][np.diff(slash_at) == 1]
+        doubles = np.searchsorted(double_at, last) - np.searchsorted(double_at, first)
+    del token_first, token_last, first, last
+    n_slash, n_double = int(slashes[0]), int(doubles[0])
+    if (slashes != n_slash).any() or (doubles != n_double).any() or n_slash > 2 or \
+            n_double > (1 if n_slash == 2 else 0):
+        return None
+    fields = 1 + n_slash - n_double
+    blank = buf.copy()
+    blank[starts[is_v | is_f]] = 32
+    two = starts[is_vt | is_vn]
+    blank[two], blank[two + 1] = 32, 32
+    blank[slash_at] = 32                  # only face lines are parsed as indices
+    text = blank.tobytes()
+    del blank
+
+    def parse(mask, dtype, per_line_count):
+        line_end = np.append(starts, n)
+        parts = []
+        for a, b in _runs(mask):
+            chunk = np.fromstring(text[line_end[a]:line_end[b]], dtype=dtype, sep=" ")
+            parts.append(chunk)
+        out = np.concatenate(parts) if parts else np.zeros(0, dtype)
+        if out.size != per_line_count * int(mask.sum()):
+            raise ValueError("not a number")
+        return out.reshape(-1, per_line_count)
+
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")   # numpy warns (DeprecationWarning) on a bad token
+        try:
+            pos = parse(is_v, np.float64, v_width)[:, :3]
+            tex = parse(is_vt, np.float64, vt_width) if is_vt.any() else np.zeros((0, 1))
+            nrm = parse(is_vn, np.float64, 3) if is_vn.any() else np.zeros((0, 3))
+            ids = parse(is_f, np.int64, k * fields).reshape(len(f_lines), k, fields)
+        except (DeprecationWarning, ValueError):
+            return None
+    if not (np.isfinite(pos).all() and np.isfinite(tex).all() and np.isfinite(nrm).all()):
+        return None         # NaN / infinity (or numpy's looser spellings): the general parser
+    if len(tex):
+        tex = np.stack([tex[:, 0], 1.0 - tex[:, 1] if vt_width > 1 else np.ones(len(tex))], axis=1)
+    else:
+        tex = np.zeros((0, 2))
+    # indices: 1-based, or relative to the count read before the face's line
+    before = [np.cumsum(mask)[f_lines] for mask in (is_v, is_vt, is_vn)]
+    columns = [0, 1, 2][:fields] if n_double == 0 else [0, 2]
+    corner = np.full((len(f_lines), k, 3), -1, np.int64)
+    for j, axis in enumerate(columns):
+        i = ids[:, :, j]
+        if (i == 0).any():
+            return None
+        i = np.where(i < 0, i + before[axis][:, None], i - 1)
+        if i.size and (i.min() < 0 or i.max() >= (len(pos), len(tex), len(nrm))[axis]):
+            return None
+        corner[:, :, axis] = i
+    nf = len(f_lines)
+    fan = np.stack([corner[:, [0, j, j + 1]] for j in range(1, k - 1)], axis=1).reshape(-1, 3, 3)
+    face_of = np.repeat(np.arange(nf), k - 2)
+    # materials, objects and libraries: the face each marker precedes
+    faces_before = np.cumsum(is_f) - is_f
     mat_starts, obj_starts, mtl_files = [], [], []
-    markers = list(re.finditer(r"^(usemtl|mtllib|o|g)\b(.*)$", text, re.M))
-    if markers:
-        face_at = np.array([mt.start() for mt in re.finditer(r"^f ", text, re.M)])
-        for mt in markers:
-            key, name = mt.group(1), mt.group(2).strip()
-            if key == "mtllib":
-                mtl_files.append((name, text.count("\n", 0, mt.start()) + 1))
-            else:
-                target = mat_starts if key == "usemtl" else obj_starts
-                target.append((int(np.searchsorted(face_at, mt.start())), name or "default"))
-    if not f or not v:
-        return None
-    try:
-        pos = _numbers(" ".join(v), np.float64)
-        if pos.size != 3 * len(v):
-            return None
-        tokens = " ".join(f).split()
-        k = len(tokens) // len(f)
-        if k < 3 or k * len(f) != len(tokens) or len(f[0].split()) != k:
-            return None
-        first = tokens[0]
-        slashes = first.count("/")
-        double = "//" in first
-        joined = " ".join(tokens)
-        if joined.count("/") != slashes * len(tokens) or ("//" in joined) != double or \
-                (double and joined.count("//") != len(tokens)):
-            return None
-        fields = 1 + slashes - (1 if double else 0)
-        ids = _numbers(joined.replace("//", " ").replace("/", " "), np.int64)
-        if ids.size != fields * len(tokens) or ids.min() < 1:
-            return None       # negative or zero indices: the general parser
-        ids = ids.reshape(len(f), k, fields) - 1
-        tex = np.array(" ".join(t.split()[0] + " " + (t.split() + ["0"])[1] for t in vt).split(),
-                       np.float64).reshape(-1, 2) if vt else np.zeros((0, 2))
-        nrm = _numbers(" ".join(vn), np.float64).reshape(-1, 3) if vn else np.zeros((0, 3))
-    except ValueError:
-        return None
-    corner = np.full((len(f), k, 3), -1, np.int64)
-    corner[:, :, 0] = ids[:, :, 0]
-    if double:
-        corner[:, :, 2] = ids[:, :, 1]
-    elif fields >= 2:
-        corner[:, :, 1] = ids[:, :, 1]
-        if fields == 3:
-            corner[:, :, 2] = ids[:, :, 2]
-    for axis, count in enumerate((len(v), len(tex), len(nrm))):
-        if corner[:, :, axis].max() >= count:
-            return None
-    tex[:, 1] = 1.0 - tex[:, 1]
-    fan = np.concatenate([corner[:, [0, j, j + 1]] for j in range(1, k - 1)], axis=0)
-    face_of = np.tile(np.arange(len(f)), k - 2)
+    for i, key, name in marks:
+        if key == "mtllib":
+            mtl_files.append((name, i + 1))
+        elif key not in ("s", "vp"):
+            (mat_starts if key == "usemtl" else obj_starts).append((int(faces_before[i]),
+                                                                    name or "default"))
 
-    def numbered(starts):
+    def numbered(marker_starts):
         names, index = ["default"], {"default": 0}
-        per_face = np.zeros(len(f), np.int64)
-        for n, (at, name) in enumerate(starts):
-            end = starts[n + 1][0] if n + 1 < len(starts) else len(f)
-            per_face[at:end] = index.setdefault(name, len(names))
+        per_face = np.zeros(nf, np.int64)
+        for j, (at, name) in enumerate(marker_starts):
+            stop = marker_starts[j + 1][0] if j + 1 < len(marker_starts) else nf
+            per_face[at:stop] = index.setdefault(name, len(names))
             if index[name] == len(names):
                 names.append(name)
         return names, per_face[face_of]
     mat_names, tri_mat = numbered(mat_starts)
     obj_names, tri_obj = numbered(obj_starts)
-    order = np.argsort(face_of, kind="stable")          # triangles in file order
-    fan, tri_mat, tri_obj = fan[order], tri_mat[order], tri_obj[order]
-    unique, inverse = _corners(fan.reshape(-1, 3), len(v), len(tex), len(nrm))
-    positions = pos.reshape(-1, 3)
-    if not np.all(np.isfinite(positions)):
-        return None
-    obj = ObjFile(path, positions, tex, nrm, unique, inverse.reshape(-1, 3), tri_mat, tri_obj,
-                  mat_names, obj_names)
+    unique, inverse = _corners(fan.reshape(-1, 3), len(pos), len(tex), len(nrm))
+    obj = ObjFile(path, np.ascontiguousarray(pos), tex, nrm, unique, inverse.reshape(-1, 3),
+                  tri_mat, tri_obj, mat_names, obj_names)
     return obj, mtl_files
 
 
@@ -249,12 +309,13 @@ def read_obj(path, files: SceneFiles | None = None, read_materials: bool = True)
     """Parse an OBJ file (and its MTL files when ``read_materials``)."""
     path = Path(path)
     files = files or SceneFiles(path.parent)
-    text = _read_text(path)
-    fast = _read_obj_fast(text, path) if len(text) > FAST_PATH_BYTES else None
+    data = read_bytes(path, MAX_FILE_BYTES)
+    fast = _read_obj_fast(data, path) if len(data) > FAST_PATH_BYTES else None
     if fast is not None:
         obj, mtl_files = fast
         _read_materials(obj, mtl_files, path, files, read_materials)
         return obj
+    text = data.decode("utf-8", errors="replace")
     notes = Notes(path, "ignored OBJ statements")
     pos, tex, nrm = [], [], []
     pos_lines = []
@@ -302,6 +363,9 @@ def read_obj(path, files: SceneFiles | None = None, read_materials: bool = True)
                     else:
                         i -= 1
                         if i >= count:
+                            if i >= 1 << 62:
+                                raise SceneError(f"{path}:{lineno}: index {text_id} in {token!r} "
+                                                 f"is out of range")
                             late_positive = True   # checked against the final count below
                     ids.append(i)
                 corner.append(ids)
@@ -532,10 +596,12 @@ def load_obj_scene(path, **params) -> m.Scene:
         mat, emission = obj_material(obj.materials.get(name), name)
         mat_ids[k] = scene.add_material(mat)
         emissions[k] = emission
-    pairs = np.unique(np.stack([obj.tri_object, obj.tri_material], axis=1), axis=0)
-    for obj_id, mat_id in pairs:
-        select = (obj.tri_object == obj_id) & (obj.tri_material == mat_id)
-        mesh = obj.mesh(select)
+    # one key per (object, material) pair: a sort of rows (np.unique(axis=0)) is 30x slower
+    key = obj.tri_object * len(obj.material_names) + obj.tri_material
+    single = bool((key == key[0]).all())
+    for pair in (key[:1] if single else np.unique(key)).tolist():
+        obj_id, mat_id = divmod(pair, len(obj.material_names))
+        mesh = obj.mesh(None if single else key == pair)
         scene.shapes.append(m.Shape("mesh", material=mat_ids[mat_id], vertices=mesh.vertices,
                                     triangles=mesh.triangles, normals=mesh.normals, uvs=mesh.uvs,
                                     emission=emissions[mat_id],

@@ -1,0 +1,116 @@
+"""Loading speed: a 1M-triangle mesh from ``glrender.load`` to the first finished pass.
+
+The mesh is benchmarks/bvh.py's displaced UV sphere (999,698 triangles, 501,264 vertices),
+written once as binary PLY (positions only) and as OBJ with ``v``/``vt``/``vn`` and
+``f v/vt/vn`` faces. Every measurement is a fresh process that loads the file, makes a
+``Renderer`` at 512x512 (a constant environment light added) and renders one pass of
+8 spp; it reports wall seconds for load, packing, BVH build plus upload, kernel compile
+and the pass, the process's CPU seconds, and the 1-minute load average.
+
+``--baseline DIR`` (a checkout of another commit, e.g. ``git worktree add /tmp/base
+<commit>``) is measured alternately with this checkout, round by round, so both see
+the same machine load; medians over ``--repeats`` rounds are printed.
+
+    .venv/bin/python benchmarks/loading.py [--repeats 5] [--baseline DIR] [--formats ply,obj]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+MEASURE = r"""
+import json, os, sys, time, warnings
+warnings.simplefilter("ignore")
+import glrender
+from glrender.scene import model as m
+c0, t0 = time.process_time(), time.perf_counter()
+scene = glrender.load(sys.argv[1])
+c1, t1 = time.process_time(), time.perf_counter()
+scene.film.width = scene.film.height = 512
+scene.lights.append(m.Light("constant", radiance=(1, 1, 1)))
+r = glrender.Renderer(scene, spp=8)
+c2, t2 = time.process_time(), time.perf_counter()
+r.step(8)
+r.film()
+t3 = time.perf_counter()
+print(json.dumps({"load": t1 - t0, "pack": t2 - t1 - r.timings["build"] - r.timings["compile"],
+                  "bvh_upload": r.timings["build"], "compile": r.timings["compile"],
+                  "pass": t3 - t2, "cpu_to_dispatch": c2 - c0, "loadavg": os.getloadavg()[0]}))
+"""
+
+
+def write_meshes(folder: Path) -> dict[str, Path]:
+    import numpy as np
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from bvh import procedural_mesh
+
+    v, f = procedural_mesh(1_000_000)
+    v = v.astype(np.float64)
+    ply = folder / "sphere.ply"
+    header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(v)}\n"
+              "property float x\nproperty float y\nproperty float z\n"
+              f"element face {len(f)}\nproperty list uchar int vertex_indices\nend_header\n")
+    faces = np.zeros(len(f), np.dtype([("n", "u1"), ("i", "<i4", (3,))]))
+    faces["n"], faces["i"] = 3, f
+    ply.write_bytes(header.encode() + v.astype("<f4").tobytes() + faces.tobytes())
+    from glrender.scene.loaders.meshes import vertex_normals
+
+    n = vertex_normals(v, f)
+    uv = np.random.default_rng(0).random((len(v), 2))
+    obj = folder / "sphere.obj"
+    with open(obj, "w") as out:
+        out.write("# displaced sphere\n")
+        out.write("".join("v %.6f %.6f %.6f\n" % tuple(p) for p in v))
+        out.write("".join("vn %.6f %.6f %.6f\n" % tuple(p) for p in n))
+        out.write("".join("vt %.6f %.6f\n" % tuple(p) for p in uv))
+        g = f + 1
+        out.write("".join(f"f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}\n" for a, b, c in g))
+    return {"ply": ply, "obj": obj}
+
+
+def measure(checkout: Path, mesh: Path) -> dict:
+    env = dict(os.environ, PYTHONPATH=str(checkout))
+    out = subprocess.run([sys.executable, "-c", MEASURE, str(mesh)], env=env, cwd=checkout,
+                         capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--baseline", type=Path, default=None)
+    parser.add_argument("--formats", default="ply,obj")
+    args = parser.parse_args(argv)
+    checkouts = {"this": ROOT}
+    if args.baseline is not None:
+        checkouts = {"baseline": args.baseline.resolve(), "this": ROOT}
+    with tempfile.TemporaryDirectory() as tmp:
+        meshes = write_meshes(Path(tmp))
+        rows: dict[tuple[str, str], list[dict]] = {}
+        for _ in range(args.repeats):
+            for fmt in args.formats.split(","):
+                for name, checkout in checkouts.items():   # alternately: the same load for both
+                    rows.setdefault((fmt, name), []).append(measure(checkout, meshes[fmt]))
+    print(f"medians of {args.repeats} fresh processes per row (seconds; 512x512, 8 spp pass)")
+    for (fmt, name), rs in rows.items():
+        def med(key):
+            return statistics.median(r[key] for r in rs)
+        to_pass = [r["load"] + r["pack"] + r["bvh_upload"] for r in rs]
+        print(f"{fmt:4} {name:9} load {med('load'):6.2f}  pack {med('pack'):5.2f}  "
+              f"BVH+upload {med('bvh_upload'):5.2f}  load+pack+BVH {statistics.median(to_pass):6.2f}  "
+              f"compile {med('compile'):5.2f}  pass {med('pass'):5.2f}  "
+              f"CPU to dispatch {med('cpu_to_dispatch'):6.2f}  "
+              f"load average {min(r['loadavg'] for r in rs):.1f}-{max(r['loadavg'] for r in rs):.1f}")
+
+
+if __name__ == "__main__":
+    main()
