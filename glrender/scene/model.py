@@ -87,9 +87,11 @@ def _times_identity(p: np.ndarray) -> np.ndarray:
 
 def transform_points(m: np.ndarray, p: np.ndarray) -> np.ndarray:
     p = np.asarray(p, np.float64)
+    out: np.ndarray
     if _translation_only(m):
-        return _times_identity(p) + m[:3, 3]
-    out: np.ndarray = p @ m[:3, :3].T + m[:3, 3]
+        out = _times_identity(p) + m[:3, 3]
+    else:
+        out = p @ m[:3, :3].T + m[:3, 3]
     return out
 
 
