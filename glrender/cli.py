@@ -210,7 +210,8 @@ def _add_render(sub) -> None:
                         "fireflies; biased, marked in --stats; default: off)")
     g = p.add_argument_group("light transport")
     g.add_argument("--integrator", choices=INTEGRATORS, default=None,
-                   help="path tracer, direct lighting or ambient occlusion (default: the scene's)")
+                   help="path tracer, direct lighting, ambient occlusion, light tracing, bidirectional, "
+                        "SPPM or photon mapping (default: the scene's)")
     g.add_argument("--strategy", choices=tuple(STRATEGIES), default=None,
                    help="direct-lighting strategy: light or BSDF sampling alone, or both with "
                         "the balance or power heuristic")

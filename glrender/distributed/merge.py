@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..render import accum, strategies
+from ..render import accum
 
 
 @dataclass
@@ -42,7 +42,7 @@ def from_state(state: dict, pixels: int, aovs: bool, samples, seconds: float = 0
     aov = state["aov"].reshape(pixels, accum.AOV_CHANNELS, 4) if aovs else None
     sums_splat = None
     if splat:   # two 32-bit words (low, high) per pixel and channel, as the device adds them
-        sums_splat = strategies.fixed_sums(state["splat"]).reshape(-1, 3)
+        sums_splat = accum.fixed_sums(state["splat"]).reshape(-1, 3)
     return Partial(sums, squares, aov, tuple(samples), seconds, sums_splat)
 
 

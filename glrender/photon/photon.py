@@ -30,6 +30,7 @@ from ..film import Film
 from ..gl import shaders
 from ..gpu import codegen
 from ..gpu import layout as scene_layout
+from ..render import accum
 from ..render.renderer import SPLAT_SCALE, Renderer
 from . import layout as pl
 from .grid import PointGrid, build_point_grid, typical_radius
@@ -260,8 +261,7 @@ class PhotonRenderer(Renderer):
         photon hits the camera sees, power per emitted photon in each pixel."""
         film = super().film()
         if self.photon.photon_view:
-            words = np.frombuffer(self._view.read(), np.uint32).reshape(-1, 2).astype(np.uint64)
-            sums = ((words[:, 1] << np.uint64(32)) | words[:, 0]).view(np.int64).astype(np.float64)
+            sums = accum.fixed_sums(np.frombuffer(self._view.read(), np.uint32)).astype(np.float64)
             view = (sums / (SPLAT_SCALE * self.photons[0])).reshape(self.height, self.width, 3)
             first = 8 * self.rows[0]
             film.aovs["photons"] = view[first:first + self.band_height].astype(np.float32)

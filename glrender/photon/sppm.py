@@ -33,6 +33,7 @@ from ..gl import shaders
 from ..gl.context import Context
 from ..gpu import codegen
 from ..gpu import layout as scene_layout
+from ..render import accum
 from ..render.renderer import (SPLAT_SCALE, RenderSettings, Renderer, camera_tangents,
                                settings_from_scene)
 from ..scene import model as m
@@ -370,8 +371,7 @@ class SppmRenderer:
         h, w = self.height, self.width
         out = {"radius": self.radius.reshape(h, w).astype(np.float32)}
         if self.photon_view:
-            words = np.frombuffer(self._view.read(), np.uint32).reshape(-1, 2).astype(np.uint64)
-            sums = ((words[:, 1] << np.uint64(32)) | words[:, 0]).view(np.int64).astype(np.float64)
+            sums = accum.fixed_sums(np.frombuffer(self._view.read(), np.uint32)).astype(np.float64)
             photons = max(self.iterations, 1) * self.photons_per_iteration
             out["photons"] = (sums / (SPLAT_SCALE * photons)).reshape(h, w, 3).astype(np.float32)
         return out

@@ -43,6 +43,13 @@ def add_counts(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
+def fixed_sums(words: np.ndarray) -> np.ndarray:
+    """Signed 64-bit fixed-point sums (the splat and photon-view buffers, in units of
+    1/SPLAT_SCALE) from their (low, high) uint32 word pairs."""
+    pairs = np.asarray(words, np.uint32).reshape(-1, 2).astype(np.uint64)
+    return ((pairs[:, 1] << np.uint64(32)) | pairs[:, 0]).view(np.int64)
+
+
 def values(words: np.ndarray) -> np.ndarray:
     """128-bit fixed-point words (..., 4) as float64 values (...)."""
     w = np.ascontiguousarray(words, np.uint32).view(np.uint64)

@@ -741,7 +741,7 @@ class Renderer:
         splatted images come from independent renders)."""
         if self.settings.integrator.kind not in SPLATTING:
             return np.zeros((self.height, self.width, 3), np.float32)
-        sums = strategies.fixed_sums(np.frombuffer(self._splat.read(), np.uint32))
+        sums = accum.fixed_sums(np.frombuffer(self._splat.read(), np.uint32))
         paths = max(self.spp_done - self.spp_start, 1) * self.width * self.band_height
         image = sums.astype(np.float64) / (SPLAT_SCALE * paths)
         return image.reshape(self.height, self.width, 3).astype(np.float32)

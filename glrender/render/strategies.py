@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UsageError
+from .accum import fixed_sums
 
 SSBO_STRATEGY_IMAGES = 8   # the kernel's own block (integrators/strategy_images.glsl)
 WORDS_PER_PIXEL = 12       # six floats (t >= 2) or six 64-bit fixed-point sums (t = 1)
@@ -36,12 +37,6 @@ def check_depth(depth: int, max_depth: int, cap: int) -> None:
     if not (isinstance(depth, int) and 1 <= depth <= longest):
         raise UsageError(f"--strategy-depth {depth}: expected a path length in 1..{longest} "
                          f"(the render's max depth{', capped at %d' % cap if longest == cap else ''})")
-
-
-def fixed_sums(words: np.ndarray) -> np.ndarray:
-    """Signed 64-bit fixed-point sums from their (low, high) uint32 word pairs."""
-    pairs = np.asarray(words, np.uint32).reshape(-1, 2).astype(np.uint64)
-    return ((pairs[:, 1] << np.uint64(32)) | pairs[:, 0]).view(np.int64)
 
 
 def read(words: np.ndarray, depth: int, width: int, height: int, spp: int,

@@ -14,7 +14,7 @@
 import numpy as np
 import pytest
 
-from glrender.render import strategies
+from glrender.render import accum, strategies
 from glrender.render.renderer import SPLAT_SCALE, Renderer, settings_from_scene
 from glrender.testing.images import compare_images
 
@@ -42,12 +42,12 @@ def test01_weighted_images_partition_the_render(gl_ctx, make):
     images = r.strategy_images()
     words = np.frombuffer(r._strategies.read(), np.uint32).reshape(
         len(strategies.strategies(4)), SIZE, SIZE, strategies.WORDS_PER_PIXEL)
-    splat_sums = strategies.fixed_sums(np.frombuffer(r._splat.read(), np.uint32))
+    splat_sums = accum.fixed_sums(np.frombuffer(r._splat.read(), np.uint32))
     r.release()
     assert set(images) == set(strategies.strategies(4))
     # t = 1: every splat went to its strategy image as the same integers
     lens = [j for j, (s, t) in enumerate(strategies.strategies(4)) if t == 1]
-    per = sum(strategies.fixed_sums(words[j]).reshape(SIZE * SIZE, 6)[:, :3] for j in lens)
+    per = sum(accum.fixed_sums(words[j]).reshape(SIZE * SIZE, 6)[:, :3] for j in lens)
     assert np.array_equal(per.reshape(-1), splat_sums) and splat_sums.any()
     # t >= 2: float32 sums of spp samples vs the film's running mean of their total
     camera = sum(w for (s, t), (w, u) in images.items() if t >= 2)
