@@ -3,9 +3,9 @@
 A still view of the Cornell box (256x256, so samples arrive over seconds, not frames)
 is restarted (R) for each half of the test. With denoising on, two consecutive
 denoised images (the title names their spp: they come at 1, 2, 4, ... spp) are
-captured from the window; with it off, the noisy view is captured once the title's spp
-has reached each of those two counts (the title lags the frame, so the noisy captures
-have as many samples or more: the comparison favours the noisy view). Measured
+captured from the window; with it off, the noisy view is captured paused, once the
+title's spp has reached the first count and again at twice the samples of that capture
+or more (a doubling, as between the denoised pair). Measured
 offline from 1 to 32 spp (8-bit display values, the emission kept out of the filter as
 the preview does), the noisy view changes 7-10x more than the denoised one between
 doublings; the test asks for 3x.
@@ -66,6 +66,22 @@ def _denoised_frame(preview, spp: int) -> np.ndarray:
     return wait_for(settled, 60.0, what=f"a still denoised view at {spp} spp")[0]
 
 
+def _paused_frame(preview, at_least: int) -> tuple[np.ndarray, int]:
+    """Once the title's spp reaches ``at_least``: pause (space), capture the still
+    view, resume; the capture and the spp it shows."""
+    _title_number(preview, r"- (\d+) spp -", at_least)
+    preview.key("space")
+    preview.wait_title("- paused")
+    spp = _title_number(preview, r"- (\d+) spp - paused", at_least)
+    def settled():
+        a, b = _frame(preview), _frame(preview)
+        return (a,) if np.array_equal(a, b) else None
+    frame = wait_for(settled, 60.0, what=f"a still paused view at {spp} spp")[0]
+    preview.key("space")
+    wait_for(lambda: "paused" not in preview.title(), 60.0, what="the preview resumed")
+    return frame, spp
+
+
 def test01_denoise_key_steadies_the_view(preview):
     preview.key("n", "r")
     preview.wait_line(r"denoising with Open Image Denoise", 60.0)
@@ -77,10 +93,11 @@ def test01_denoise_key_steadies_the_view(preview):
     # restart, then denoise off: a title without "denoised" is one made after the restart
     preview.key("r", "n")
     wait_for(lambda: "denois" not in preview.title(), 60.0, what="the title without denoising")
-    _title_number(preview, r"- (\d+) spp -", first)
-    off_a = _frame(preview)
-    _title_number(preview, r"- (\d+) spp -", second)
-    off_b = _frame(preview)
+    # each noisy capture is made paused, so it is one accumulation (no pass half drawn)
+    # at a known spp, and the second has at least twice the first's samples, as the
+    # denoised pair has: a doubling against a doubling
+    off_a, at = _paused_frame(preview, first)
+    off_b, _ = _paused_frame(preview, max(second, 2 * at))
 
     diff_on = np.abs(on_a - on_b).mean()
     diff_off = np.abs(off_a - off_b).mean()
