@@ -78,17 +78,19 @@ def emission_settings(settings):
                    aovs=False, count_loops=False, debug_nonfinite=0, emission_only=True)
 
 
-def render_seen_emission(scene, settings, *, ctx=None, rows: tuple[int, int] | None = None):
+def render_seen_emission(scene, settings, *, ctx=None, rows: tuple[int, int] | None = None,
+                         share=None):
     """The emission the camera sees, as the :class:`~glrender.film.film.Film` of the
     seen-emission pass for a render with ``settings`` (its ``mean``; the tile rows
     ``rows`` only, as ``Renderer.reset(rows=...)``); None where :func:`emission_settings`
-    is None."""
+    is None. ``share``: a renderer of the same scene whose device data (BVH, textures)
+    the pass reuses instead of building its own."""
     from .render.renderer import Renderer
 
     pass_settings = emission_settings(settings)
     if pass_settings is None:
         return None
-    with Renderer(scene, pass_settings, ctx=ctx) as r:
+    with Renderer(scene, pass_settings, ctx=ctx, share=share) as r:
         if rows is not None:
             r.reset(rows=rows)
         r.step(pass_settings.sampler.spp)

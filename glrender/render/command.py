@@ -187,7 +187,7 @@ def _write_outputs(film, output: Path, aov_names: list[str], args,
     return written
 
 
-def _denoise(film, scene, settings, ctx, crop, say) -> tuple[np.ndarray, dict]:
+def _denoise(film, scene, settings, ctx, crop, say, share=None) -> tuple[np.ndarray, dict]:
     """The film's mean denoised (--denoise), and what the statistics record about it: the
     seen emission kept out of the filter and rendered again by its own pass (at the
     film's samples per pixel, which a time budget or a resume may change)."""
@@ -198,7 +198,7 @@ def _denoise(film, scene, settings, ctx, crop, say) -> tuple[np.ndarray, dict]:
     t0 = time.perf_counter()
     settings = replace(settings, sampler=replace(settings.sampler, spp=film.spp))
     rows = crop_rows(crop) if crop is not None else None
-    seen = render_seen_emission(scene, settings, ctx=ctx, rows=rows)
+    seen = render_seen_emission(scene, settings, ctx=ctx, rows=rows, share=share)
     pass_spp = None if seen is None else seen.spp
     if seen is not None and crop is not None:
         seen = crop_band(seen, crop, rows)
@@ -356,12 +356,13 @@ def run_render(args, signals) -> int:
         if settings.integrator.kind in SPLATTING:
             raise UsageError(f"--crop: not available with the {settings.integrator.kind} "
                              f"integrator (its light paths reach every pixel of the film)")
-    noise_plan = None
+    noise_plan = pilot = None
     if args.noise_threshold is not None and ckpt is None:
-        from .noise import plan_spp
+        from .noise import run_pilot
 
-        noise_plan = plan_spp(scene, settings, args.noise_threshold, ctx=ctx,
-                              max_spp=options.get("spp"), region=crop)
+        # the render shares the pilot's scene data (packed arrays, BVH, textures)
+        noise_plan, pilot = run_pilot(scene, settings, args.noise_threshold, ctx=ctx,
+                                      max_spp=options.get("spp"), region=crop)
         say(f"glrender: pilot of {noise_plan.pilot_spp} spp ({noise_plan.pilot_seconds:.2f} s): "
             f"{noise_plan.spp} spp for a mean relative error of {noise_plan.threshold:g}")
         options["spp"] = target = noise_plan.spp
@@ -374,12 +375,15 @@ def run_render(args, signals) -> int:
         elif photon is not None:
             from ..photon import PhotonRenderer
 
-            renderer = PhotonRenderer(scene, settings, photon, ctx=ctx)
+            renderer = PhotonRenderer(scene, settings, photon, ctx=ctx, share=pilot)
         else:
-            renderer = Renderer(scene, settings, ctx=ctx)
+            renderer = Renderer(scene, settings, ctx=ctx, share=pilot)
     except moderngl.Error as exc:
         raise UsageError(f"cannot allocate the device buffers of a {width}x{height} image "
                          f"({str(exc).strip()}): render fewer pixels (--width/--height)") from exc
+    finally:
+        if pilot is not None:
+            pilot.release()
     timer.update(renderer.timings)
     if crop is not None:      # the tile rows the crop covers; columns are cut at the end
         renderer.reset(rows=crop_rows(crop))
@@ -445,7 +449,7 @@ def run_render(args, signals) -> int:
     if film.spp > 0:
         if getattr(args, "denoise", False):
             with timer("denoise"):
-                denoised, denoise_info = _denoise(film, scene, settings, ctx, crop, say)
+                denoised, denoise_info = _denoise(film, scene, settings, ctx, crop, say, share=renderer)
         with timer("write"):
             written = _write_outputs(film, output, aov_names, args, denoised)
             if settings.strategy_depth:

@@ -87,11 +87,22 @@ def check_threshold(threshold: float) -> float:
 
 
 def plan_spp(scene, settings, threshold: float, *, pilot_spp: int = PILOT_SPP, ctx=None,
-             max_spp: int | None = None, region=None) -> NoisePlan:
+             max_spp: int | None = None, region=None, share=None) -> NoisePlan:
     """Render an independent pilot of ``pilot_spp`` samples per pixel and return the sample
     count at which the image's mean relative stderr is predicted to reach ``threshold``
     (capped at ``max_spp``); ``region`` (x0, y0, x1, y1): measure (and render) only
-    those pixels."""
+    those pixels. ``share``: a renderer of the scene whose device data the pilot reuses."""
+    plan, renderer = run_pilot(scene, settings, threshold, pilot_spp=pilot_spp, ctx=ctx,
+                               max_spp=max_spp, region=region, share=share)
+    renderer.release()
+    return plan
+
+
+def run_pilot(scene, settings, threshold: float, *, pilot_spp: int = PILOT_SPP, ctx=None,
+              max_spp: int | None = None, region=None, share=None):
+    """:func:`plan_spp`, returning the plan and the pilot's renderer, not yet released: the
+    render that follows shares its scene data (``Renderer(..., share=pilot)``) instead of
+    packing the scene and building its BVH again."""
     import time
 
     from .renderer import Renderer
@@ -102,7 +113,7 @@ def plan_spp(scene, settings, threshold: float, *, pilot_spp: int = PILOT_SPP, c
     sampler = replace(settings.sampler, seed=pilot_seed(settings.sampler.seed), spp=pilot_spp)
     pilot = replace(settings, sampler=sampler, aovs=False)
     t0 = time.perf_counter()
-    renderer = Renderer(scene, pilot, ctx=ctx)
+    renderer = Renderer(scene, pilot, ctx=ctx, share=share)
     try:
         if region is not None:
             renderer.reset(rows=crop_rows(region))
@@ -110,11 +121,12 @@ def plan_spp(scene, settings, threshold: float, *, pilot_spp: int = PILOT_SPP, c
         film = renderer.film()
         if region is not None:
             film = crop_band(film, region, renderer.rows)
-    finally:
+    except BaseException:
         renderer.release()
+        raise
     seconds = time.perf_counter() - t0
     error = mean_relative_stderr(film)
     spp = 1 if error is None else max(1, math.ceil(pilot_spp * (error / threshold) ** 2))
     if max_spp is not None:
         spp = min(spp, int(max_spp))
-    return NoisePlan(threshold, spp, pilot_spp, error, seconds)
+    return NoisePlan(threshold, spp, pilot_spp, error, seconds), renderer

@@ -125,25 +125,77 @@ def camera_tangents(camera: m.Camera, width: int, height: int) -> tuple[float, f
     return t * width / diag, t * height / diag
 
 
+class SceneData:
+    """What of a scene the device holds independent of the render settings: the packed
+    arrays, the BVH and per-triangle data, the surface textures and the environment image;
+    shared by the renderers of one scene on one context and freed with the last of them."""
+
+    def __init__(self, packed: PackedScene) -> None:
+        self.packed = packed
+        self.users = 1
+        self.uploaded = False
+        self.bvh: Any = None
+        self.mesh_textures: list[Any] = []
+        self.surface_textures: list[Any] = []
+        self.texture_bytes = 0      # the atlas pages (RGBA16F) on the device
+        self.env_texture: Any = None
+        self.buffers: list[Any] = []
+
+    def acquire(self) -> SceneData:
+        self.users += 1
+        return self
+
+    def release(self) -> None:
+        self.users -= 1
+        if self.users == 0:
+            for buf in self.buffers:
+                buf.release()
+            for _, tex in self.mesh_textures:
+                tex.release()
+            if self.bvh is not None:
+                self.bvh.release()
+            self.buffers, self.mesh_textures, self.bvh = [], [], None
+
+
 class Renderer:
     """A scene on the device, ready to accumulate samples progressively.
 
     ``step(spp)`` adds samples to every pixel; ``film()`` reads the image back.
+    ``share=other``: render the same scene with other settings on ``other``'s context,
+    reusing its packed scene, BVH, triangle data and textures instead of building them
+    again (they stay on the device until the last renderer using them is released).
     """
 
     integrator_files = INTEGRATOR_FILES   # the render kernels' integrators (kind: file)
 
     def __init__(self, scene: m.Scene, settings: RenderSettings | None = None, *,
                  ctx: Context | None = None, device: str | int | None = None,
-                 **overrides: Any) -> None:
+                 share: Renderer | None = None, **overrides: Any) -> None:
         if settings is not None and overrides:
             raise UsageError(f"Renderer: give either settings or overrides "
                              f"({', '.join(sorted(overrides))}), not both")
         self.scene = scene
         self.settings = settings or settings_from_scene(scene, **overrides)
-        self.ctx = ctx or default_context(device)
+        if share is not None:
+            share = getattr(share, "base", share)     # SPPM's renderer holds the scene in .base
+            shared_ctx: Context = share.ctx
+            if share.scene is not scene or (ctx is not None and ctx is not shared_ctx):
+                raise UsageError("Renderer(share=...): the renderer shared from must render the "
+                                 "same scene object on the same context")
+            ctx = shared_ctx
+        self.ctx: Context = ctx or default_context(device)
         self.gl = self.ctx.gl
-        self.packed: PackedScene = pack_scene(scene)
+        # what depends on the scene alone (the packed arrays, the BVH, the triangle data,
+        # textures, the environment image) is made once and shared by renderers of other
+        # settings on the same context (share=: the noise pilot, the seen-emission pass)
+        self._scene_data: SceneData | None
+        if share is None:
+            self._scene_data = SceneData(pack_scene(scene))
+        elif share._scene_data is None:
+            raise UsageError("Renderer(share=...): the renderer shared from was released")
+        else:
+            self._scene_data = share._scene_data.acquire()
+        self.packed: PackedScene = self._scene_data.packed
         self.width, self.height = scene.film.width, scene.film.height
         self.tiles_x = -(-self.width // TILE)
         self.tiles_y = -(-self.height // TILE)
@@ -198,9 +250,15 @@ class Renderer:
         self._dist = self._buffer(np.ascontiguousarray(dist, np.float32).tobytes())
         self._params = gl.buffer(reserve=layout.RENDER_PARAMS.itemsize)
         self.n_lights = n_lights
-        if p.has_bvh:
-            self._upload_mesh()
-        self._upload_textures()
+        data = self._scene_data
+        assert data is not None, "the renderer was released"
+        if not data.uploaded:
+            if p.has_bvh:
+                self._upload_mesh()
+            self._upload_textures()
+            data.uploaded = True
+        self._bvh, self._mesh_textures = data.bvh, data.mesh_textures
+        self._surface_textures, self.texture_bytes = data.surface_textures, data.texture_bytes
 
     def _upload_envmap(self, lights: np.ndarray, packer: Any) -> None:
         """The environment image as a float texture (bilinear, wrapping in u) and its
@@ -212,25 +270,29 @@ class Renderer:
         envmap.check_texture_size(image, self.gl.info["GL_MAX_TEXTURE_SIZE"], self.scene.source)
         env = self.packed.environment - 1
         lights[env]["info"][3] = packer.add_distribution_2d(envmap.importance_weights(image))
-        tex = self.gl.texture((w, h), 3, np.ascontiguousarray(image, np.float32).tobytes(), dtype="f4")
-        tex.filter = (self.gl.LINEAR, self.gl.LINEAR)
-        tex.repeat_x, tex.repeat_y = True, False
-        self._env_texture = tex
-        self._buffers.append(tex)
+        data = self._scene_data
+        assert data is not None, "the renderer was released"
+        if data.env_texture is None:
+            tex = self.gl.texture((w, h), 3, np.ascontiguousarray(image, np.float32).tobytes(), dtype="f4")
+            tex.filter = (self.gl.LINEAR, self.gl.LINEAR)
+            tex.repeat_x, tex.repeat_y = True, False
+            data.env_texture = tex
+            data.buffers.append(tex)
+        self._env_texture = data.env_texture
 
     def _upload_textures(self) -> None:
         """The materials' textures: image layers (unit 8) and records (unit 9), bound with
         the other scene data in _bind; scenes without textures bind nothing."""
         from ..gpu import textures
 
-        self._surface_textures = []
-        self.texture_bytes = 0      # the atlas pages (RGBA16F) on the device
+        data = self._scene_data
+        assert data is not None, "the renderer was released"
         if len(self.packed.textures):
             array, records = textures.upload(self.ctx, self.packed.textures)
-            self.texture_bytes = array.width * array.height * array.layers * 8
-            self._buffers += [array, records]
-            self._surface_textures = [(layout.TEX_TEXTURES, array.use),
-                                      (layout.TEX_TEXTURE_RECORDS, records.bind)]
+            data.texture_bytes = array.width * array.height * array.layers * 8
+            data.buffers += [array, records]
+            data.surface_textures = [(layout.TEX_TEXTURES, array.use),
+                                     (layout.TEX_TEXTURE_RECORDS, records.bind)]
 
     def _upload_mesh(self) -> None:
         """BVH over the static mesh triangles (world space) plus one tree per moving mesh
@@ -270,8 +332,10 @@ class Renderer:
             uv4[rows, 0, :2], uv4[rows, 0, 2:], uv4[rows, 1, :2] = uv[:, 0], uv[:, 1], uv[:, 2]
             info[rows, 0], info[rows, 1] = mt[o], li[o]
             row += len(o)
-        self._bvh = GpuBvh(self.ctx, bvh)
-        self._mesh_textures = [
+        data = self._scene_data
+        assert data is not None, "the renderer was released"
+        data.bvh = GpuBvh(self.ctx, bvh)
+        data.mesh_textures = [
             (layout.TEX_TRI_NORMALS, BufferTexture(self.ctx, n4, "rgba32f", "triangle normals")),
             (layout.TEX_TRI_UVS, BufferTexture(self.ctx, uv4, "rgba32f", "triangle uvs")),
             (layout.TEX_TRI_INFO, BufferTexture(self.ctx, info, "rgba32ui", "triangle info")),
@@ -747,8 +811,12 @@ class Renderer:
         return image.reshape(self.height, self.width, 3).astype(np.float32)
 
     def release(self) -> None:
-        """Free the device buffers (the renderer cannot render afterwards)."""
+        """Free the device buffers (the renderer cannot render afterwards); the scene's
+        own data stays on the device while another renderer shares it."""
         for buf in self._buffers + [*self._accumulators(), self._params]:
             buf.release()
         self._release_snapshot()
         self._buffers = []
+        data, self._scene_data = self._scene_data, None
+        if data is not None:
+            data.release()
