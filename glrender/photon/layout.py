@@ -52,5 +52,11 @@ PHOTON_MAP_PARAMS = np.dtype([
     ("caustic_lo", "<f4", 4),
     ("radius", "<f4", 4),        # lookup radius global, caustic; 1 / photons global, caustic
     ("mode", "<u4", 4),          # kernel, k nearest (0: fixed radius), final gather, direct by photons
+    ("pages", "<u4", 4),         # first record of global pages 1, 2, caustic page 1 (NO_PAGE: none)
 ])
-assert PHOTON_MAP_PARAMS.itemsize == 128
+assert PHOTON_MAP_PARAMS.itemsize == 144
+
+# a map longer than one storage-block binding continues in further pages (map_layout.glsl)
+GLOBAL_PAGES = (SSBO_GLOBAL_PHOTONS, 13, 14)
+CAUSTIC_PAGES = (SSBO_CAUSTIC_PHOTONS, 15)
+NO_PAGE = 0xFFFFFFFF

@@ -82,6 +82,27 @@ class PhotonSettings:
             raise UsageError(f"direct: expected nee or photons, got {self.direct!r}")
 
 
+def canonical_order(records: np.ndarray) -> np.ndarray:
+    """An order of photon records (N, 12) that depends on the records alone: atomics store
+    photons in any order, and this one makes the radius estimate and the grid, hence the
+    image, repeatable (and the same however the map was traced: in one buffer or
+    several). By the bits of x and y; records that share them (the floor's y = 0 with equal
+    x, say) by all their words."""
+    words = records.view(np.uint32)
+    key = (words[:, 0].astype(np.uint64) << np.uint64(32)) | words[:, 1]
+    order = np.argsort(key, kind="stable")
+    ks = key[order]
+    equal = ks[1:] == ks[:-1]
+    tied = np.zeros(len(order), bool)
+    tied[1:] |= equal
+    tied[:-1] |= equal
+    if tied.any():
+        at = np.nonzero(tied)[0]
+        sub = order[at]
+        order[at] = sub[np.lexsort((*words[sub].T[::-1], ks[at]))]
+    return order
+
+
 class PhotonRenderer(Renderer):
     """A scene on the device rendered by photon mapping: :class:`Renderer` with the
     photon integrator's camera kernel and the two photon maps, traced at construction."""
@@ -95,7 +116,9 @@ class PhotonRenderer(Renderer):
             overrides.setdefault("integrator", "photon")
         super().__init__(scene, settings, ctx=ctx, device=device, **overrides)
         t0 = time.perf_counter()
-        self.counters: dict[str, list[Any]] = {"stored": [0, 0], "traced_twice": [False, False]}
+        # per map: photons stored, dispatches traced again (their photons overflowed a
+        # buffer), pages the map takes on the device
+        self.counters: dict[str, list[Any]] = {"stored": [0, 0], "retraced": [0, 0], "pages": [1, 1]}
         self.grids: list[PointGrid] = []
         self._trace_maps()
         self.timings["photons"] = time.perf_counter() - t0
@@ -120,7 +143,7 @@ class PhotonRenderer(Renderer):
                                     slots=slots, library=library).source
         self._store_hash = hashlib.sha256(source.encode()).hexdigest()
         gl = self.gl
-        self._maps = [gl.buffer(reserve=16), gl.buffer(reserve=16)]
+        self._maps: list[list[Any]] = [[gl.buffer(reserve=16)], [gl.buffer(reserve=16)]]   # pages
         self._cells = [gl.buffer(reserve=16), gl.buffer(reserve=16)]
         self._counters = gl.buffer(reserve=4 * pl.MAP_COUNTER_WORDS)
         self._counters.clear()
@@ -154,70 +177,122 @@ class PhotonRenderer(Renderer):
             r = 1e-3 * float(self.packed.sphere_bounds[1])
         return r * (KNN_REACH if self.photon.knn else 1.0)
 
-    def _limit_photons(self) -> int:
-        return int(self.gl.info["GL_MAX_SHADER_STORAGE_BLOCK_SIZE"]) // pl.BYTES_PER_PHOTON
+    def _map_binding_limit(self) -> int:
+        """Bytes one storage-block binding of a photon map may hold: the device's
+        GL_MAX_SHADER_STORAGE_BLOCK_SIZE (tests lower it to split small maps)."""
+        return self._binding_limit()
 
-    def _trace(self, which: int, capacity: int) -> int:
-        """Traces map ``which`` into a buffer of ``capacity`` photons: the photons it
-        stored (more than ``capacity`` when they did not fit)."""
-        buf = self.gl.buffer(reserve=max(16, pl.BYTES_PER_PHOTON * capacity))
-        old = self._maps[which]
-        old.release()
-        self._maps[which] = buf
-        self._counters.clear()
+    def page_photons(self) -> int:
+        """Photons one page of a map holds: one storage-block binding's worth."""
+        return max(1, self._map_binding_limit() // pl.BYTES_PER_PHOTON)
+
+    def _trace(self, which: int) -> np.ndarray:
+        """Traces map ``which``: its stored photons (S, 12) float32, in no set order.
+
+        The tracing kernel stores into a buffer of at most one page (first sized for 4
+        photons an emitted photon in the global map, 1 in the caustic map), reading the
+        count back after every dispatch. A dispatch that overflows the buffer is traced
+        again into an emptied one (photon j's numbers depend on j alone: the same
+        photons), after the photons of the dispatches before are read back; the
+        buffer doubles at every overflow, up to a page, and the dispatch halves when it
+        alone does not fit a page. The photon-map view splats each
+        photon once (store.w: photons below it were splatted already)."""
+        page = self.page_photons()
+        total = self.photons[which]
+        capacity = min(page, 4 * total if which == 0 else total)
         prm = self._param_block(0, 0)
         self._bind()
         self._params.write(prm.tobytes())
-        buf.bind_to_storage_buffer(pl.SSBO_GLOBAL_PHOTONS)
         self._view.bind_to_storage_buffer(scene_layout.SSBO_SPLAT)
         block = self._block.copy()
-        total = self.photons[which]
         max_depth = self.settings.integrator.max_depth
-        block["store"] = (capacity, 256 if max_depth < 0 else max_depth,
-                          int(self.photon.photon_view and which == 0), 0)
-        first = 0
-        while first < total:
-            count = min(PHOTONS_PER_DISPATCH, total - first)
-            block["trace"] = (first, count, total, which)
-            self._map_params.write(block.tobytes())
-            self.store_kernel.run(group_x=-(-count // 64))
-            first += count
-        self.gl.finish()
+        view = int(self.photon.photon_view and which == 0)
+        chunks: list[np.ndarray] = []
+        buf: Any = None
+        first, stored, splatted, per_dispatch = 0, 0, 0, PHOTONS_PER_DISPATCH
+        try:
+            while first < total:
+                if buf is None:
+                    buf = self.gl.buffer(reserve=max(16, pl.BYTES_PER_PHOTON * capacity))
+                    buf.bind_to_storage_buffer(pl.SSBO_GLOBAL_PHOTONS)
+                    self._counters.clear()
+                    stored = 0
+                count = min(per_dispatch, total - first)
+                block["trace"] = (first, count, total, which)
+                block["store"] = (capacity, 256 if max_depth < 0 else max_depth, view, splatted)
+                self._map_params.write(block.tobytes())
+                self.store_kernel.run(group_x=-(-count // 64))
+                n = int(np.frombuffer(self._counters.read(4), np.uint32)[0])
+                if n <= capacity:
+                    stored, first = n, first + count
+                    continue
+                # overflow: keep the earlier dispatches' photons, trace this one again
+                self.counters["retraced"][which] += 1
+                splatted = max(splatted, first + count)
+                if stored:
+                    chunks.append(self._read_photons(buf, stored))
+                elif capacity == page:
+                    if count == 1:
+                        raise UsageError(f"photon maps: one photon stores {n} hits, more than a "
+                                         f"storage buffer's {page}")
+                    per_dispatch = count // 2
+                capacity = min(page, 2 * capacity)
+                buf.release()
+                buf = None
+            if buf is not None and stored:
+                chunks.append(self._read_photons(buf, stored))
+        finally:
+            if buf is not None:
+                buf.release()
         self._bind()
-        return int(np.frombuffer(self._counters.read(4), np.uint32)[0])
+        return np.concatenate(chunks) if chunks else np.zeros((0, 12), np.float32)
+
+    @staticmethod
+    def _read_photons(buf: Any, n: int) -> np.ndarray:
+        return np.frombuffer(buf.read(pl.BYTES_PER_PHOTON * n), np.float32).reshape(n, 12)
+
+    def _upload_map(self, which: int, records: np.ndarray) -> None:
+        """Map ``which``'s photons (in grid order) to its device pages, one storage-block
+        binding each, split at photon boundaries; at most len(GLOBAL_PAGES) (global) or
+        len(CAUSTIC_PAGES) (caustic) pages."""
+        page = self.page_photons()
+        bindings = (pl.GLOBAL_PAGES, pl.CAUSTIC_PAGES)[which]
+        pages = max(1, -(-len(records) // page))
+        if pages > len(bindings):
+            name = ("--photons", "--caustic-photons")[which]
+            raise UsageError(f"{name} {self.photons[which]}: the {('global', 'caustic')[which]} map "
+                             f"stores {len(records)} photons, above the {len(bindings) * page} of its "
+                             f"{len(bindings)} storage buffers on this device: trace fewer")
+        for buf in self._maps[which]:
+            buf.release()
+        self._maps[which] = [self.gl.buffer(np.ascontiguousarray(records[i * page:(i + 1) * page]).tobytes()
+                                            if len(records) > i * page else b"\0" * 16)
+                             for i in range(pages)]
+        self.counters["pages"][which] = pages
+        starts = [3 * page * i for i in range(1, len(bindings))]     # first record of pages 1, ...
+        starts = [st if i + 1 < pages else pl.NO_PAGE for i, st in enumerate(starts)]
+        if which == 0:
+            self._block["pages"][:2] = starts
+        else:
+            self._block["pages"][2] = starts[0]
 
     def _trace_maps(self) -> None:
-        limit = self._limit_photons()
         self._radii = [0.0, 0.0]
+        self._block["pages"] = pl.NO_PAGE
         for which in (0, 1):
-            # a first guess of the photons stored; traced again at the exact size if short
-            capacity = min(limit, 4 * self.photons[which] if which == 0 else self.photons[which])
-            stored = self._trace(which, capacity)
-            if stored > capacity:
-                if stored > limit:
-                    name = ("--photons", "--caustic-photons")[which]
-                    raise UsageError(f"{name} {self.photons[which]}: the {('global', 'caustic')[which]} "
-                                     f"map stores {stored} photons, above the device's "
-                                     f"{limit} per storage buffer: trace fewer")
-                self.counters["traced_twice"][which] = True
-                if self.photon.photon_view and which == 0:
-                    self._view.clear()
-                self._trace(which, stored)
+            records = self._trace(which)
+            stored = len(records)
             self.counters["stored"][which] = stored
-            records = np.zeros((0, 12), np.float32)
             if stored:
-                data = self._maps[which].read(pl.BYTES_PER_PHOTON * stored)
-                records = np.frombuffer(data, np.float32).reshape(stored, 12)
-                # atomics store photons in any order: a canonical one (by the bits of x and
-                # y; photons at the same x and y are as good as never) makes the radius
-                # estimate and the grid, hence the image, repeatable
-                bits = records[:, :2].copy().view(np.uint32).astype(np.uint64)
-                records = records[np.argsort((bits[:, 0] << np.uint64(32)) | bits[:, 1])]
+                records = records[canonical_order(records)]
             self._radii[which] = self._estimate_radius(records[:, :3])
             grid = build_point_grid(records[:, :3], self._radii[which])
             self.grids.append(grid)
-            if stored:
-                self._maps[which].write(np.ascontiguousarray(records[grid.order]).tobytes())
+            self._upload_map(which, records[grid.order])
+            if 4 * (grid.table_size + 1) > self._map_binding_limit():
+                raise UsageError(f"{('--photons', '--caustic-photons')[which]} {self.photons[which]}: "
+                                 f"the map's hash table takes {4 * (grid.table_size + 1)} bytes, above "
+                                 f"the device's {self._map_binding_limit()} per storage buffer: trace fewer")
             self._cells[which].release()
             self._cells[which] = self.gl.buffer(grid.offsets.tobytes() if grid.table_size else b"\0" * 16)
             size = "global_size" if which == 0 else "caustic_size"
@@ -235,10 +310,12 @@ class PhotonRenderer(Renderer):
 
     def _bind(self) -> None:
         super()._bind()
-        for binding, buf in ((pl.SSBO_GLOBAL_PHOTONS, self._maps[0]), (pl.SSBO_GLOBAL_CELLS, self._cells[0]),
-                             (pl.SSBO_CAUSTIC_PHOTONS, self._maps[1]), (pl.SSBO_CAUSTIC_CELLS, self._cells[1]),
+        for binding, buf in ((pl.SSBO_GLOBAL_CELLS, self._cells[0]), (pl.SSBO_CAUSTIC_CELLS, self._cells[1]),
                              (pl.SSBO_MAP_COUNTERS, self._counters)):
             buf.bind_to_storage_buffer(binding)
+        for pages, bindings in zip(self._maps, (pl.GLOBAL_PAGES, pl.CAUSTIC_PAGES)):
+            for i, binding in enumerate(bindings):    # a page not there: page 0 (never read)
+                pages[i if i < len(pages) else 0].bind_to_storage_buffer(binding)
         self._map_params.bind_to_uniform_block(pl.UBO_PHOTON)
 
     def fingerprint(self) -> str:
@@ -250,6 +327,14 @@ class PhotonRenderer(Renderer):
         return h.hexdigest()
 
     # -- outputs -----------------------------------------------------------------------------
+    def map_records(self, which: int) -> np.ndarray:
+        """The global (0) or caustic (1) map's photons as the device holds them, its pages
+        read back in order: (stored, 12) float32 records (photon/map_layout.glsl)."""
+        stored, page = self.counters["stored"][which], self.page_photons()
+        parts = [np.frombuffer(buf.read(pl.BYTES_PER_PHOTON * min(page, stored - i * page)), np.float32)
+                 for i, buf in enumerate(self._maps[which]) if stored > i * page]
+        return np.concatenate(parts).reshape(-1, 12) if parts else np.zeros((0, 12), np.float32)
+
     def lookup_counters(self) -> dict[str, int]:
         """Lookup candidates since the maps were built: ``skipped`` by the bound,
         ``visited``, and the most one lookup visited (``max_visited``)."""
@@ -279,15 +364,19 @@ class PhotonRenderer(Renderer):
                 "lookups": self.lookup_counters(), "memory": self.memory(),
                 "seconds": self.timings.get("photons", 0.0)}
 
-    def memory(self) -> dict[str, int]:
-        """Device bytes per photon stored, photons stored per map and the maps' bytes."""
+    def memory(self) -> dict[str, Any]:
+        """Device bytes per photon stored (and 4 more in its map's hash table) and per
+        pixel (the camera pass's accumulation), photons stored per map, the maps' bytes,
+        and the pages of each map: storage-block bindings of ``page_photons`` photons."""
         stored = self.counters["stored"]
-        return {"bytes_per_photon": pl.BYTES_PER_PHOTON, "global_photons": stored[0],
-                "caustic_photons": stored[1],
+        return {"bytes_per_photon": pl.BYTES_PER_PHOTON, "bytes_per_pixel": self.device_bytes_per_pixel(),
+                "global_photons": stored[0], "caustic_photons": stored[1],
                 "map_bytes": sum(pl.BYTES_PER_PHOTON * s + 4 * (g.table_size + 1)
-                                 for s, g in zip(stored, self.grids))}
+                                 for s, g in zip(stored, self.grids)),
+                "pages": list(self.counters["pages"]), "page_photons": self.page_photons()}
 
     def release(self) -> None:
-        for buf in (*self._maps, *self._cells, self._counters, self._map_params, self._view):
+        for buf in (*self._maps[0], *self._maps[1], *self._cells, self._counters, self._map_params,
+                    self._view):
             buf.release()
         super().release()

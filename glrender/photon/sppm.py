@@ -257,6 +257,11 @@ class SppmRenderer:
         valid = np.nonzero(position[:, 3] > 0)[0]
         grid = build_grid(position[valid, :3], self.radius[valid], valid.astype(np.uint32))
         self.counters["max_cell"] = max(self.counters["max_cell"], grid.max_cell_entries)
+        limit = int(self.gl.info["GL_MAX_SHADER_STORAGE_BLOCK_SIZE"])
+        if grid.cells.nbytes > limit:
+            raise UsageError(f"sppm: the visible points' grid takes {grid.cells.nbytes >> 20} MiB, above "
+                             f"the device's {limit >> 20} MiB storage buffers: render fewer pixels or "
+                             f"lower --initial-radius")
         self._grid.orphan(grid.cells.nbytes)
         self._grid.write(grid.cells.tobytes())
         self._radius2.write((self.radius ** 2).astype(np.float32).tobytes())

@@ -20,14 +20,19 @@ float density_kernel(uint kernel, float q2) {
 const float kNormalAgreement = 0.5;   // cos 60 degrees
 
 // What a photon arriving from the unit direction wi (pointing back where it came from)
-// contributes toward wo_l (in `frame`, the point's shading frame; ng its geometric
-// normal) per unit power: the BSDF over |cos theta_i| (bsdf_eval includes the cosine; the
-// photon density already accounts for it). False (the photon does not count) unless it
-// arrives on the geometric side its shading direction claims.
+// contributes toward wo_l (in `frame`, the point's shading frame; ng its unit geometric
+// normal) per unit power: f |wi . ns| / |wi . ng|. Photons land on the geometric surface,
+// so their density per area is the irradiance through ng, int L_i |wi . ng|, while the
+// radiance the camera sees is int f L_i |wi . ns| (bsdf_eval includes |wi . ns|): the
+// ratio is Veach's adjoint shading-normal factor at the photon's last vertex (its camera
+// side, |wo . ng| / |wo . ns|, cancels against the camera ray's cosine). Without a normal
+// map ns = ng and this is f. False (the photon does not count) unless it arrives on
+// the geometric side its shading direction claims.
 bool photon_bsdf(Bsdf b, Frame frame, vec3 wo_l, vec3 ng, vec3 wi, out vec3 f) {
     vec3 wi_l = frame_to_local(frame, wi);
     f = vec3(0.0);
-    if (!(abs(wi_l.z) > 0.0) || dot(wi, ng) * wi_l.z <= 0.0) return false;
-    f = bsdf_eval(b, wo_l, wi_l, false) / abs(wi_l.z);
+    float cos_g = dot(wi, ng);
+    if (!(abs(wi_l.z) > 0.0) || cos_g * wi_l.z <= 0.0) return false;
+    f = bsdf_eval(b, wo_l, wi_l, false) / abs(cos_g);
     return true;
 }

@@ -28,7 +28,7 @@ const uint kGlobalMap = 0u;
 const uint kCausticMap = 1u;
 
 vec4 map_photon(uint map, uint k) {
-    return map == kGlobalMap ? global_photons[k] : caustic_photons[k];
+    return map_record(map, k);
 }
 
 uint map_cell(uint map, uint h) {

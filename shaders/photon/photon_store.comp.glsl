@@ -6,8 +6,9 @@
 // direction it came from, its power and type (direct: the first surface; caustic:
 // reached through delta surfaces only, L S+ D; indirect: the rest) and the segments it
 // took. The caustic map's pass (trace.w = 1) keeps caustic photons only and ends each
-// photon at its first non-delta surface. Photons beyond the map's capacity are counted
-// and not stored (the host sizes the map from the count and traces again).
+// photon at its first non-delta surface. Photons beyond the buffer's capacity are
+// counted and not stored (the host keeps what earlier dispatches stored and traces the
+// dispatch again into an emptied buffer, splatting none of its photons twice).
 // Photon j draws its numbers as sample j of a sequence scrambled by (seed, map).
 layout(local_size_x = 64) in;
 
@@ -44,7 +45,7 @@ void main() {
             uint type = segments == 1 ? kPhotonDirect : (delta_only ? kPhotonCaustic : kPhotonIndirect);
             if (!caustic_map || type == kPhotonCaustic) {
                 store_photon(h.hit, ph, type, segments);
-                if (u_map.store.z != 0u) splat_photon_view(h.hit, ph, h.u_lens);
+                if (u_map.store.z != 0u && j >= u_map.store.w) splat_photon_view(h.hit, ph, h.u_lens);
             }
             if (caustic_map) break;
             delta_only = false;
