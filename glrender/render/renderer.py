@@ -143,7 +143,10 @@ class Renderer:
         self.settings = settings or settings_from_scene(scene, **overrides)
         self.ctx = ctx or default_context(device)
         self.gl = self.ctx.gl
+        t_pack = time.perf_counter()
         self.packed: PackedScene = pack_scene(scene)
+        t0 = time.perf_counter()
+        pack = t0 - t_pack
         self.width, self.height = scene.film.width, scene.film.height
         self.tiles_x = -(-self.width // TILE)
         self.tiles_y = -(-self.height // TILE)
@@ -153,15 +156,15 @@ class Renderer:
         self._buffers: list[Any] = []
         self._bvh: Any = None
         self._snapshot: list[Any] | None = None     # accumulation copies that undo a stopped pass
-        t0 = time.perf_counter()
         self._upload()
         t1 = time.perf_counter()
         self._compile()
         self.reset()
         self._warm_up()
-        # seconds spent packing and uploading the scene (BVH build included) and compiling
-        # the kernel (llvmpipe's JIT at the first dispatch included)
-        self.timings = {"build": t1 - t0, "compile": time.perf_counter() - t1}
+        # seconds spent packing the scene into arrays ("pack"), packing and uploading it
+        # ("build": pack_scene, the BVH build and the uploads) and compiling the kernel
+        # ("compile": llvmpipe's JIT at the first dispatch included)
+        self.timings = {"pack": pack, "build": t1 - t_pack, "compile": time.perf_counter() - t1}
 
     # -- setup -------------------------------------------------------------------------------
     def _upload(self) -> None:
