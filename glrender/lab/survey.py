@@ -32,6 +32,7 @@ import numpy as np
 from .core import Section, Table
 from .renders import load_scene, region_table, render_variants
 from .report import pyplot, save
+from .roulette import unbiased_finding, unbiasedness
 
 NAME = "survey"
 TITLE = "The path tracer's defaults over the scenes users render"
@@ -111,25 +112,6 @@ def chosen_settings(choice: dict) -> dict:
     return settings
 
 
-def unbiasedness(lab, tables: list[Table]) -> dict:
-    """Each setting's mean radiance against the baseline's (the enclosure's: against its
-    exact value), Šidák-corrected over all of them."""
-    tests = []
-    for t in tables:
-        base = t.row("baseline")
-        for r in t.rows:
-            if r.exact is not None:
-                tests.append((t.title, r.technique, (r.mean - r.exact) / r.stderr if r.stderr else 0.0))
-            elif r is not base:
-                tests.append((t.title, r.technique,
-                              (r.mean - base.mean) / math.hypot(r.stderr, base.stderr)))
-    runs = min(r.runs for t in tables for r in t.rows)
-    threshold = lab.threshold(len(tests), runs)
-    worst = max(tests, key=lambda x: abs(x[2]))
-    return {"tests": len(tests), "threshold": threshold, "max_abs_t": abs(worst[2]),
-            "worst": f"{worst[0]}: {worst[1]}", "all_within": all(abs(x[2]) <= threshold for x in tests)}
-
-
 def run(lab) -> Section:
     runs, spp = lab.size((8, 4), (16, 16))
     cands = candidates()
@@ -152,13 +134,8 @@ def run(lab) -> Section:
     section.extra["choice_by_time"] = by_time = choose(tables, "time")
     section.extra["choice_by_rays"] = by_rays = choose(tables, "rays")
     settings = section.extra["chosen"] = chosen_settings(by_time)
-    section.extra["unbiased"] = check = unbiasedness(lab, tables)
-    section.findings.append(
-        f"unbiased: all {check['tests']} settings agree with the baseline or the exact value "
-        f"(largest |t| {check['max_abs_t']:.2f}, {check['worst']}; Šidák threshold "
-        f"{check['threshold']:.2f})" if check["all_within"] else
-        f"NOT within the Šidák threshold {check['threshold']:.2f}: {check['worst']} "
-        f"(|t| {check['max_abs_t']:.2f})")
+    section.extra["unbiased"] = check = unbiasedness(lab, tables, "baseline")
+    section.findings.append(unbiased_finding(check, "the baseline or the exact value"))
     for decision, c in by_time.items():
         parts = [f"{s['label']} ×{s['geomean']:.3g} (worst ×{s['worst']:.3g})"
                  for n, s in c["candidates"].items() if n != "baseline"]
