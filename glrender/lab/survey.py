@@ -66,7 +66,7 @@ def _scenes(lab):
             ("envmap", "environment map", (64, 32), None),
             ("enclosure", "closed enclosure (unbounded)", (32, 32), None)]
     if q:
-        return [(n, t, (w // 3, h // 3), d) for n, t, (w, h), d in full
+        return [(n, t, (w // 2, h // 2), d) for n, t, (w, h), d in full
                 if n in ("cornell-box", "enclosure")]
     return full
 
@@ -113,7 +113,7 @@ def chosen_settings(choice: dict) -> dict:
 
 
 def run(lab) -> Section:
-    runs, spp = lab.size((8, 4), (16, 16))
+    runs, spp = lab.size((8, 16), (16, 16))
     cands = candidates()
     labels = {n: label for n, (label, _) in cands.items()}
     tables, scenes = [], []
