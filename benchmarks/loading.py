@@ -41,8 +41,8 @@ c2, t2 = time.process_time(), time.perf_counter()
 r.step(8)
 r.film()
 t3 = time.perf_counter()
-print(json.dumps({"load": t1 - t0, "pack": t2 - t1 - r.timings["build"] - r.timings["compile"],
-                  "bvh_upload": r.timings["build"], "compile": r.timings["compile"],
+print(json.dumps({"load": t1 - t0, "pack": r.timings["pack"],
+                  "bvh_upload": r.timings["build"] - r.timings["pack"], "compile": r.timings["compile"],
                   "pass": t3 - t2, "cpu_to_dispatch": c2 - c0, "loadavg": os.getloadavg()[0]}))
 """
 

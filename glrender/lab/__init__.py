@@ -16,7 +16,7 @@ from ..errors import UsageError
 
 # Experiment modules in report order.
 EXPERIMENTS = ["importance", "rejection", "figures", "patterns", "point_lights",
-               "direct", "light_selection", "area_lights", "roulette"]
+               "direct", "light_selection", "area_lights", "roulette", "survey"]
 
 
 def experiment(name: str):

@@ -32,8 +32,9 @@ def defaults_section(sections: list[Section]) -> Section | None:
         best = "mis-power" if pw.efficiency >= bal.efficiency else "mis-balance"
         lines.append(f"**MIS heuristic** (default `{integ.strategy}`): on Veach's plates the power "
                      f"heuristic's efficiency is ×{pw.efficiency / bal.efficiency:.3g} the "
-                     f"balance heuristic's (measured best: **{best}**; the two differ by less than "
-                     f"their noise when the ratio is near 1).")
+                     f"balance heuristic's (best on the plates with the direct integrator: **{best}**; "
+                     f"the two differ by less than their noise when the ratio is near 1; the "
+                     f"default is decided over all the survey's scenes: the last line).")
     selection = _find(sections, "light_selection")
     if selection is not None:
         whole = selection.tables[0]
@@ -41,10 +42,13 @@ def defaults_section(sections: list[Section]) -> Section | None:
         lines.append(f"**Light selection** (default `{integ.light_selection}`): choosing ∝ power "
                      f"has ×{ratio:.3g} the efficiency of uniform choice over the whole Veach "
                      f"image, but the tables by region disagree (see Light selection): "
-                     f"neither wins everywhere.")
+                     f"neither wins everywhere (the default: the last line).")
     roulette = _find(sections, "roulette")
     if roulette is not None:
         lines.append(roulette_line(roulette, integ))
+    survey = _find(sections, "survey")
+    if survey is not None:
+        lines.append(survey_line(survey, integ))
     if not lines:
         return None
     return Section("defaults", "The renderer's defaults against the measurements",
@@ -83,3 +87,26 @@ def roulette_line(roulette: Section, integ) -> str:
                    f"decide (see Russian roulette)")
     return (f"**Russian roulette and splitting** (default: {default}): best by rays on "
             + "; ".join(per_scene) + f". {verdict[0].upper()}{verdict[1:]}.")
+
+
+def survey_line(survey: Section, integ) -> str:
+    """The path tracer's defaults against the settings the survey's criterion chose."""
+    from .survey import FLOOR
+
+    ours = dict(rr=integ.rr, rr_depth=integ.rr_depth, strategy=integ.strategy,
+                light_selection=integ.light_selection)
+    chosen = survey.extra["chosen"]
+    parts = []
+    for decision, c in survey.extra["choice_by_time"].items():
+        best = c["candidates"][c["chosen"]]
+        others = [f"{s['label']} ×{s['geomean']:.3g} (worst ×{s['worst']:.3g})"
+                  for n, s in c["candidates"].items() if n != c["chosen"]]
+        parts.append(f"{decision}: **{best['label']}** (against it: " + "; ".join(others) + ")"
+                     if c["chosen"] == "baseline" else
+                     f"{decision}: **{best['label']}** (×{best['geomean']:.3g}, worst ×{best['worst']:.3g})")
+    verdict = ("the renderer's defaults are these settings" if ours == chosen else
+               f"**the renderer's defaults ({ours}) differ from the chosen ({chosen})**")
+    return (f"**Path tracer defaults over {len(survey.tables)} scenes** (criterion: the best "
+            f"geometric mean of the efficiency ratio by time among the settings no worse than "
+            f"×{FLOOR:g} on any scene; see the survey): " + "; ".join(parts) + f". {verdict[0].upper()}"
+            f"{verdict[1:]}.")

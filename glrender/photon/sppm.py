@@ -110,7 +110,8 @@ class SppmRenderer:
         self._allocate()
         self.reset()
         self._warm_up()
-        self.timings = {"build": self.base.timings["build"], "compile": time.perf_counter() - t0
+        self.timings = {"pack": self.base.timings["pack"], "build": self.base.timings["build"],
+                        "compile": time.perf_counter() - t0
                         - self.base.timings["build"]}
 
     # -- setup -------------------------------------------------------------------------------

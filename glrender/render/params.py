@@ -22,18 +22,25 @@ def kind_mask(kinds, table: dict[str, int]) -> int:
 
 
 def shader_defines(*, sampler: str = "independent", material_kinds=("diffuse",),
-                   light_kinds=(), max_depth: int = -1, rr_depth: int = 5,
-                   rr: str = "throughput", light_samples: int = 1, split: int = 1,
-                   strategy: str = "mis-power", emitter_samples: int = 1, bsdf_samples: int = 1,
-                   hide_emitters: bool = False, light_selection: str = "power",
-                   area_sampling: str = "solid-angle", filter: str = "box", aovs: bool = False,
+                   light_kinds=(), max_depth: int = -1, rr_depth: int | None = None,
+                   rr: str | None = None, light_samples: int = 1, split: int = 1,
+                   strategy: str | None = None, emitter_samples: int = 1, bsdf_samples: int = 1,
+                   hide_emitters: bool = False, light_selection: str | None = None,
+                   area_sampling: str | None = None, filter: str = "box", aovs: bool = False,
                    count_loops: bool = False, count_rays: bool = False,
                    debug_nonfinite: int = 0, emission_only: bool = False) -> dict[str, object]:
     """The full define set for params.glsl (defaults suit unit tests of shader code).
-    ``rr``: the Russian roulette rule, ``throughput``, ``fixed:<q>`` or ``off``."""
-    from ..scene.model import parse_rr
+    ``rr``: the Russian roulette rule, ``throughput``, ``fixed:<q>`` or ``off``. The
+    integrator settings left None take the scene model's defaults (:class:`Integrator`):
+    one fact for the shaders' unit tests and the renderer."""
+    from ..scene.model import Integrator, parse_rr
 
-    rule, survival = parse_rr(rr)
+    default = Integrator()
+    rr_depth = default.rr_depth if rr_depth is None else rr_depth
+    strategy = default.strategy if strategy is None else strategy
+    light_selection = default.light_selection if light_selection is None else light_selection
+    area_sampling = default.area_sampling if area_sampling is None else area_sampling
+    rule, survival = parse_rr(default.rr if rr is None else rr)
     return {
         "GLRENDER_SAMPLER": SAMPLERS[sampler],
         "GLRENDER_MATERIAL_KINDS": kind_mask(material_kinds, layout.MATERIAL_KINDS),

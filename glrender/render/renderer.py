@@ -188,6 +188,7 @@ class Renderer:
         # what depends on the scene alone (the packed arrays, the BVH, the triangle data,
         # textures, the environment image) is made once and shared by renderers of other
         # settings on the same context (share=: the noise pilot, the seen-emission pass)
+        t_pack = time.perf_counter()
         self._scene_data: SceneData | None
         if share is None:
             self._scene_data = SceneData(pack_scene(scene))
@@ -196,6 +197,8 @@ class Renderer:
         else:
             self._scene_data = share._scene_data.acquire()
         self.packed: PackedScene = self._scene_data.packed
+        t0 = time.perf_counter()
+        pack = t0 - t_pack      # about 0 where the scene data is shared
         self.width, self.height = scene.film.width, scene.film.height
         self.tiles_x = -(-self.width // TILE)
         self.tiles_y = -(-self.height // TILE)
@@ -205,15 +208,15 @@ class Renderer:
         self._buffers: list[Any] = []
         self._bvh: Any = None
         self._snapshot: list[Any] | None = None     # accumulation copies that undo a stopped pass
-        t0 = time.perf_counter()
         self._upload()
         t1 = time.perf_counter()
         self._compile()
         self.reset()
         self._warm_up()
-        # seconds spent packing and uploading the scene (BVH build included) and compiling
-        # the kernel (llvmpipe's JIT at the first dispatch included)
-        self.timings = {"build": t1 - t0, "compile": time.perf_counter() - t1}
+        # seconds spent packing the scene into arrays ("pack"), packing and uploading it
+        # ("build": pack_scene, the BVH build and the uploads) and compiling the kernel
+        # ("compile": llvmpipe's JIT at the first dispatch included)
+        self.timings = {"pack": pack, "build": t1 - t_pack, "compile": time.perf_counter() - t1}
 
     # -- setup -------------------------------------------------------------------------------
     def _upload(self) -> None:

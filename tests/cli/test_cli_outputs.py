@@ -108,7 +108,8 @@ def test08_stats(tmp_path, film):
                 "nonfinite_samples", "mean_relative_stderr"):
         assert key in stats, key
     assert stats["device"]["GL_RENDERER"]
-    assert set(stats["seconds"]) >= {"load", "build", "compile", "render", "write"}
+    assert set(stats["seconds"]) >= {"load", "pack", "build", "compile", "render", "write"}
+    assert stats["seconds"]["pack"] <= stats["seconds"]["build"]
     assert all(v >= 0 for v in stats["seconds"].values())
     assert stats["seed"] == SEED and stats["spp"] == SPP and stats["stopped"] == "complete"
     assert stats["nonfinite_samples"] == film.nonfinite_total == 0

@@ -33,6 +33,25 @@ def test02_parameters_override_defaults():
     assert scene.sampler.spp == 16 and scene.film.width == 64 and scene.integrator.max_depth == 3
 
 
+def test02b_integrator_keeps_mitsuba_s_rules(monkeypatch):
+    """An imported path integrator uses Mitsuba's roulette rule and depth (5 unless the XML
+    says), power heuristic and uniform light selection, whatever glrender's defaults are."""
+    from glrender.scene import model as m
+
+    monkeypatch.setattr(m.Integrator, "__init__", _other_defaults(m.Integrator.__init__))
+    scene = glrender.load(CBOX)
+    i = scene.integrator
+    assert (i.rr, i.rr_depth, i.strategy, i.light_selection) == (
+        "throughput", 5, "mis-power", "uniform")
+
+
+def _other_defaults(init):
+    def wrapped(self, *args, **kwargs):
+        init(self, *args, **{"rr": "fixed:0.5", "rr_depth": 1, "strategy": "mis-balance",
+                             "light_selection": "power", **kwargs})
+    return wrapped
+
+
 def _scene(body: str) -> str:
     return f'<scene version="3.0.0">\n{body}\n</scene>\n'
 

@@ -748,7 +748,9 @@ class _Builder:
         if t not in ("path", "direct"):
             self.r.notes.add(f"integrator {t!r} (path used)", node.line)
             t = "path"
-        integ = m.Integrator(t)
+        # Mitsuba's own rules, whatever glrender's defaults: throughput roulette from rr_depth
+        # (its default 5), the power heuristic, uniform light selection
+        integ = m.Integrator(t, rr="throughput", strategy="mis-power", light_selection="uniform")
         try:
             integ.max_depth = self.prop(node, "max_depth", "int", -1)
             integ.rr_depth = max(self.prop(node, "rr_depth", "int", 5), 1)

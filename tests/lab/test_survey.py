@@ -1,0 +1,76 @@
+"""The defaults survey's criterion on made-up measurements, and the renderer's defaults
+against the committed full report (docs/lab/results.json)."""
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from glrender.lab.core import Measurement, Table
+from glrender.lab.survey import BASELINE, DECISIONS, FLOOR, chosen_settings, choose
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def scene_table(title, efficiency):
+    """A table whose rows have efficiency (by time and by rays) ×efficiency[name] of the
+    baseline's (1 where not given): variance 1/e, equal cost."""
+    rows = []
+    for items in DECISIONS.values():
+        for name, _, _ in items:
+            if any(r.technique == name for r in rows):
+                continue
+            e = efficiency.get(name, 1.0)
+            rows.append(Measurement(name, np.array([1.0, 1.1]), 100, 1.0,
+                                    run_variances=np.array([1.0 / e, 1.0 / e]),
+                                    units={"rays": 3.0}))
+    return Table(title, rows, baseline="baseline")
+
+
+def test01_best_geometric_mean_among_those_above_the_floor():
+    # rr-depth-1: geometric mean 2 but one scene at x0.5 (< the floor): not admissible;
+    # rr-fixed-0.5: x1.5 and x1.2 (geomean 1.34, above the floor): chosen;
+    # balance: x0.9 on both: the baseline stays; power selection: x1.3 and x0.85 (geomean 1.05)
+    a = scene_table("a", {"rr-depth-1": 8.0, "rr-fixed-0.5": 1.5, "mis-balance": 0.9,
+                          "light-power": 1.3})
+    b = scene_table("b", {"rr-depth-1": 0.5, "rr-fixed-0.5": 1.2, "mis-balance": 0.9,
+                          "light-power": 0.85})
+    for by in ("time", "rays"):
+        c = choose([a, b], by)
+        rr = c["roulette"]
+        assert math.isclose(rr["candidates"]["rr-depth-1"]["geomean"], 2.0)
+        assert "rr-depth-1" not in rr["admissible"]
+        assert rr["chosen"] == "rr-fixed-0.5"
+        assert math.isclose(rr["candidates"]["rr-fixed-0.5"]["geomean"], math.sqrt(1.8))
+        assert c["MIS heuristic"]["chosen"] == "baseline"
+        assert c["light selection"]["chosen"] == "light-power"
+        assert 0.85 >= FLOOR
+        assert chosen_settings(c) == {**BASELINE, "rr": "fixed:0.5", "light_selection": "power"}
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "open finding of the committed full run (docs/lab): the criterion chooses fixed q = 0.5 "
+    "from depth 5 (geometric mean x1.14, worst scene x0.812, all of the gain on the closed "
+    "enclosure, x3.67; chosen together x0.91-x1.02 on the six other scenes), the default is "
+    "still Mitsuba's throughput rule: strict, so this fails once the two agree"))
+def test02_the_renderer_defaults_are_the_committed_report_s_choice():
+    """The scene model's defaults (and shader_defines', the same fact) are the settings the
+    full run in docs/lab chose by its criterion; rerun `glrender lab --out docs/lab` when
+    the renderer changes, and follow what it chooses."""
+    from glrender.render.params import LIGHT_SELECTION, RR_RULES, STRATEGIES, shader_defines
+    from glrender.scene.model import Integrator, parse_rr
+
+    results = json.loads((ROOT / "docs" / "lab" / "results.json").read_text())
+    assert results["meta"]["quick"] is False
+    survey = next(s for s in results["experiments"] if s["name"] == "survey")
+    chosen = survey["extra"]["chosen"]
+    i = Integrator()
+    assert dict(rr=i.rr, rr_depth=i.rr_depth, strategy=i.strategy,
+                light_selection=i.light_selection) == chosen
+    d = shader_defines()
+    rule, q = parse_rr(chosen["rr"])
+    assert d["GLRENDER_RR_RULE"] == RR_RULES[rule] and d["GLRENDER_RR_SURVIVAL"] == q
+    assert d["GLRENDER_RR_DEPTH"] == chosen["rr_depth"]
+    assert d["GLRENDER_STRATEGY"] == STRATEGIES[chosen["strategy"]]
+    assert d["GLRENDER_LIGHT_SELECTION"] == LIGHT_SELECTION[chosen["light_selection"]]
