@@ -28,6 +28,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from accumulation import CHILD as TIMED   # one timed render in a fresh process: wall and CPU s
+
 ROOT = Path(__file__).resolve().parents[1]
 PATCHES = {"profile": ROOT / "benchmarks" / "patches" / "simd-profile.patch",
            "group": ROOT / "benchmarks" / "patches" / "group-tracing.patch"}
@@ -48,20 +50,6 @@ r.step(spp)
 print(json.dumps(np.frombuffer(buf.read(), np.uint32).astype(int).tolist()))
 """
 
-TIMED = """
-import resource, sys, time
-import glrender
-from glrender.render.renderer import Renderer, settings_from_scene
-scene = glrender.load(sys.argv[1]); spp = int(sys.argv[2])
-r = Renderer(scene, settings_from_scene(scene, seed=1, spp=spp))
-r.step(r.samples_per_pass); r.reset()
-def cpu():
-    u = resource.getrusage(resource.RUSAGE_SELF)
-    return u.ru_utime + u.ru_stime
-t, c = time.perf_counter(), cpu()
-r.step(spp)
-print(time.perf_counter() - t, cpu() - c)
-"""
 
 
 def export(dest: Path, patch: Path | None) -> Path:
@@ -114,7 +102,8 @@ def main() -> None:
             runs: dict[str, list[tuple[float, float]]] = {"plain": [], args.variant: []}
             for i in range(args.time):
                 for label, tree in (("plain", plain), (args.variant, variant)):
-                    wall, cpu = map(float, child(tree, TIMED, str(path), str(4 * args.spp)).split())
+                    wall, cpu = map(float, child(tree, TIMED, str(path), str(4 * args.spp),
+                                                 str(scene.film.width)).split())
                     runs[label].append((wall, cpu))
                     print(f"  round {i + 1} {label:>7}: wall {wall:.3f} s, cpu {cpu:.3f} s", flush=True)
             if args.time:
