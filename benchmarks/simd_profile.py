@@ -21,6 +21,7 @@ fresh processes, and prints wall and CPU seconds.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import statistics
 import subprocess
@@ -28,6 +29,7 @@ import sys
 import tempfile
 from pathlib import Path
 
+import glrender
 from accumulation import CHILD as TIMED   # one timed render in a fresh process: wall and CPU s
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -81,8 +83,6 @@ def report(name: str, c: list[int], paths: int) -> None:
 
 
 def main() -> None:
-    import json
-
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenes", default="cornell-bunny,caustic")
     ap.add_argument("--spp", type=int, default=8)
@@ -91,11 +91,9 @@ def main() -> None:
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         variant = export(Path(tmp) / args.variant, PATCHES[args.variant])
-        plain = export(Path(tmp) / "plain", None) if args.time else None
+        plain = export(Path(tmp) / "plain", None) if args.time else variant
         for name in args.scenes.split(","):
             path = ROOT / "scenes" / name / "scene.toml"
-            import glrender
-
             scene = glrender.load(path)
             counts = json.loads(child(variant, COUNTS, str(path), str(args.spp)))
             report(name, counts, scene.film.width * scene.film.height * args.spp)
