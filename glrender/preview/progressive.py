@@ -159,7 +159,7 @@ class SppmProgressive:
         if r.iterations:
             # the estimate times the count, so that the display's sum / count is the estimate
             radiance = r.radiance().reshape(n, 3).astype(np.float64)
-            sums[:, :3] = accum.fixed_values(radiance * r.iterations)
+            sums[:, :3] = accum.fixed(radiance * r.iterations)
             sums[:, 3, 0] = r.iterations
         r.base._sums.write(sums.tobytes())
         r.base._squares.write(np.zeros((n, 3, 4), np.uint32).tobytes())

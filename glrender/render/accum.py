@@ -15,8 +15,6 @@ float64 rounded to float32: a pure function of the integers.
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 FRACTION = 48                 # kAccumFraction
@@ -59,26 +57,17 @@ def values(words: np.ndarray) -> np.ndarray:
 
 
 def fixed(x) -> np.ndarray:
-    """float32 values as 128-bit fixed-point words (..., 4), rounded to nearest with ties
-    away from zero, as the device converts them (for tests)."""
-    x = np.asarray(x, np.float32)
-    words = []
-    for v in x.astype(np.float64).ravel():
-        a = abs(float(v)) * 2.0 ** FRACTION        # exact: a power-of-two scale
-        q = math.floor(a) + (1 if a - math.floor(a) >= 0.5 else 0)
-        q = (-q if v < 0 else q) % (1 << 128)
-        words.append([(q >> (32 * k)) & 0xFFFFFFFF for k in range(4)])
-    return np.array(words, np.uint32).reshape(*x.shape, 4)
-
-
-def fixed_values(x) -> np.ndarray:
-    """float64 values as 128-bit fixed-point words (..., 4), vectorized: the nearest
-    multiple of 2^-FRACTION, exact while |x| 2^FRACTION < 2^53 (for writing a display
-    estimate into an accumulation; :func:`fixed` rounds as the device does)."""
-    x = np.asarray(x, np.float64)
-    a = np.round(np.abs(x) * 2.0 ** FRACTION)
-    hi = np.floor(a / 2.0 ** 64)
-    lo = a - hi * 2.0 ** 64
+    """Values as 128-bit fixed-point words (..., 4), vectorized: the nearest multiple of
+    2^-FRACTION, ties away from zero, as the device converts its float32 samples. Exact
+    for float32 and float64 values of magnitude below 2^(127 - FRACTION) (the scaled
+    value, its floor and fraction are exact in float64; beyond 2^53 it is an integer)."""
+    x = np.asarray(x)
+    x = x.astype(np.float64) if x.dtype != np.float64 else x
+    a = np.abs(x) * 2.0 ** FRACTION                 # exact: a power-of-two scale
+    q = np.floor(a)
+    q += a - q >= 0.5
+    hi = np.floor(q / 2.0 ** 64)
+    lo = q - hi * 2.0 ** 64                          # exact: the bits of q below 2^64
     words = np.stack([lo.astype(np.uint64), hi.astype(np.uint64)], axis=-1).view(np.uint32)
     negative = x < 0
     if negative.any():

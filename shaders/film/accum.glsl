@@ -57,6 +57,42 @@ void accum_add(inout uvec4 a, uvec4 v) {
     a.w += v.w + c2 + d2;
 }
 
+// Partial sums of a few samples in 64 bits (two words, low first, two's complement): a
+// sample of magnitude below kAccumFast converts with float arithmetic and adds with one
+// carry, and kAccumFlush such samples stay below 2^63 (2^4 x 2^(11 + 48)); the partial
+// is then added to the 128-bit sum (accum_add(a, accum_widen(p))). Integer sums, so the
+// result is the same bits as adding every sample to the 128-bit sum.
+const float kAccumFast = 2048.0;   // 2^11
+const uint kAccumFlush = 16u;
+
+// |x| (|x| < 2^15) as a 64-bit fixed-point number (low, high), rounded as accum_fixed_abs:
+// the significand m rounded to s < 0 places, or shifted left by s (at most 39) places.
+uvec2 accum_fixed64_abs(float x) {
+    uint b = floatBitsToUint(x);
+    int e = int((b >> 23) & 0xFFu);
+    uint m = e == 0 ? 0u : (b & 0x7FFFFFu) | 0x800000u;
+    int s = e - 150 + kAccumFraction;
+    uint r = uint(clamp(-s, 0, 25));
+    m = (m + ((1u << r) >> 1u)) >> r;
+    uint t = uint(clamp(s, 0, 31));
+    return s < 32 ? uvec2(m << t, (m >> 1u) >> (31u - t)) : uvec2(0u, m << uint(s - 32));
+}
+
+// p += x (|x| < kAccumFast) in 64-bit fixed point, modulo 2^64.
+void accum_add64(inout uvec2 p, float x) {
+    uvec2 v = accum_fixed64_abs(x);
+    uint c, b;
+    uint add = uaddCarry(p.x, v.x, c);
+    uint sub = usubBorrow(p.x, v.x, b);
+    p = x < 0.0 ? uvec2(sub, p.y - v.y - b) : uvec2(add, p.y + v.y + c);
+}
+
+// A 64-bit partial sum sign-extended to 128 bits.
+uvec4 accum_widen(uvec2 p) {
+    uint s = uint(int(p.y) >> 31);
+    return uvec4(p, s, s);
+}
+
 // A 128-bit fixed-point sum as a double (the preview's display; the host reads sums
 // exactly). Doubles keep the variance Q - S^2 / n of a bright pixel with a small spread.
 double accum_value(uvec4 a) {

@@ -16,13 +16,66 @@
 
 // A pixel's statistics, exact fixed-point sums (film/accum.glsl): per channel the sum
 // and the sum of squares of the finite samples, their count and the count of dropped
-// samples (non-finite, or beyond kAccumLimit), and the sums of the AOVs.
+// samples (non-finite, or beyond kAccumLimit), and the sums of the AOVs. Samples whose
+// values (squares included) are all below kAccumFast go into 64-bit partial sums first,
+// added to the 128-bit sums every kAccumFlush of them and at the end (accumulator_flush).
 struct Accumulator {
     uvec4 sum[3];
     uvec4 sq[3];
     uvec2 counts;    // x: finite samples, y: dropped samples
     uvec4 aov[kAovChannels];   // albedo rgb, normal xyz, depth, seen emission rgb
+    uvec2 part[6];   // partial sums: r, g, b, their squares
+    uvec2 aov_part[kAovChannels];
+    uint pending;    // samples in the partial sums
 };
+
+// Clears the partial sums (constant indices only: an array indexed by a loop variable
+// may be kept in memory and addressed lane by lane).
+void accumulator_clear(inout Accumulator acc) {
+    acc.part[0] = uvec2(0u);
+    acc.part[1] = uvec2(0u);
+    acc.part[2] = uvec2(0u);
+    acc.part[3] = uvec2(0u);
+    acc.part[4] = uvec2(0u);
+    acc.part[5] = uvec2(0u);
+    if (kAovs) {
+        acc.aov_part[0] = uvec2(0u);
+        acc.aov_part[1] = uvec2(0u);
+        acc.aov_part[2] = uvec2(0u);
+        acc.aov_part[3] = uvec2(0u);
+        acc.aov_part[4] = uvec2(0u);
+        acc.aov_part[5] = uvec2(0u);
+        acc.aov_part[6] = uvec2(0u);
+        acc.aov_part[7] = uvec2(0u);
+        acc.aov_part[8] = uvec2(0u);
+        acc.aov_part[9] = uvec2(0u);
+    }
+    acc.pending = 0u;
+}
+
+// Adds the partial sums to the 128-bit sums and clears them.
+void accumulator_flush(inout Accumulator acc) {
+    accum_add(acc.sum[0], accum_widen(acc.part[0]));
+    accum_add(acc.sum[1], accum_widen(acc.part[1]));
+    accum_add(acc.sum[2], accum_widen(acc.part[2]));
+    accum_add(acc.sq[0], accum_widen(acc.part[3]));
+    accum_add(acc.sq[1], accum_widen(acc.part[4]));
+    accum_add(acc.sq[2], accum_widen(acc.part[5]));
+    if (kAovs) {
+        accum_add(acc.aov[0], accum_widen(acc.aov_part[0]));
+        accum_add(acc.aov[1], accum_widen(acc.aov_part[1]));
+        accum_add(acc.aov[2], accum_widen(acc.aov_part[2]));
+        accum_add(acc.aov[3], accum_widen(acc.aov_part[3]));
+        accum_add(acc.aov[4], accum_widen(acc.aov_part[4]));
+        accum_add(acc.aov[5], accum_widen(acc.aov_part[5]));
+        accum_add(acc.aov[6], accum_widen(acc.aov_part[6]));
+        accum_add(acc.aov[7], accum_widen(acc.aov_part[7]));
+        accum_add(acc.aov[8], accum_widen(acc.aov_part[8]));
+        accum_add(acc.aov[9], accum_widen(acc.aov_part[9]));
+    }
+    accumulator_clear(acc);
+}
+
 
 // A camera ray for sample `index` of the pixel: pixel filter, lens and shutter time,
 // with the near clip applied (o starts on it, t_max ends at the far clip).
@@ -50,6 +103,10 @@ CameraSample camera_sample(uvec2 pixel, inout SamplerState s) {
 // non-finite samples, and those with a component of kAccumLimit or more, are dropped
 // and counted. With a clamp c > 0 (u_params.misc.z) a sample whose largest component
 // exceeds c is scaled down to it (hue kept; biased).
+float max_abs(vec3 v) {
+    return max(abs(v.x), max(abs(v.y), abs(v.z)));
+}
+
 void accumulate(inout Accumulator acc, vec3 L, Aov aov, uint index) {
     if (kDebugNonFinite != 0u && (index % 7u) == kDebugNonFinite - 1u) L = vec3(uintBitsToFloat(0x7fc00000u));
     float clamp_to = u_params.misc.z;
@@ -62,23 +119,52 @@ void accumulate(inout Accumulator acc, vec3 L, Aov aov, uint index) {
         // constant indices only: an array indexed by a loop variable may be kept in
         // memory and addressed lane by lane
         acc.counts.x += 1u;
-        accum_add(acc.sum[0], accum_fixed(L.r));
-        accum_add(acc.sum[1], accum_fixed(L.g));
-        accum_add(acc.sum[2], accum_fixed(L.b));
-        accum_add(acc.sq[0], accum_fixed_abs(L.r * L.r));
-        accum_add(acc.sq[1], accum_fixed_abs(L.g * L.g));
-        accum_add(acc.sq[2], accum_fixed_abs(L.b * L.b));
+        vec3 sq = L * L;
+        bool fast = max(sq.r, max(sq.g, sq.b)) < kAccumFast;
         if (kAovs) {
-            accum_add(acc.aov[0], accum_fixed(aov.albedo.r));
-            accum_add(acc.aov[1], accum_fixed(aov.albedo.g));
-            accum_add(acc.aov[2], accum_fixed(aov.albedo.b));
-            accum_add(acc.aov[3], accum_fixed(aov.normal.x));
-            accum_add(acc.aov[4], accum_fixed(aov.normal.y));
-            accum_add(acc.aov[5], accum_fixed(aov.normal.z));
-            accum_add(acc.aov[6], accum_fixed(aov.depth));
-            accum_add(acc.aov[7], accum_fixed(aov.emission.r));
-            accum_add(acc.aov[8], accum_fixed(aov.emission.g));
-            accum_add(acc.aov[9], accum_fixed(aov.emission.b));
+            fast = fast && max(max_abs(aov.albedo), max(max_abs(aov.normal), max(abs(aov.depth),
+                                                                       max_abs(aov.emission)))) < kAccumFast;
+        }
+        if (fast) {
+            if (acc.pending == kAccumFlush) accumulator_flush(acc);
+            acc.pending += 1u;
+            accum_add64(acc.part[0], L.r);
+            accum_add64(acc.part[1], L.g);
+            accum_add64(acc.part[2], L.b);
+            accum_add64(acc.part[3], sq.r);
+            accum_add64(acc.part[4], sq.g);
+            accum_add64(acc.part[5], sq.b);
+            if (kAovs) {
+                accum_add64(acc.aov_part[0], aov.albedo.r);
+                accum_add64(acc.aov_part[1], aov.albedo.g);
+                accum_add64(acc.aov_part[2], aov.albedo.b);
+                accum_add64(acc.aov_part[3], aov.normal.x);
+                accum_add64(acc.aov_part[4], aov.normal.y);
+                accum_add64(acc.aov_part[5], aov.normal.z);
+                accum_add64(acc.aov_part[6], aov.depth);
+                accum_add64(acc.aov_part[7], aov.emission.r);
+                accum_add64(acc.aov_part[8], aov.emission.g);
+                accum_add64(acc.aov_part[9], aov.emission.b);
+            }
+        } else {
+            accum_add(acc.sum[0], accum_fixed(L.r));
+            accum_add(acc.sum[1], accum_fixed(L.g));
+            accum_add(acc.sum[2], accum_fixed(L.b));
+            accum_add(acc.sq[0], accum_fixed_abs(sq.r));
+            accum_add(acc.sq[1], accum_fixed_abs(sq.g));
+            accum_add(acc.sq[2], accum_fixed_abs(sq.b));
+            if (kAovs) {
+                accum_add(acc.aov[0], accum_fixed(aov.albedo.r));
+                accum_add(acc.aov[1], accum_fixed(aov.albedo.g));
+                accum_add(acc.aov[2], accum_fixed(aov.albedo.b));
+                accum_add(acc.aov[3], accum_fixed(aov.normal.x));
+                accum_add(acc.aov[4], accum_fixed(aov.normal.y));
+                accum_add(acc.aov[5], accum_fixed(aov.normal.z));
+                accum_add(acc.aov[6], accum_fixed(aov.depth));
+                accum_add(acc.aov[7], accum_fixed(aov.emission.r));
+                accum_add(acc.aov[8], accum_fixed(aov.emission.g));
+                accum_add(acc.aov[9], accum_fixed(aov.emission.b));
+            }
         }
     } else {
         acc.counts.y += 1u;

@@ -35,7 +35,9 @@ void main() {
     }
     acc.counts = accum_sum[4u * idx + 3u].xy;
     for (int c = 0; c < int(kAovChannels); ++c) acc.aov[c] = kAovs ? accum_aov[kAovChannels * idx + c] : uvec4(0u);
+    accumulator_clear(acc);
     integrator_pixel(pixel, pixel_hash, u_params.samples.x, u_params.samples.y, acc);
+    accumulator_flush(acc);
     for (int c = 0; c < 3; ++c) {
         accum_sum[4u * idx + c] = acc.sum[c];
         accum_sq[3u * idx + c] = acc.sq[c];
