@@ -24,10 +24,34 @@
 #include "integrators/strategy_images.glsl"
 // The strategies weigh with the densities of their own BSDF evaluations; tests define
 // BDPT_GENERIC_WEIGHTS to evaluate every density afresh instead (the same bits).
+// Next-event estimation and lens connections pass their own light or lens vertex (the
+// generic weights read it from index 0 of its subpath, where they put it for the call).
 #ifdef BDPT_GENERIC_WEIGHTS
 #define STRATEGY_WEIGHT(s, t, cp) bdpt_mis_weight(s, t)
+#define LIGHT_SAMPLE_WEIGHT(t, cp, light, delta) light_sample_weight_generic(t, light)
+#define LENS_WEIGHT(s, cp, lens) lens_weight_generic(s, lens)
 #else
 #define STRATEGY_WEIGHT(s, t, cp) bdpt_mis_weight_pdfs(s, t, cp)
+#define LIGHT_SAMPLE_WEIGHT(t, cp, light, delta) bdpt_mis_weight_ends(1, t, cp, light.pdf_fwd, delta)
+#define LENS_WEIGHT(s, cp, lens) bdpt_mis_weight_pdfs(s, 1, cp)
+#endif
+
+#ifdef BDPT_GENERIC_WEIGHTS
+float light_sample_weight_generic(int t, Vertex light) {
+    Vertex saved = g_light[0];
+    g_light[0] = light;
+    float w = bdpt_mis_weight(1, t);
+    g_light[0] = saved;
+    return w;
+}
+
+float lens_weight_generic(int s, Vertex lens) {
+    Vertex saved = g_camera[0];
+    g_camera[0] = lens;
+    float w = bdpt_mis_weight(s, 1);
+    g_camera[0] = saved;
+    return w;
+}
 #endif
 
 Vertex vertex_from_hit(SurfaceHit hit, Frame frame, Bsdf b, vec3 beta) {
@@ -179,10 +203,7 @@ vec3 strategy_light_sample(int t, inout SamplerState smp) {
     light.pdf_fwd = vertex_pdf_light_origin(light, pt);
     ConnectionPdfs cp = ConnectionPdfs(vertex_pdf_light(light, pt), solid_angle_to_area(pdf_back, pt, pt_minus),
                                        solid_angle_to_area(pdf_light, pt, light), 0.0);
-    Vertex saved = g_light[0];
-    g_light[0] = light;
-    float w = STRATEGY_WEIGHT(1, t, cp);
-    g_light[0] = saved;
+    float w = LIGHT_SAMPLE_WEIGHT(t, cp, light, light_data_is_delta(l));
     strategy_record(1, t, L, w);
     return L * w;
 }
@@ -201,10 +222,7 @@ void strategy_lens(int s, inout SamplerState smp) {
     if (max_component(L) <= 0.0 || !segment_visible(qs, lens, kNoPrimitive)) return;
     ConnectionPdfs cp = ConnectionPdfs(solid_angle_to_area(pdf_lens, qs, lens), 0.0, vertex_pdf(lens, lens, qs),
                                        solid_angle_to_area(pdf_back, qs, qs_minus));
-    Vertex saved = g_camera[0];
-    g_camera[0] = lens;
-    float w = STRATEGY_WEIGHT(s, 1, cp);
-    g_camera[0] = saved;
+    float w = LENS_WEIGHT(s, cp, lens);
     strategy_splat(s, c.film, L, w);
     splat_film(c.film, L * w);
 }
@@ -260,6 +278,8 @@ vec3 bdpt_sample(uvec2 pixel, inout SamplerState s, inout Aov aov) {
             if (n_light > 1) g_light[1].pdf_fwd = st.e.pdf_pos * abs(dot(g_light[1].ng, st.e.d));
         }
     }
+
+    bdpt_mis_prepare(n_camera, n_light);
 
     // Every strategy, one kind per loop (a loop body runs the same code on every SIMD
     // lane); path length s + t - 1 <= kBdptMaxSegments holds by the subpath lengths
