@@ -142,16 +142,32 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
 // solid-angle densities with which v samples `to` coming from `from` (pdf_to) and
 // `from` coming from `to` (pdf_from): the MIS densities of the connection, from the
 // same BSDF (vertex_pdf would look the material up again for each).
-vec3 vertex_f(Vertex v, vec3 from, vec3 to, bool adjoint, out float pdf_to, out float pdf_from) {
-    Frame frame = vertex_frame(v);
+// The BSDF of a surface vertex in its shading frame (normal-mapped as at its hit).
+struct VertexBsdf {
+    Bsdf b;
+    Frame frame;
+};
+
+VertexBsdf vertex_bsdf(Vertex v) {
+    VertexBsdf vb;
+    vb.frame = vertex_frame(v);
+    vb.b = bsdf_from_material(v.material, v.uv);
+    bsdf_normal_frame(vb.b, vertex_ns0(v), vb.frame);
+    return vb;
+}
+
+// vertex_f with v's BSDF already looked up (vertex_bsdf).
+vec3 vertex_f_bsdf(Vertex v, VertexBsdf vb, vec3 from, vec3 to, bool adjoint, out float pdf_to, out float pdf_from) {
     vec3 wo_w = normalize(from - v.p), wi_w = normalize(to - v.p);
-    vec3 wo = frame_to_local(frame, wo_w), wi = frame_to_local(frame, wi_w);
-    Bsdf b = bsdf_from_material(v.material, v.uv);
-    bsdf_normal_frame(b, vertex_ns0(v), frame);
-    vec3 f = bsdf_eval_pdf(b, wo, wi, adjoint, pdf_to);
-    pdf_from = bsdf_pdf(b, wi, wo);
+    vec3 wo = frame_to_local(vb.frame, wo_w), wi = frame_to_local(vb.frame, wi_w);
+    vec3 f = bsdf_eval_pdf(vb.b, wo, wi, adjoint, pdf_to);
+    pdf_from = bsdf_pdf(vb.b, wi, wo);
     if (adjoint) f *= shading_normal_correction(wo_w, wi_w, v.ns, v.ng);
     return f;
+}
+
+vec3 vertex_f(Vertex v, vec3 from, vec3 to, bool adjoint, out float pdf_to, out float pdf_from) {
+    return vertex_f_bsdf(v, vertex_bsdf(v), from, to, adjoint, pdf_to, pdf_from);
 }
 
 bool segment_visible(Vertex a, Vertex b, uint ignore) {
@@ -227,15 +243,16 @@ void strategy_lens(int s, inout SamplerState smp) {
     splat_film(c.film, L * w);
 }
 
-// s, t >= 2: the two subpaths' ends joined by a visibility ray.
-vec3 strategy_connect(int s, int t) {
-    Vertex qs = g_light[s - 1], pt = g_camera[t - 1];
-    if (!qs.connectible || !pt.connectible) return vec3(0.0);
-    Vertex qs_minus = g_light[s - 2], pt_minus = g_camera[t - 2];
+// s, t >= 2: the two subpaths' ends joined by a visibility ray; pt = g_camera[t - 1],
+// its BSDF and the point before it come from the caller (the same for every s).
+vec3 strategy_connect(int s, int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus) {
+    Vertex qs = g_light[s - 1];
+    if (!qs.connectible) return vec3(0.0);
+    Vertex qs_minus = g_light[s - 2];
     vec3 d = pt.p - qs.p;
     float qs_to_pt, qs_to_minus, pt_to_qs, pt_to_minus;
     vec3 L = qs.beta * vertex_f(qs, qs_minus.p, pt.p, true, qs_to_pt, qs_to_minus) *
-             vertex_f(pt, pt_minus.p, qs.p, false, pt_to_qs, pt_to_minus) * pt.beta / dot(d, d);
+             vertex_f_bsdf(pt, pt_bsdf, pt_minus.p, qs.p, false, pt_to_qs, pt_to_minus) * pt.beta / dot(d, d);
     if (max_component(L) <= 0.0 || !segment_visible(qs, pt, kNoPrimitive)) return vec3(0.0);
     ConnectionPdfs cp = ConnectionPdfs(solid_angle_to_area(qs_to_pt, qs, pt),
                                        solid_angle_to_area(pt_to_minus, pt, pt_minus),
@@ -301,9 +318,14 @@ vec3 bdpt_sample(uvec2 pixel, inout SamplerState s, inout Aov aov) {
         strategy_lens(k, s);
     }
     for (int t = 2; t <= n_camera; ++t) {
-        for (int k = 2; k <= min(n_light, kBdptMaxSegments + 1 - t); ++k) {
+        int k_end = min(n_light, kBdptMaxSegments + 1 - t);
+        Vertex pt = g_camera[t - 1];
+        if (k_end < 2 || !pt.connectible) continue;
+        Vertex pt_minus = g_camera[t - 2];
+        VertexBsdf pt_bsdf = vertex_bsdf(pt);
+        for (int k = 2; k <= k_end; ++k) {
             LOOP_TICK();
-            L += strategy_connect(k, t);
+            L += strategy_connect(k, t, pt, pt_bsdf, pt_minus);
         }
     }
     return L;
