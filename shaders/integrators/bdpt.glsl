@@ -172,6 +172,17 @@ vec3 vertex_f(Vertex v, vec3 from, vec3 to, bool adjoint, out float pdf_to, out 
     return vertex_f_bsdf(v, vertex_bsdf(v), from, to, adjoint, pdf_to, pdf_from);
 }
 
+// The point of camera (light) subpath vertex i alone: position, geometric normal and kind,
+// all that the densities and directions toward it need (a whole record read from a
+// dynamically indexed array costs llvmpipe a load per field and lane).
+Vertex camera_point(int i) {
+    return vertex_point(g_camera[i].kind, g_camera[i].p, g_camera[i].ng, vec3(0.0));
+}
+
+Vertex light_point(int i) {
+    return vertex_point(g_light[i].kind, g_light[i].p, g_light[i].ng, vec3(0.0));
+}
+
 bool segment_visible(Vertex a, Vertex b, uint ignore) {
     vec3 d = b.p - a.p;
     float dist = length(d);
@@ -208,7 +219,7 @@ vec3 strategy_light_sample(int t, inout SamplerState smp) {
     if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return vec3(0.0);
     bool infinite = light_is_infinite(l);
     vec3 q = pt.p + (infinite ? kInfiniteVertexDistance * u_params.scene_sphere.w : ls.dist) * ls.wi;
-    Vertex pt_minus = g_camera[t - 2];
+    Vertex pt_minus = camera_point(t - 2);
     float pdf_light, pdf_back;
     vec3 L = pt.beta * vertex_f(pt, pt_minus.p, q, false, pdf_light, pdf_back) * ls.Le / (choice.pmf * ls.pdf);
     if (max_component(L) <= 0.0) return vec3(0.0);
@@ -233,7 +244,7 @@ void strategy_lens(int s, inout SamplerState smp) {
     if (!qs.connectible) return;
     CameraConnection c = camera_connect(qs.p, u_lens, g_time);
     if (!c.valid) return;
-    Vertex qs_minus = g_light[s - 2];
+    Vertex qs_minus = light_point(s - 2);
     float pdf_lens, pdf_back;
     vec3 L = qs.beta * vertex_f(qs, qs_minus.p, c.p, true, pdf_lens, pdf_back) * c.importance;
     Vertex lens = vertex_point(kVertexCamera, c.p, vec3(0.0), vec3(1.0));
@@ -250,7 +261,7 @@ void strategy_lens(int s, inout SamplerState smp) {
 vec3 strategy_connect(int s, int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus) {
     Vertex qs = g_light[s - 1];
     if (!qs.connectible) return vec3(0.0);
-    Vertex qs_minus = g_light[s - 2];
+    Vertex qs_minus = light_point(s - 2);
     vec3 d = pt.p - qs.p;
     float qs_to_pt, qs_to_minus, pt_to_qs, pt_to_minus;
     vec3 L = qs.beta * vertex_f(qs, qs_minus.p, pt.p, true, qs_to_pt, qs_to_minus) *
@@ -323,7 +334,7 @@ vec3 bdpt_sample(uvec2 pixel, inout SamplerState s, inout Aov aov) {
         int k_end = min(n_light, kBdptMaxSegments + 1 - t);
         Vertex pt = g_camera[t - 1];
         if (k_end < 2 || !pt.connectible) continue;
-        Vertex pt_minus = g_camera[t - 2];
+        Vertex pt_minus = camera_point(t - 2);
         VertexBsdf pt_bsdf = vertex_bsdf(pt);
         for (int k = 2; k <= k_end; ++k) {
             LOOP_TICK();
