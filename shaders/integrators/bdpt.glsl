@@ -24,10 +24,34 @@
 #include "integrators/strategy_images.glsl"
 // The strategies weigh with the densities of their own BSDF evaluations; tests define
 // BDPT_GENERIC_WEIGHTS to evaluate every density afresh instead (the same bits).
+// Next-event estimation and lens connections pass their own light or lens vertex (the
+// generic weights read it from index 0 of its subpath, where they put it for the call).
 #ifdef BDPT_GENERIC_WEIGHTS
 #define STRATEGY_WEIGHT(s, t, cp) bdpt_mis_weight(s, t)
+#define LIGHT_SAMPLE_WEIGHT(t, cp, light, delta) light_sample_weight_generic(t, light)
+#define LENS_WEIGHT(s, cp, lens) lens_weight_generic(s, lens)
 #else
 #define STRATEGY_WEIGHT(s, t, cp) bdpt_mis_weight_pdfs(s, t, cp)
+#define LIGHT_SAMPLE_WEIGHT(t, cp, light, delta) bdpt_mis_weight_ends(1, t, cp, light.pdf_fwd, delta)
+#define LENS_WEIGHT(s, cp, lens) bdpt_mis_weight_pdfs(s, 1, cp)
+#endif
+
+#ifdef BDPT_GENERIC_WEIGHTS
+float light_sample_weight_generic(int t, Vertex light) {
+    Vertex saved = g_light[0];
+    g_light[0] = light;
+    float w = bdpt_mis_weight(1, t);
+    g_light[0] = saved;
+    return w;
+}
+
+float lens_weight_generic(int s, Vertex lens) {
+    Vertex saved = g_camera[0];
+    g_camera[0] = lens;
+    float w = bdpt_mis_weight(s, 1);
+    g_camera[0] = saved;
+    return w;
+}
 #endif
 
 Vertex vertex_from_hit(SurfaceHit hit, Frame frame, Bsdf b, vec3 beta) {
@@ -45,6 +69,9 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
                 int max_vertices, inout SamplerState s, inout Aov aov) {
     vec3 throughput = vec3(1.0);
     float eta_product = 1.0;
+    // the vertex before the next one, kept in registers: llvmpipe reads a record of a
+    // dynamically indexed array field by field, lane by lane (~1/3 of a walk's time)
+    Vertex prev = light_path ? g_light[n - 1] : g_camera[n - 1];
     while (n < max_vertices) {
         LOOP_TICK();
         SurfaceHit hit;
@@ -52,7 +79,6 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
         if (!scene_intersect(o, d, t_max, g_time, hit)) {
             // a camera subpath that leaves the scene ends on the environment (s = 0)
             if (!light_path && u_params.counts.z != 0u) {
-                Vertex prev = g_camera[n - 1];
                 Vertex v = vertex_point(kVertexInfinite,
                                         prev.p + kInfiniteVertexDistance * u_params.scene_sphere.w * d,
                                         vec3(0.0), beta);
@@ -67,7 +93,6 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
         vec2 u_choice = sampler_2d(s);
         vec2 u_bsdf = sampler_2d(s);
         float u_rr = sampler_1d(s);
-        Vertex prev = light_path ? g_light[n - 1] : g_camera[n - 1];
         Bsdf b = bsdf_from_material(hit.material, hit.uv);
         Frame frame = shading_frame(hit);
         bsdf_normal_frame(b, hit.ns0, frame);
@@ -92,6 +117,7 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
         pdf_sa = bs.delta ? 0.0 : bs.pdf;
         float pdf_rev_sa = bs.delta ? 0.0 : bsdf_pdf(b, bs.wi, wo);
         float prev_rev = solid_angle_to_area(pdf_rev_sa, v, prev);
+        prev = v;
         if (light_path) {
             g_light[n - 1].delta = bs.delta;
             g_light[n - 2].pdf_rev = prev_rev;
@@ -118,16 +144,43 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
 // solid-angle densities with which v samples `to` coming from `from` (pdf_to) and
 // `from` coming from `to` (pdf_from): the MIS densities of the connection, from the
 // same BSDF (vertex_pdf would look the material up again for each).
-vec3 vertex_f(Vertex v, vec3 from, vec3 to, bool adjoint, out float pdf_to, out float pdf_from) {
-    Frame frame = vertex_frame(v);
+// The BSDF of a surface vertex in its shading frame (normal-mapped as at its hit).
+struct VertexBsdf {
+    Bsdf b;
+    Frame frame;
+};
+
+VertexBsdf vertex_bsdf(Vertex v) {
+    VertexBsdf vb;
+    vb.frame = vertex_frame(v);
+    vb.b = bsdf_from_material(v.material, v.uv);
+    bsdf_normal_frame(vb.b, vertex_ns0(v), vb.frame);
+    return vb;
+}
+
+// vertex_f with v's BSDF already looked up (vertex_bsdf).
+vec3 vertex_f_bsdf(Vertex v, VertexBsdf vb, vec3 from, vec3 to, bool adjoint, out float pdf_to, out float pdf_from) {
     vec3 wo_w = normalize(from - v.p), wi_w = normalize(to - v.p);
-    vec3 wo = frame_to_local(frame, wo_w), wi = frame_to_local(frame, wi_w);
-    Bsdf b = bsdf_from_material(v.material, v.uv);
-    bsdf_normal_frame(b, vertex_ns0(v), frame);
-    vec3 f = bsdf_eval_pdf(b, wo, wi, adjoint, pdf_to);
-    pdf_from = bsdf_pdf(b, wi, wo);
+    vec3 wo = frame_to_local(vb.frame, wo_w), wi = frame_to_local(vb.frame, wi_w);
+    vec3 f = bsdf_eval_pdf(vb.b, wo, wi, adjoint, pdf_to);
+    pdf_from = bsdf_pdf(vb.b, wi, wo);
     if (adjoint) f *= shading_normal_correction(wo_w, wi_w, v.ns, v.ng);
     return f;
+}
+
+vec3 vertex_f(Vertex v, vec3 from, vec3 to, bool adjoint, out float pdf_to, out float pdf_from) {
+    return vertex_f_bsdf(v, vertex_bsdf(v), from, to, adjoint, pdf_to, pdf_from);
+}
+
+// The point of camera (light) subpath vertex i alone: position, geometric normal and kind,
+// all that the densities and directions toward it need (a whole record read from a
+// dynamically indexed array costs llvmpipe a load per field and lane).
+Vertex camera_point(int i) {
+    return vertex_point(g_camera[i].kind, g_camera[i].p, g_camera[i].ng, vec3(0.0));
+}
+
+Vertex light_point(int i) {
+    return vertex_point(g_light[i].kind, g_light[i].p, g_light[i].ng, vec3(0.0));
 }
 
 bool segment_visible(Vertex a, Vertex b, uint ignore) {
@@ -166,7 +219,7 @@ vec3 strategy_light_sample(int t, inout SamplerState smp) {
     if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return vec3(0.0);
     bool infinite = light_is_infinite(l);
     vec3 q = pt.p + (infinite ? kInfiniteVertexDistance * u_params.scene_sphere.w : ls.dist) * ls.wi;
-    Vertex pt_minus = g_camera[t - 2];
+    Vertex pt_minus = camera_point(t - 2);
     float pdf_light, pdf_back;
     vec3 L = pt.beta * vertex_f(pt, pt_minus.p, q, false, pdf_light, pdf_back) * ls.Le / (choice.pmf * ls.pdf);
     if (max_component(L) <= 0.0) return vec3(0.0);
@@ -179,10 +232,7 @@ vec3 strategy_light_sample(int t, inout SamplerState smp) {
     light.pdf_fwd = vertex_pdf_light_origin(light, pt);
     ConnectionPdfs cp = ConnectionPdfs(vertex_pdf_light(light, pt), solid_angle_to_area(pdf_back, pt, pt_minus),
                                        solid_angle_to_area(pdf_light, pt, light), 0.0);
-    Vertex saved = g_light[0];
-    g_light[0] = light;
-    float w = STRATEGY_WEIGHT(1, t, cp);
-    g_light[0] = saved;
+    float w = LIGHT_SAMPLE_WEIGHT(t, cp, light, light_data_is_delta(l));
     strategy_record(1, t, L, w);
     return L * w;
 }
@@ -194,30 +244,28 @@ void strategy_lens(int s, inout SamplerState smp) {
     if (!qs.connectible) return;
     CameraConnection c = camera_connect(qs.p, u_lens, g_time);
     if (!c.valid) return;
-    Vertex qs_minus = g_light[s - 2];
+    Vertex qs_minus = light_point(s - 2);
     float pdf_lens, pdf_back;
     vec3 L = qs.beta * vertex_f(qs, qs_minus.p, c.p, true, pdf_lens, pdf_back) * c.importance;
     Vertex lens = vertex_point(kVertexCamera, c.p, vec3(0.0), vec3(1.0));
     if (max_component(L) <= 0.0 || !segment_visible(qs, lens, kNoPrimitive)) return;
     ConnectionPdfs cp = ConnectionPdfs(solid_angle_to_area(pdf_lens, qs, lens), 0.0, vertex_pdf(lens, lens, qs),
                                        solid_angle_to_area(pdf_back, qs, qs_minus));
-    Vertex saved = g_camera[0];
-    g_camera[0] = lens;
-    float w = STRATEGY_WEIGHT(s, 1, cp);
-    g_camera[0] = saved;
+    float w = LENS_WEIGHT(s, cp, lens);
     strategy_splat(s, c.film, L, w);
     splat_film(c.film, L * w);
 }
 
-// s, t >= 2: the two subpaths' ends joined by a visibility ray.
-vec3 strategy_connect(int s, int t) {
-    Vertex qs = g_light[s - 1], pt = g_camera[t - 1];
-    if (!qs.connectible || !pt.connectible) return vec3(0.0);
-    Vertex qs_minus = g_light[s - 2], pt_minus = g_camera[t - 2];
+// s, t >= 2: the two subpaths' ends joined by a visibility ray; pt = g_camera[t - 1],
+// its BSDF and the point before it come from the caller (the same for every s).
+vec3 strategy_connect(int s, int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus) {
+    Vertex qs = g_light[s - 1];
+    if (!qs.connectible) return vec3(0.0);
+    Vertex qs_minus = light_point(s - 2);
     vec3 d = pt.p - qs.p;
     float qs_to_pt, qs_to_minus, pt_to_qs, pt_to_minus;
     vec3 L = qs.beta * vertex_f(qs, qs_minus.p, pt.p, true, qs_to_pt, qs_to_minus) *
-             vertex_f(pt, pt_minus.p, qs.p, false, pt_to_qs, pt_to_minus) * pt.beta / dot(d, d);
+             vertex_f_bsdf(pt, pt_bsdf, pt_minus.p, qs.p, false, pt_to_qs, pt_to_minus) * pt.beta / dot(d, d);
     if (max_component(L) <= 0.0 || !segment_visible(qs, pt, kNoPrimitive)) return vec3(0.0);
     ConnectionPdfs cp = ConnectionPdfs(solid_angle_to_area(qs_to_pt, qs, pt),
                                        solid_angle_to_area(pt_to_minus, pt, pt_minus),
@@ -261,6 +309,8 @@ vec3 bdpt_sample(uvec2 pixel, inout SamplerState s, inout Aov aov) {
         }
     }
 
+    bdpt_mis_prepare(n_camera, n_light);
+
     // Every strategy, one kind per loop (a loop body runs the same code on every SIMD
     // lane); path length s + t - 1 <= kBdptMaxSegments holds by the subpath lengths
     // except for s, t >= 2.
@@ -281,9 +331,14 @@ vec3 bdpt_sample(uvec2 pixel, inout SamplerState s, inout Aov aov) {
         strategy_lens(k, s);
     }
     for (int t = 2; t <= n_camera; ++t) {
-        for (int k = 2; k <= min(n_light, kBdptMaxSegments + 1 - t); ++k) {
+        int k_end = min(n_light, kBdptMaxSegments + 1 - t);
+        Vertex pt = g_camera[t - 1];
+        if (k_end < 2 || !pt.connectible) continue;
+        Vertex pt_minus = camera_point(t - 2);
+        VertexBsdf pt_bsdf = vertex_bsdf(pt);
+        for (int k = 2; k <= k_end; ++k) {
             LOOP_TICK();
-            L += strategy_connect(k, t);
+            L += strategy_connect(k, t, pt, pt_bsdf, pt_minus);
         }
     }
     return L;

@@ -146,9 +146,13 @@ float vertex_pdf(Vertex v, Vertex prev, Vertex next) {
 
 // Whether v, a light vertex, lies on a point or spot light (a delta position) or a
 // directional light (a delta direction): no camera subpath can reach it.
-bool light_is_delta(Vertex v) {
-    uint kind = scene_light(v.light - 1u).info.x;
+bool light_data_is_delta(LightData l) {
+    uint kind = l.info.x;
     return kind == kLightPoint || kind == kLightSpot || kind == kLightDirectional;
+}
+
+bool light_is_delta(Vertex v) {
+    return light_data_is_delta(scene_light(v.light - 1u));
 }
 
 // One factor of the recurrence: (pdf_rev / pdf_fwd)^e, zeros counting as 1.
@@ -167,37 +171,89 @@ struct ConnectionPdfs {
     float qs_minus_rev;
 };
 
-// MIS weight of strategy (s, t) given the densities its connection changes (the
-// strategies get them from their own BSDF evaluations).
-float bdpt_mis_weight_pdfs(int s, int t, ConnectionPdfs c) {
+// Suffix sums of the ratio recurrence over the densities the subpaths stored, so that
+// each strategy's weight costs O(1) instead of a walk over both subpaths:
+// g_camera_mis[m] = sum over 1 <= i <= m of the products of the ratios of vertices
+// i ... m (counting only the i where a strategy could end: x_i and x_{i-1} not delta),
+// g_light_mis[m] the same over light vertices 0 <= i <= m (x_0 not a delta light).
+// A strategy (s, t) changes the densities of its last two vertices on each side and
+// takes the rest from g_camera_mis[t - 3] and g_light_mis[s - 3].
+float g_camera_mis[kBdptVertices];
+float g_light_mis[kBdptVertices];
+bool g_light_delta;   // the light subpath starts on a point, spot or directional light
+
+// ratio times rest, where rest = 0 (no strategy beyond) gives 0 even for an infinite ratio.
+float mis_step(float ratio, float rest) {
+    return rest > 0.0 ? ratio * rest : 0.0;
+}
+
+// Fills g_camera_mis and g_light_mis (and g_light_delta) for subpaths of n_camera and
+// n_light vertices whose densities are final.
+void bdpt_mis_prepare(int n_camera, int n_light) {
+    float c = 0.0;
+    g_camera_mis[0] = 0.0;
+    for (int i = 1; i < n_camera; ++i) {
+        LOOP_TICK();
+        bool valid = !g_camera[i].delta && !g_camera[i - 1].delta;
+        c = mis_step(mis_ratio(g_camera[i].pdf_rev, g_camera[i].pdf_fwd), c + (valid ? 1.0 : 0.0));
+        g_camera_mis[i] = c;
+    }
+    g_light_delta = n_light > 0 && light_is_delta(g_light[0]);
+    float l = 0.0;
+    bool before = g_light_delta;
+    for (int i = 0; i < n_light; ++i) {
+        LOOP_TICK();
+        bool delta_i = g_light[i].delta;
+        l = mis_step(mis_ratio(g_light[i].pdf_rev, g_light[i].pdf_fwd), l + (!delta_i && !before ? 1.0 : 0.0));
+        g_light_mis[i] = l;
+        before = delta_i;
+    }
+}
+
+// MIS weight of strategy (s, t) given the densities its connection changes, the forward
+// density qs_fwd of light vertex s - 1 and whether the path's light is a delta light
+// (next-event estimation passes its own light point's; the others g_light[s - 1]'s).
+float bdpt_mis_weight_ends(int s, int t, ConnectionPdfs c, float qs_fwd, bool delta_light) {
     if (s + t == 2) return 1.0;
-    float sum = 0.0;
-    // strategies with fewer camera vertices: walk the camera subpath back from the connection
-    float r = 1.0;
-    for (int i = t - 1; i > 0; --i) {
-        LOOP_TICK();
-        float rev = i == t - 1 ? c.pt_rev : (i == t - 2 ? c.pt_minus_rev : g_camera[i].pdf_rev);
-        r *= mis_ratio(rev, g_camera[i].pdf_fwd);
-        bool delta_i = i == t - 1 ? false : g_camera[i].delta;
-        if (!delta_i && !g_camera[i - 1].delta) sum += r;
+    // strategies with fewer camera vertices: x_{t-1}, x_{t-2} with the connection's
+    // reverse densities, the rest from the suffix sums
+    float cam = 0.0;
+    if (t >= 2) {
+        bool delta_minus = g_camera[t - 2].delta;
+        float inner = 0.0;
+        if (t >= 3) {
+            float tail = g_camera_mis[max(t - 3, 0)];
+            bool valid = !delta_minus && !g_camera[t - 3].delta;
+            inner = mis_step(mis_ratio(c.pt_minus_rev, g_camera[t - 2].pdf_fwd), (valid ? 1.0 : 0.0) + tail);
+        }
+        cam = mis_step(mis_ratio(c.pt_rev, g_camera[t - 1].pdf_fwd), (!delta_minus ? 1.0 : 0.0) + inner);
     }
-    // strategies with fewer light vertices: walk the light subpath back
-    r = 1.0;
-    for (int i = s - 1; i >= 0; --i) {
-        LOOP_TICK();
-        float rev = i == s - 1 ? c.qs_rev : (i == s - 2 ? c.qs_minus_rev : g_light[i].pdf_rev);
-        r *= mis_ratio(rev, g_light[i].pdf_fwd);
-        bool delta_i = i == s - 1 ? false : g_light[i].delta;
-        // a delta light's own point cannot be found by the camera subpath
-        bool delta_before = i > 0 ? g_light[i - 1].delta : light_is_delta(g_light[0]);
-        if (!delta_i && !delta_before) sum += r;
+    // strategies with fewer light vertices (a delta light's own point cannot be found
+    // by the camera subpath)
+    float light = 0.0;
+    if (s >= 1) {
+        bool delta_minus = s >= 2 ? g_light[max(s - 2, 0)].delta : delta_light;
+        float inner = 0.0;
+        if (s >= 2) {
+            float tail = s >= 3 ? g_light_mis[max(s - 3, 0)] : 0.0;
+            bool before = s >= 3 ? g_light[max(s - 3, 0)].delta : delta_light;
+            bool valid = !delta_minus && !before;
+            inner = mis_step(mis_ratio(c.qs_minus_rev, g_light[s - 2].pdf_fwd), (valid ? 1.0 : 0.0) + tail);
+        }
+        light = mis_step(mis_ratio(c.qs_rev, qs_fwd), (!delta_minus ? 1.0 : 0.0) + inner);
     }
-    return 1.0 / (1.0 + sum);
+    return 1.0 / (1.0 + cam + light);
+}
+
+// MIS weight of strategy (s, t) given the densities its connection changes (the
+// strategies get them from their own BSDF evaluations), after bdpt_mis_prepare.
+float bdpt_mis_weight_pdfs(int s, int t, ConnectionPdfs c) {
+    return bdpt_mis_weight_ends(s, t, c, s > 0 ? g_light[max(s - 1, 0)].pdf_fwd : 0.0, g_light_delta);
 }
 
 // MIS weight of strategy (s, t) for the path g_light[0, s) + g_camera[0, t) (for s = 1
 // or t = 1 the caller has put the sampled light or lens vertex at index 0), every
-// density evaluated afresh.
+// density of the connection evaluated afresh (the rest from bdpt_mis_prepare).
 float bdpt_mis_weight(int s, int t) {
     if (s + t == 2) return 1.0;
     Vertex pt = g_camera[t - 1];
@@ -211,5 +267,5 @@ float bdpt_mis_weight(int s, int t) {
                    : (has_qs ? vertex_pdf(pt, qs, pt_minus) : vertex_pdf_light(pt, pt_minus));
     c.qs_rev = has_qs ? vertex_pdf(pt, pt_minus, qs) : 0.0;
     c.qs_minus_rev = has_qs_minus ? vertex_pdf(qs, pt, qs_minus) : 0.0;
-    return bdpt_mis_weight_pdfs(s, t, c);
+    return bdpt_mis_weight_ends(s, t, c, qs.pdf_fwd, has_qs && light_is_delta(g_light[0]));
 }

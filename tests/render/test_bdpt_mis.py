@@ -4,7 +4,8 @@ A test kernel builds real subpaths with bdpt.glsl's random walks (from the scene
 device, as the renderer binds it), joins the whole light subpath to the whole camera
 subpath into one path x_0 ... x_{k-1}, computes every vertex's densities in both
 directions, and re-splits the path at every s (s light vertices, t = k - s camera
-vertices) as that strategy would have stored it. bdpt_mis_weight(s, t) summed over the
+vertices) as that strategy would have stored it. bdpt_mis_weight(s, t) (after
+bdpt_mis_prepare, the suffix sums of the split's subpaths) summed over the
 strategies that can make the path (no connection at a specular vertex or a delta
 light, s = 0 only on an area light, t >= 1, (1, 1) left out) must be 1 to float32
 precision, under the balance and the power heuristic, on scenes with glass, a
@@ -95,6 +96,7 @@ void main() {
         }
         // the light's point, reached by the camera (a light at infinity stays one)
         if (sl == 0 && !light_is_infinite(l)) g_camera[t - 1].kind = kVertexSurface;
+        bdpt_mis_prepare(t, sl);
         sum += bdpt_mis_weight(sl, t);
         strategies += 1;
     }
