@@ -197,8 +197,7 @@ class Renderer:
         else:
             self._scene_data = share._scene_data.acquire()
         self.packed: PackedScene = self._scene_data.packed
-        t0 = time.perf_counter()
-        pack = t0 - t_pack      # about 0 where the scene data is shared
+        pack = time.perf_counter() - t_pack      # about 0 where the scene data is shared
         self.width, self.height = scene.film.width, scene.film.height
         self.tiles_x = -(-self.width // TILE)
         self.tiles_y = -(-self.height // TILE)
@@ -206,7 +205,6 @@ class Renderer:
         self.rows = (0, self.tiles_y)   # the tile rows accumulated: (first, count)
         self._tile_rate: float | None = None    # measured seconds per tile-sample
         self._buffers: list[Any] = []
-        self._bvh: Any = None
         self._snapshot: list[Any] | None = None     # accumulation copies that undo a stopped pass
         self._upload()
         t1 = time.perf_counter()
@@ -217,6 +215,11 @@ class Renderer:
         # ("build": pack_scene, the BVH build and the uploads) and compiling the kernel
         # ("compile": llvmpipe's JIT at the first dispatch included)
         self.timings = {"pack": pack, "build": t1 - t_pack, "compile": time.perf_counter() - t1}
+
+    @property
+    def texture_bytes(self) -> int:
+        """Bytes of the scene's texture atlas pages (RGBA16F) on the device."""
+        return self._scene_data.texture_bytes if self._scene_data is not None else 0
 
     # -- setup -------------------------------------------------------------------------------
     def _upload(self) -> None:
@@ -260,8 +263,6 @@ class Renderer:
                 self._upload_mesh()
             self._upload_textures()
             data.uploaded = True
-        self._bvh, self._mesh_textures = data.bvh, data.mesh_textures
-        self._surface_textures, self.texture_bytes = data.surface_textures, data.texture_bytes
 
     def _upload_envmap(self, lights: np.ndarray, packer: Any) -> None:
         """The environment image as a float texture (bilinear, wrapping in u) and its
@@ -281,7 +282,6 @@ class Renderer:
             tex.repeat_x, tex.repeat_y = True, False
             data.env_texture = tex
             data.buffers.append(tex)
-        self._env_texture = data.env_texture
 
     def _upload_textures(self) -> None:
         """The materials' textures: image layers (unit 8) and records (unit 9), bound with
@@ -607,13 +607,15 @@ class Renderer:
         if self.settings.strategy_depth:
             self._strategies.bind_to_storage_buffer(strategies.SSBO_STRATEGY_IMAGES)
         self._params.bind_to_uniform_block(layout.UBO_PARAMS)
-        if getattr(self, "_env_texture", None) is not None:
-            self._env_texture.use(layout.TEX_ENVMAP)
-        for unit, bind in self._surface_textures:
+        data = self._scene_data
+        assert data is not None, "the renderer was released"
+        if data.env_texture is not None:
+            data.env_texture.use(layout.TEX_ENVMAP)
+        for unit, bind in data.surface_textures:
             bind(unit)
-        if self._bvh is not None:
-            self._bvh.bind()
-            for unit, tex in self._mesh_textures:
+        if data.bvh is not None:
+            data.bvh.bind()
+            for unit, tex in data.mesh_textures:
                 tex.bind(unit)
 
     def _run_pass(self, first_sample: int, samples: int,
