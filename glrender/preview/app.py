@@ -114,7 +114,8 @@ class PreviewApp:
         self.denoise = False         # the N key: show the denoised color view
         self._denoised = None        # its DenoisedView (glrender/preview/denoised.py)
         self._generation = 0         # which accumulation: +1 at every restart or new kernel
-        self._shown = None           # (Denoised, view settings, 8-bit pixels) on screen
+        self._shown = None           # (Denoised, view settings, 8-bit pixels) last tonemapped
+        self._drawn_denoised = None  # the Denoised image the window shows now (None: the accumulation)
         self.display = Display(ctx)
         self._build()
         center, radius = self.renderer.packed.sphere_bounds
@@ -399,8 +400,10 @@ class PreviewApp:
         v = self.view
         note = self._compile_note if now < self._compile_note_until else ""
         if self.denoise and self._denoised is not None:
-            result = self._denoised.current(self._generation)
-            note += f" - denoised at {result.spp} spp" if result is not None else " - denoising"
+            # what the window shows, not the newest result: the worker may finish one
+            # after the draw, and the title names it only once it is drawn
+            shown = self._drawn_denoised
+            note += f" - denoised at {shown.spp} spp" if shown is not None else " - denoising"
         return (f"glrender - {self.options.scene_name} - {self.settings_label()} - {v.view}, "
                 f"{v.curve}, {v.exposure:+.1f} EV - {spp} - {state}{note}")
 
@@ -484,6 +487,7 @@ class PreviewApp:
             else:
                 self.display.draw(self.renderer, gl.screen, view, self.view)
             glfw.swap_buffers(self.window)
+            self._drawn_denoised = self._shown[0] if pixels is not None else None
         seconds = time.perf_counter() - t0
         self._display_seconds = seconds if self._frames == 0 else 0.8 * self._display_seconds + 0.2 * seconds
         self._totals["display"] += seconds
