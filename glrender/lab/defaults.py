@@ -91,7 +91,7 @@ def roulette_line(roulette: Section, integ) -> str:
 
 def survey_line(survey: Section, integ) -> str:
     """The path tracer's defaults against the settings the survey's criterion chose."""
-    from .survey import FLOOR
+    from .survey import ALBEDO, FLOOR
 
     ours = dict(rr=integ.rr, rr_depth=integ.rr_depth, strategy=integ.strategy,
                 light_selection=integ.light_selection)
@@ -99,7 +99,9 @@ def survey_line(survey: Section, integ) -> str:
     parts = []
     for decision, c in survey.extra["choice_by_time"].items():
         best = c["candidates"][c["chosen"]]
-        others = [f"{s['label']} ×{s['geomean']:.3g} (worst ×{s['worst']:.3g})"
+        others = [f"{s['label']} ×{s['geomean']:.3g} (worst ×{s['worst']:.3g}"
+                  + ("" if s.get("finite_variance_albedo", 1.0) > ALBEDO else
+                     f"; variance finite only below albedo {s['finite_variance_albedo']:.2f}") + ")"
                   for n, s in c["candidates"].items() if n != c["chosen"]]
         parts.append(f"{decision}: **{best['label']}** (against it: " + "; ".join(others) + ")"
                      if c["chosen"] == "baseline" else
@@ -108,5 +110,6 @@ def survey_line(survey: Section, integ) -> str:
                f"**the renderer's defaults ({ours}) differ from the chosen ({chosen})**")
     return (f"**Path tracer defaults over {len(survey.tables)} scenes** (criterion: the best "
             f"geometric mean of the efficiency ratio by time among the settings no worse than "
-            f"×{FLOOR:g} on any scene; see the survey): " + "; ".join(parts) + f". {verdict[0].upper()}"
+            f"×{FLOOR:g} on any scene whose variance stays finite up to albedo {ALBEDO:g}; see "
+            f"the survey): " + "; ".join(parts) + f". {verdict[0].upper()}"
             f"{verdict[1:]}.")

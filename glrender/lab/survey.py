@@ -18,7 +18,9 @@ rays traced (exact). Efficiency = 1/(variance · cost).
 scenes of its efficiency ratio to the baseline (by measured time) wins, among the
 candidates that are no worse than ×0.8 of the baseline on any scene (a default may trade
 a little on one scene for much on the others, but not lose a fifth of the efficiency on
-a scene a user renders). The baseline always qualifies. The geometric mean weighs a
+a scene a user renders) and whose variance stays finite on every scene of albedo up to
+0.9 (white paint, snow), a condition a finite run measures badly (the variance sits in
+rare long paths), so it is decided from the rule itself (:func:`finite_variance_albedo`). The baseline always qualifies. The geometric mean weighs a
 gain and a loss of the same factor alike, whatever the scene's absolute variance. The
 chosen settings together are then rendered once more against the baseline on every
 scene, to show that they also hold combined.
@@ -39,6 +41,8 @@ TITLE = "The path tracer's defaults over the scenes users render"
 
 BASELINE = dict(rr="throughput", rr_depth=5, strategy="mis-power", light_selection="uniform")
 FLOOR = 0.8   # the criterion's worst-scene limit (efficiency ratio to the baseline)
+ALBEDO = 0.9  # the albedo up to which a default must keep the variance finite
+THROUGHPUT_CAP = 0.95   # the throughput rule's largest survival probability (Mitsuba's)
 
 # decision -> candidates (name, label, overrides of the baseline); the first is the baseline
 DECISIONS = {
@@ -81,6 +85,26 @@ def candidates() -> dict[str, tuple[str, dict]]:
     return out
 
 
+def finite_variance_albedo(rr: str) -> float:
+    """The largest albedo ρ at which the path tracer's estimate keeps a finite variance in
+    a closed scene of unbounded depth under the roulette rule ``rr``.
+
+    At a diffuse vertex sampled by the cosine the BSDF weight is ρ. With a fixed survival
+    probability q the weight after k roulette vertices is (ρ/q)^k and a path gets there
+    with probability q^k, so the second moment of what it collects there is ∝
+    q^k (ρ/q)^(2k) = (ρ²/q)^k: the sum over k is finite only for ρ < √q (q = 0.5: ρ <
+    0.71). The throughput rule survives with p = min(β, cap): while β < cap the weight
+    β/p is 1 (bounded), and only while β ≥ cap does it grow, by ρ/cap per vertex with
+    p = cap, finite for ρ < √cap (0.975). Without roulette the weight is ρ^k: finite for
+    every ρ < 1."""
+    from ..scene.model import parse_rr
+
+    kind, q = parse_rr(rr)
+    if kind == "off":
+        return 1.0
+    return math.sqrt(q if kind == "fixed" else THROUGHPUT_CAP)
+
+
 def ratio(row, base, by: str) -> float:
     """Efficiency ratio of row to base, by measured time or by rays."""
     if by == "time":
@@ -90,15 +114,18 @@ def ratio(row, base, by: str) -> float:
 
 def choose(tables: list[Table], by: str = "time") -> dict:
     """The criterion over the scenes' tables: per decision, every candidate's geometric mean
-    and worst efficiency ratio to the baseline, and the chosen one."""
+    and worst efficiency ratio to the baseline, the albedo up to which its variance stays
+    finite, and the chosen one."""
     out = {}
     for decision, items in DECISIONS.items():
         stats = {}
-        for name, label, _ in items:
+        for name, label, o in items:
             rs = [ratio(t.row(name), t.row("baseline"), by) for t in tables]
             stats[name] = {"label": label, "geomean": float(math.exp(np.mean(np.log(rs)))),
-                           "worst": float(min(rs)), "per_scene": {t.title: r for t, r in zip(tables, rs)}}
-        admissible = [n for n, s in stats.items() if n == "baseline" or s["worst"] >= FLOOR]
+                           "worst": float(min(rs)), "per_scene": {t.title: r for t, r in zip(tables, rs)},
+                           "finite_variance_albedo": finite_variance_albedo({**BASELINE, **o}["rr"])}
+        admissible = [n for n, s in stats.items() if n == "baseline"
+                      or (s["worst"] >= FLOOR and s["finite_variance_albedo"] > ALBEDO)]
         chosen = max(admissible, key=lambda n: stats[n]["geomean"])
         out[decision] = {"candidates": stats, "admissible": admissible, "chosen": chosen,
                          "overrides": next(o for n, _, o in items if n == chosen)}
@@ -131,13 +158,16 @@ def run(lab) -> Section:
     section = Section(NAME, TITLE, __doc__.split("\n\n", 1)[1], tables=tables)
     section.extra["baseline"] = BASELINE
     section.extra["floor"] = FLOOR
+    section.extra["albedo"] = ALBEDO
     section.extra["choice_by_time"] = by_time = choose(tables, "time")
     section.extra["choice_by_rays"] = by_rays = choose(tables, "rays")
     settings = section.extra["chosen"] = chosen_settings(by_time)
     section.extra["unbiased"] = check = unbiasedness(lab, tables, "baseline")
     section.findings.append(unbiased_finding(check, "the baseline or the exact value"))
     for decision, c in by_time.items():
-        parts = [f"{s['label']} ×{s['geomean']:.3g} (worst ×{s['worst']:.3g})"
+        parts = [f"{s['label']} ×{s['geomean']:.3g} (worst ×{s['worst']:.3g}"
+                 + ("" if s["finite_variance_albedo"] > ALBEDO else
+                    f"; variance finite only below albedo {s['finite_variance_albedo']:.2f}") + ")"
                  for n, s in c["candidates"].items() if n != "baseline"]
         r = by_rays[decision]
         section.findings.append(
