@@ -18,14 +18,19 @@ driver is the display's, so ``Context.device`` is None there.
 """
 from __future__ import annotations
 
+import functools
 import os
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any, TypeVar
 
 import moderngl
 
 from ..errors import DeviceError
 from . import egl, mesa
+
+T = TypeVar("T")
 
 REQUIRED_GL = 430
 ENV_DEVICE = "GLRENDER_DEVICE"
@@ -110,6 +115,12 @@ class Context:
     def is_llvmpipe(self) -> bool:
         return "llvmpipe" in self.renderer
 
+    def make_current(self) -> None:
+        """Make this context the current one of the calling thread. A process may hold
+        several (other devices, a command run in-process), and GL calls go to whichever
+        is current: the renderers call this at each entry point (see :func:`current`)."""
+        self.gl.__enter__()
+
     def has_extension(self, name: str) -> bool:
         return name in self.gl.extensions
 
@@ -135,6 +146,16 @@ class Context:
             "shader_cache": shader_cache_location(),
             "bundled_mesa": mesa.active_root(),
         }
+
+
+def current(method: Callable[..., T]) -> Callable[..., T]:
+    """Decorator for the methods of an object with a ``ctx`` (:class:`Context`) that touch
+    the device: its context is made current first."""
+    @functools.wraps(method)
+    def run(self: Any, *args: Any, **kwargs: Any) -> T:
+        self.ctx.make_current()
+        return method(self, *args, **kwargs)
+    return run
 
 
 def llvmpipe_threads() -> int:

@@ -28,6 +28,7 @@ import numpy as np
 from ..errors import UsageError
 from ..film import Film
 from ..gl import shaders
+from ..gl.context import current
 from ..gpu import codegen
 from ..gpu import layout as scene_layout
 from ..render import accum
@@ -327,6 +328,7 @@ class PhotonRenderer(Renderer):
         return h.hexdigest()
 
     # -- outputs -----------------------------------------------------------------------------
+    @current
     def map_records(self, which: int) -> np.ndarray:
         """The global (0) or caustic (1) map's photons as the device holds them, its pages
         read back in order: (stored, 12) float32 records (photon/map_layout.glsl)."""
@@ -335,12 +337,14 @@ class PhotonRenderer(Renderer):
                  for i, buf in enumerate(self._maps[which]) if stored > i * page]
         return np.concatenate(parts).reshape(-1, 12) if parts else np.zeros((0, 12), np.float32)
 
+    @current
     def lookup_counters(self) -> dict[str, int]:
         """Lookup candidates since the maps were built: ``skipped`` by the bound,
         ``visited``, and the most one lookup visited (``max_visited``)."""
         c = np.frombuffer(self._counters.read(), np.uint32)
         return {"skipped": int(c[1]), "visited": int(c[2]), "max_visited": int(c[3])}
 
+    @current
     def film(self) -> Film:
         """The Renderer's film; with ``photon_view`` its ``photons`` AOV: the global map's
         photon hits the camera sees, power per emitted photon in each pixel."""
@@ -375,6 +379,7 @@ class PhotonRenderer(Renderer):
                                  for s, g in zip(stored, self.grids)),
                 "pages": list(self.counters["pages"]), "page_photons": self.page_photons()}
 
+    @current
     def release(self) -> None:
         for buf in (*self._maps[0], *self._maps[1], *self._cells, self._counters, self._map_params,
                     self._view):

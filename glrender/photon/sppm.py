@@ -30,7 +30,7 @@ import numpy as np
 from ..errors import UsageError
 from ..film import Film
 from ..gl import shaders
-from ..gl.context import Context
+from ..gl.context import Context, current
 from ..gpu import codegen
 from ..gpu import layout as scene_layout
 from ..render import accum
@@ -175,6 +175,7 @@ class SppmRenderer:
         self._own = [self._view, self._vp_position, self._vp_shading, self._vp_extra, self._vp_radiance,
                      self._radius2, self._deposits, self._grid, self._records, self._photon_params]
 
+    @current
     def reset(self) -> None:
         """Forget every iteration: radii back to the initial radius."""
         n = self.width * self.height
@@ -226,6 +227,7 @@ class SppmRenderer:
                           int(self.photon_view))
         return prm
 
+    @current
     def camera_pass(self, iteration: int) -> tuple[np.ndarray, np.ndarray]:
         """Runs the camera pass of ``iteration``: visible points' positions (N, 4: xyz and
         camera segments, 0 for none) and the camera paths' radiance (N, 3)."""
@@ -239,6 +241,7 @@ class SppmRenderer:
         radiance = np.frombuffer(self._vp_radiance.read(), np.float32).reshape(-1, 4)[:, :3]
         return position, radiance
 
+    @current
     def photon_pass(self, iteration: int, position: np.ndarray,
                     should_stop: Callable[[], bool] | None = None) -> tuple[np.ndarray, np.ndarray] | None:
         """Traces the photons of ``iteration`` into the visible points ``position`` (from
@@ -251,6 +254,7 @@ class SppmRenderer:
             first = self.dispatch_photons(prm, first)
         return self.end_photons()
 
+    @current
     def begin_photons(self, iteration: int, position: np.ndarray) -> Any:
         """The photon pass's set-up: the grid over the visible points ``position``, the
         radii and cleared deposits on the device; returns the parameter block for
@@ -273,6 +277,7 @@ class SppmRenderer:
         prm["grid_lo"] = (*grid.lo, grid.cell)
         return prm
 
+    @current
     def dispatch_photons(self, prm: Any, first: int) -> int:
         """Traces the next dispatch of photons from ``first``; returns where the next
         one starts (photons_per_iteration when the pass is done)."""
@@ -284,6 +289,7 @@ class SppmRenderer:
         self.photon_kernel.run(group_x=-(-count // 64))
         return first + count
 
+    @current
     def end_photons(self) -> tuple[np.ndarray, np.ndarray]:
         """The photon pass's deposits: flux Phi (N, 3) and photon counts M (N,)."""
         self.gl.memory_barrier()
@@ -294,6 +300,7 @@ class SppmRenderer:
         self.counters["max_visited"] = max(self.counters["max_visited"], int(head[2]))
         return dep[:, :3], dep[:, 3]
 
+    @current
     def emission_records(self) -> tuple[np.ndarray, np.ndarray]:
         """The last photon pass's emitted photons (record_emission=True): power (P, 3)
         float64 and light index (P,), 0xFFFFFFFF for a photon that could not start."""
@@ -314,6 +321,7 @@ class SppmRenderer:
         self.n_photons[hit] = n_new
         self.radius[hit] = r_new
 
+    @current
     def iterate(self, should_stop: Callable[[], bool] | None = None) -> bool:
         """One SPPM iteration; False (and nothing changed) when stopped part way."""
         t = self.iterations
@@ -324,12 +332,14 @@ class SppmRenderer:
         self.finish_iteration(radiance, deposits)
         return True
 
+    @current
     def finish_iteration(self, radiance: np.ndarray, deposits: tuple[np.ndarray, np.ndarray]) -> None:
         """Adds an iteration's camera radiance and photon deposits to the state."""
         self.ld_sum += radiance
         self._update(*deposits)
         self.iterations += 1
 
+    @current
     def step(self, iterations: int, callback: Callable[[int, int], None] | None = None,
              should_stop: Callable[[], bool] | None = None) -> int:
         """Run ``iterations`` more iterations; ``callback(done, total)`` after each.
@@ -347,6 +357,7 @@ class SppmRenderer:
                 callback(self.iterations, target)
         return self.iterations - first
 
+    @current
     def radiance(self) -> np.ndarray:
         """The SPPM estimate (H, W, 3) float64."""
         n = max(self.iterations, 1)
@@ -357,6 +368,7 @@ class SppmRenderer:
     def image(self) -> Film:
         return self.film()
 
+    @current
     def film(self) -> Film:
         """The image as a :class:`Film`: ``count`` holds the iterations; SPPM has no
         per-sample variance (``m2`` is zero), error bars come from independent runs."""
@@ -370,6 +382,7 @@ class SppmRenderer:
     # the per-pixel state in float64, in this order (8 numbers per pixel)
     _STATE = (("radius", 1), ("n_photons", 1), ("tau", 3), ("ld_sum", 3))
 
+    @current
     def aovs(self) -> dict[str, np.ndarray]:
         """SPPM's pictures: ``radius`` (H, W), each pixel's search radius in scene units,
         and with ``photon_view=True`` ``photons`` (H, W, 3), the power of the photon hits
@@ -382,6 +395,7 @@ class SppmRenderer:
             out["photons"] = (sums / (SPLAT_SCALE * photons)).reshape(h, w, 3).astype(np.float32)
         return out
 
+    @current
     def state(self) -> dict[str, Any]:
         """The per-pixel SPPM state: what a checkpoint saves. The checkpoint format holds
         uint32 arrays (``sums``, ``squares``, ``aov``, ``splat``): ``sums`` carries the
@@ -396,6 +410,7 @@ class SppmRenderer:
                 "splat": np.zeros(4, np.uint32),
                 "width": self.width, "height": self.height, "rows": self.rows}
 
+    @current
     def restore(self, state: dict[str, Any]) -> None:
         """Continue from ``state()`` of an equal renderer (same fingerprint)."""
         if state.get("fingerprint") != self.fingerprint():
@@ -445,6 +460,7 @@ class SppmRenderer:
         return {"bytes_per_pixel": pl.BYTES_PER_PIXEL,
                 "bytes_per_photon": pl.BYTES_PER_RECORD if self.record_emission else 0}
 
+    @current
     def release(self) -> None:
         for buf in self._own:
             buf.release()

@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import UsageError
 from ..gl import shaders
-from ..gl.context import Context, default_context
+from ..gl.context import Context, current, default_context
 from ..gpu import codegen, envmap, layout
 from ..gpu.pack import PackedScene, pack_scene
 from ..sampling.sequences import strata_columns
@@ -184,6 +184,7 @@ class Renderer:
                                  "same scene object on the same context")
             ctx = shared_ctx
         self.ctx: Context = ctx or default_context(device)
+        self.ctx.make_current()
         self.gl = self.ctx.gl
         # what depends on the scene alone (the packed arrays, the BVH, the triangle data,
         # textures, the environment image) is made once and shared by renderers of other
@@ -415,6 +416,7 @@ class Renderer:
                              f"{limit / 2**20:.0f} MiB storage buffer: lower --strategy-depth or "
                              f"--width/--height")
 
+    @current
     def strategy_images(self) -> dict[tuple[int, int], tuple[np.ndarray, np.ndarray]]:
         """{(s, t): (weighted, unweighted)} images, (H, W, 3) float64, of every bdpt
         strategy of path lengths 1 .. ``strategy_depth`` (glrender/render/strategies.py):
@@ -450,6 +452,7 @@ class Renderer:
         h.update(prm.tobytes())
         return h.hexdigest()
 
+    @current
     def state(self) -> dict[str, Any]:
         """The accumulation so far (numpy arrays and the sample count): what a checkpoint
         saves. ``restore(state)`` on a renderer with the same fingerprint continues it, and
@@ -466,6 +469,7 @@ class Renderer:
     def _state_buffers(self) -> tuple[tuple[str, Any], ...]:
         return (("sums", self._sums), ("squares", self._squares), ("aov", self._aov))
 
+    @current
     def restore(self, state: dict[str, Any]) -> None:
         """Continue from ``state()`` of an equal renderer (same fingerprint)."""
         if state.get("fingerprint") != self.fingerprint():
@@ -510,6 +514,7 @@ class Renderer:
         first, count = self.rows
         return min(self.height, TILE * (first + count)) - TILE * first
 
+    @current
     def reset(self, start: int = 0, rows: tuple[int, int] | None = None) -> None:
         """Forget every sample (after the camera moves, say).
 
@@ -550,6 +555,7 @@ class Renderer:
             buf.clear()
         self.spp_done = self.spp_start = int(start)
 
+    @current
     def set_camera(self, camera: m.Camera) -> None:
         """Move the camera (or change its lens) and forget the samples so far.
 
@@ -744,6 +750,7 @@ class Renderer:
             copy.release()
         self._snapshot = None
 
+    @current
     def step(self, spp: int, callback: Callable[[int, int], None] | None = None,
              should_stop: Callable[[], bool] | None = None) -> int:
         """Add ``spp`` samples per pixel; ``callback(done, total)`` after every pass.
@@ -771,6 +778,7 @@ class Renderer:
         """The same as :meth:`film` (the accumulated image with its statistics)."""
         return self.film()
 
+    @current
     def film(self) -> Film:
         """Read the accumulation back as a :class:`Film` (the band of ``rows`` only)."""
         h = self.band_height
@@ -795,6 +803,7 @@ class Renderer:
     def _read(buf: Any) -> np.ndarray:
         return np.frombuffer(buf.read(), np.uint32)
 
+    @current
     def rays(self) -> int:
         """Rays traced since the last reset (camera, continuation and shadow rays, summed
         over the pixels; path integrator, settings with count_rays=True)."""
@@ -802,6 +811,7 @@ class Renderer:
             raise UsageError("Renderer.rays: render with count_rays=True to count rays")
         return int(np.frombuffer(self._debug.read(), np.uint32).astype(np.int64).sum())
 
+    @current
     def splat_image(self) -> np.ndarray:
         """The splatted part of the image (light tracing, BDPT's t = 1 strategies), (H, W, 3)
         float32: the fixed-point sums over the number of light paths, one per camera sample
@@ -815,6 +825,7 @@ class Renderer:
         image = sums.astype(np.float64) / (SPLAT_SCALE * paths)
         return image.reshape(self.height, self.width, 3).astype(np.float32)
 
+    @current
     def release(self) -> None:
         """Free the device buffers (the renderer cannot render afterwards); the scene's
         own data stays on the device while another renderer shares it."""

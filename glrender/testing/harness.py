@@ -218,6 +218,8 @@ def run_glsl(body: str, inputs: Mapping[str, object] | None = None,
                           {k: t for k, (t, _) in uniform_decls.items()},
                           {k: s for k, (s, _) in table_arrays.items()}, preamble)
     ctx = ctx or default_context()
+    if hasattr(ctx, "make_current"):
+        ctx.make_current()
     gl = getattr(ctx, "gl", ctx)
     program = shaders.compile_compute(ctx, source=source, name="<run_glsl>", defines=defines,
                                       library=library)
