@@ -5,7 +5,6 @@ import math
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 from glrender.lab.core import Measurement, Table
 from glrender.lab.survey import (BASELINE, DECISIONS, FLOOR, chosen_settings, choose,
