@@ -17,12 +17,15 @@ image mean, and at most 5% on every block that carries the image (the block-chan
 reference is at least a quarter of the image mean: the worst of them is asserted). Scenes whose worst
 blocks are heavy-tailed (a caustic or highlight reached only by BSDF sampling off a smooth
 surface, signed filter weights) take more samples or more seeds (catalog ``spp``, ``seeds``)
-to reach 5%. The glass scenes (smooth and rough dielectrics, and BDPT through glass) would
-need 20-150x the samples and 3-6x the Mitsuba passes (the reference's own error alone allows
-5.4-8.9% on their worst blocks), together far past the suite's five minutes on 2 cores; the
-catalog states each one's bound (``block_power``) and why (``block_power_why``), the test
-prints and asserts it, and the image-mean and (one-sided) MSE tests bound what a bias there
-can hide. Elsewhere the reference's error is a small part of a worst block's (at most 3% of
+to reach 5%. Every glass BSDF (smooth and rough dielectrics, total internal reflection, and
+BDPT through glass) is checked within 5% against an environment of coloured cells (the
+``*-env`` scenes: refraction, reflection and the Fresnel choice, and no caustic to find).
+Their scenes with an area light over a floor add the caustics, reached only by BSDF
+sampling: the smooth sphere's meets 5% with 8 seeds, the others (total internal reflection,
+the rough ones, BDPT through the sphere) would need 4.5-16x the samples, together past the
+suite's five minutes on 2 cores; the catalog states each one's bound (``block_power``, 12-23%)
+and why (``block_power_why``), the test prints and asserts it, and the image-mean and
+(one-sided) MSE tests bound what a bias there can hide. Elsewhere the reference's error is a small part of a worst block's (at most 3% of
 the block's value on its own).
 
 Where glrender deliberately differs (catalog keys ``difference``, where it is documented, and
