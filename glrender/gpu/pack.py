@@ -340,7 +340,8 @@ def pack_scene(scene: m.Scene) -> PackedScene:
         nonlocal lo, hi
         p = np.asarray(points, np.float64).reshape(-1, 3)
         if len(p):
-            lo, hi = np.minimum(lo, p.min(axis=0)), np.maximum(hi, p.max(axis=0))
+            p_lo, p_hi = m.point_bounds(p)
+            lo, hi = np.minimum(lo, p_lo), np.maximum(hi, p_hi)
 
     def add_area_light(kind, emission: m.Emission, **fields):
         rec = np.zeros(1, layout.LIGHT)[0]

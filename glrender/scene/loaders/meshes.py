@@ -27,8 +27,8 @@ def _corners(v: np.ndarray, f: np.ndarray) -> list[np.ndarray]:
     """The corners of every triangle as nine (T,) arrays, ``[x0, y0, z0, x1, ...]``: gathers
     from the vertex columns, never a (T, 3, 3) array (its gather and strided reads cost
     twice as much)."""
-    columns = np.ascontiguousarray(v.T)
-    return [columns[axis][f[:, k]] for k in range(3) for axis in range(3)]
+    columns, corners = np.ascontiguousarray(v.T), np.ascontiguousarray(f.T)
+    return [np.take(columns[axis], corners[k]) for k in range(3) for axis in range(3)]
 
 
 def _edges(c: list[np.ndarray]) -> list[list[np.ndarray]]:
@@ -65,12 +65,13 @@ def _angle_weighted_normals(count: int, f: np.ndarray, e: list[list[np.ndarray]]
         inv = 1.0 / np.maximum(_length(edge), 1e-300)
         unit.append([x * inv for x in edge])
     out = np.zeros((3, count))
+    corners = np.ascontiguousarray(f.T)      # bincount copies a strided index array
     for k in range(3):
         a, b = unit[k], unit[k - 1]
         cos = -(a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
         angle = np.arccos(np.clip(cos, -1.0, 1.0, out=cos), out=cos)
         for axis in range(3):   # bincount: an unbuffered scatter-add, 10x faster than np.add.at
-            out[axis] += np.bincount(f[:, k], weights=n[axis] * angle, minlength=count)
+            out[axis] += np.bincount(corners[k], weights=n[axis] * angle, minlength=count)
     length = _length(out)
     positive = length > 0
     out /= np.where(positive, length, 1.0)
