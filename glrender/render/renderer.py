@@ -331,7 +331,9 @@ class Renderer:
         for n, u, mt, li, o in parts:
             rows = slice(row, row + len(o))
             n4[rows, :, :3] = np.take(n, o, axis=0)
-            uv4.reshape(total, 8)[rows, :6] = np.take(u, o, axis=0).reshape(len(o), 6)
+            # one uv triple for every triangle (a mesh without uvs) is broadcast: no gather
+            uv4.reshape(total, 8)[rows, :6] = np.reshape(u[0], 6) if u.strides[0] == 0 and len(o) \
+                else np.take(u, o, axis=0).reshape(len(o), 6)
             info[rows, 0], info[rows, 1] = np.take(mt, o), np.take(li, o)
             row += len(o)
         data = self._scene_data

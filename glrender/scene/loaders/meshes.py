@@ -57,18 +57,20 @@ def _angle_weighted_normals(count: int, f: np.ndarray, e: list[list[np.ndarray]]
                             face_normal: list[np.ndarray]) -> np.ndarray:
     """:func:`vertex_normals` from the triangles' edges ``e`` (:func:`_edges`) and their
     unnormalized face normals ``(p1 - p0) x (p2 - p0)``."""
-    scale = 1.0 / np.maximum(_length(face_normal), 1e-300)
-    n = [x * scale for x in face_normal]
-    # each edge normalized once: corner k lies between e_k and -e_{k-1}
+    # divisions, not products with 1 / length, and dot products summed as np.einsum sums
+    # them here ((x0 y0 + x2 y2) + x1 y1): the normals of the per-corner formulation bit
+    # for bit. Each edge is normalized once: corner k lies between e_k and -e_{k-1}.
+    length = np.maximum(_length(face_normal), 1e-300)
+    n = [x / length for x in face_normal]
     unit = []
     for edge in e:
-        inv = 1.0 / np.maximum(_length(edge), 1e-300)
-        unit.append([x * inv for x in edge])
+        length = np.maximum(_length(edge), 1e-300)
+        unit.append([x / length for x in edge])
     out = np.zeros((3, count))
     corners = np.ascontiguousarray(f.T)      # bincount copies a strided index array
     for k in range(3):
         a, b = unit[k], unit[k - 1]
-        cos = -(a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+        cos = -((a[0] * b[0] + a[2] * b[2]) + a[1] * b[1])
         angle = np.arccos(np.clip(cos, -1.0, 1.0, out=cos), out=cos)
         for axis in range(3):   # bincount: an unbuffered scatter-add, 10x faster than np.add.at
             out[axis] += np.bincount(corners[k], weights=n[axis] * angle, minlength=count)
