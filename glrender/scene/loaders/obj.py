@@ -183,8 +183,12 @@ def _read_obj_fast(data: bytes, path: Path):
     # tokens: [first, last] bytes of every run of non-whitespace (the only bytes <= 32 left
     # are tab, CR, LF and space)
     ws = buf <= 32
-    token_first = np.flatnonzero(np.concatenate([[not ws[0]], ws[:-1] > ws[1:]]))
-    token_last = np.flatnonzero(np.concatenate([ws[:-1] < ws[1:], [not ws[-1]]]))
+    token_first = np.flatnonzero(ws[:-1] > ws[1:]) + 1
+    token_last = np.flatnonzero(ws[:-1] < ws[1:])
+    if not ws[0]:
+        token_first = np.concatenate([[0], token_first])
+    if not ws[-1]:
+        token_last = np.append(token_last, n - 1)
     del ws
     line_token = np.searchsorted(token_first, np.append(starts, n))   # first token of each line
     per_line = np.diff(line_token)
@@ -219,8 +223,9 @@ def _read_obj_fast(data: bytes, path: Path):
     slash_at = np.flatnonzero(buf == ord("/"))
     slashes = np.searchsorted(slash_at, last) - np.searchsorted(slash_at, first)
     doubles = np.zeros_like(slashes)
-    if b"//" in data:
-        double_at = slash_at[:-1][np.diff(slash_at) == 1]
+    adjacent = np.diff(slash_at) == 1                 # "//" (a bytes search is 7x slower)
+    if adjacent.any():
+        double_at = slash_at[:-1][adjacent]
         doubles = np.searchsorted(double_at, last) - np.searchsorted(double_at, first)
     del token_first, token_last, first, last
     n_slash, n_double = int(slashes[0]), int(doubles[0])
