@@ -93,7 +93,6 @@ def finish_mesh(mesh: MeshData, source, compute_normals: bool = True) -> MeshDat
         bad = int(np.flatnonzero((f < 0).any(axis=1) | (f >= len(v)).any(axis=1))[0])
         raise SceneError(f"{source}: triangle {bad} refers to vertex {f[bad].tolist()}, "
                          f"outside [0, {len(v)})")
-    normals = _per_vertex(mesh.normals, len(v), 3, "normals", source)
     e = face_normal = None
     if len(f):
         e = _edges(_corners(v, f))
@@ -108,6 +107,7 @@ def finish_mesh(mesh: MeshData, source, compute_normals: bool = True) -> MeshDat
             face_normal = [x[keep] for x in face_normal]
     if len(f) == 0:
         raise SceneError(f"{source}: no triangles with non-zero area")
+    normals = _per_vertex(mesh.normals, len(v), 3, "normals", source)
     if normals is None and compute_normals:
         normals = _angle_weighted_normals(len(v), f, e, face_normal)
     return MeshData(v, f, normals, _per_vertex(mesh.uvs, len(v), 2, "texture coordinates", source))
