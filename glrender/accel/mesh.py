@@ -87,8 +87,10 @@ def _vertex_hashes(v32: np.ndarray) -> np.ndarray:
     """A 64-bit hash of each vertex position (equal positions, equal hashes).
 
     The coordinates' bits times odd constants, then one xor-shift: a third of the time
-    of mixing each coordinate in, and good enough, since hashes only group triangles for
-    the exact comparison (a collision costs time, never a wrong result).
+    of mixing each coordinate in. Hashes only group triangles for the exact comparison,
+    so a collision can at worst leave a duplicate in place, never remove a distinct
+    triangle; none occur on 128^3-point grids (integer, 1/128 and 0.1 spacing) or on
+    3 x 10^6 random points.
     """
     bits = v32.view(np.uint32)
     h = bits[:, 0] * np.uint64(0x9E3779B97F4A7C15)
@@ -200,7 +202,8 @@ def prepare_triangles(vertices, triangles, on_invalid: str = "skip",
         # Exact twins share validity and area, so the first of a group survives the
         # other filters whenever any of it does.
         hashes = _vertex_hashes(v32)
-        duplicate = _duplicate_mask(corners, hashes.reshape(-1, 3) if soup else np.take(hashes, triangles)) & keep
+        corner_hash = hashes.reshape(-1, 3) if soup else np.take(hashes, triangles)
+        duplicate = _duplicate_mask(corners, corner_hash) & keep
         removed_duplicates = int(np.count_nonzero(duplicate))
         keep &= ~duplicate
 

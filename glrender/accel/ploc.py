@@ -178,8 +178,8 @@ def build_ploc(lo: np.ndarray, hi: np.ndarray, radius: int = DEFAULT_RADIUS,
     pool = ThreadPoolExecutor(threads) if threads > 1 and n >= PARALLEL_MIN else None
     try:
         while len(ids) > max(1, top_clusters):
-            ids, box, next_id = _merge_step(ids, box, next_id, radius, pool, node_lo, node_hi, left, right,
-                                            levels)
+            ids, box, next_id = _merge_step(ids, box, next_id, radius, pool, node_lo, node_hi,
+                                            left, right, levels)
     finally:
         if pool is not None:
             pool.shutdown()
