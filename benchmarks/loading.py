@@ -5,7 +5,8 @@ written once as binary PLY (positions only) and as OBJ with ``v``/``vt``/``vn`` 
 ``f v/vt/vn`` faces. Every measurement is a fresh process that loads the file, makes a
 ``Renderer`` at 512x512 (a constant environment light added) and renders one pass of
 8 spp; it reports wall seconds for load, packing, BVH build plus upload, kernel compile
-and the pass, the process's CPU seconds, and the 1-minute load average.
+and the pass, the process's CPU seconds, the 1-minute load average, and the uploaded
+tree (a hash of its packed buffers and its SAH cost: equal hashes, the same tree).
 
 ``--baseline DIR`` (a checkout of another commit, e.g. ``git worktree add /tmp/base
 <commit>``) is measured alternately with this checkout, round by round, so both see
@@ -41,9 +42,13 @@ c2, t2 = time.process_time(), time.perf_counter()
 r.step(8)
 r.film()
 t3 = time.perf_counter()
+import hashlib
+bvh = r._scene_data.bvh.bvh       # the tree as uploaded: its buffers' hash and SAH cost
+tree = hashlib.sha256(b"".join(a.tobytes() for _, a in sorted(bvh.pack().items())))
 print(json.dumps({"load": t1 - t0, "pack": r.timings["pack"],
                   "bvh_upload": r.timings["build"] - r.timings["pack"], "compile": r.timings["compile"],
-                  "pass": t3 - t2, "cpu_to_dispatch": c2 - c0, "loadavg": os.getloadavg()[0]}))
+                  "pass": t3 - t2, "cpu_to_dispatch": c2 - c0, "loadavg": os.getloadavg()[0],
+                  "tree": f"{tree.hexdigest()[:12]} SAH {bvh.sah_cost():.4f}"}))
 """
 
 
@@ -109,7 +114,8 @@ def main(argv=None) -> None:
               f"BVH+upload {med('bvh_upload'):5.2f}  load+pack+BVH {statistics.median(to_pass):6.2f}  "
               f"compile {med('compile'):5.2f}  pass {med('pass'):5.2f}  "
               f"CPU to dispatch {med('cpu_to_dispatch'):6.2f}  "
-              f"load average {min(r['loadavg'] for r in rs):.1f}-{max(r['loadavg'] for r in rs):.1f}")
+              f"load average {min(r['loadavg'] for r in rs):.1f}-{max(r['loadavg'] for r in rs):.1f}  "
+              f"tree {' / '.join(sorted({r['tree'] for r in rs}))}")
 
 
 if __name__ == "__main__":

@@ -240,7 +240,7 @@ def build_bvh(vertices, triangles, *, method: str = "ploc", radius: int = DEFAUL
     tree = build_ploc(lo, hi, radius, top_clusters, threads) if method == "ploc" else build_binned_sah(lo, hi)
     arrays = collapse_tree(tree, max_leaf_size, c_node, c_tri)
     order = arrays.prim_order
-    bvh = Bvh(np.ascontiguousarray(c[order]), prepared.source[order], arrays, prepared, method,
+    bvh = Bvh(np.take(c, order, axis=0), np.take(prepared.source, order), arrays, prepared, method,
               binary_sah=tree.sah_cost())
     if len(motion) > MAX_MOTION_INSTANCES:
         raise UsageError(f"build_bvh: at most {MAX_MOTION_INSTANCES} motion instances "

@@ -159,10 +159,10 @@ def _collapse(tree: BinaryTree, leaf: np.ndarray, count: np.ndarray, first: np.n
     prim_order[first[:n]] = np.arange(n)
     prim_lo = prim_hi = None  # triangle boxes in BVH order, gathered if ranges are needed
 
-    # What each level gathers per child, in one array each (gathers dominate the time):
-    # first primitive, count and inner flag packed in an int64, and both box corners.
+    # What each level gathers per child (gathers dominate the time): first primitive,
+    # count and inner flag packed in one int64, and the box corners.
     info = (first << 34) | (np.minimum(count, COUNT_MASK) << 1) | is_inner
-    box6 = np.concatenate([tree.lo, tree.hi], axis=1)
+    node_lo, node_hi = np.ascontiguousarray(tree.lo), np.ascontiguousarray(tree.hi)  # np.take copies others
 
     # The root is always an inner BVH4 node; a tree that is one leaf hangs below it.
     bin_roots = np.zeros(0, np.int64)
@@ -184,13 +184,16 @@ def _collapse(tree: BinaryTree, leaf: np.ndarray, count: np.ndarray, first: np.n
         first_level = None
         valid = cand >= 0
         safe = np.maximum(cand, 0)
-        packed = info[safe]
+        packed = np.take(info, safe)
         inner = valid & ((packed & 1) == 1)
         kind = np.where(valid, np.where(inner, KIND_INNER, KIND_LEAF), KIND_EMPTY).astype(np.int8)
         start, size = packed >> 34, np.where(valid, (packed >> 1) & COUNT_MASK, 0)
-        box = box6[safe]
-        lo = np.where(valid[..., None], box[..., :3], np.float32(np.inf))
-        hi = np.where(valid[..., None], box[..., 3:], np.float32(-np.inf))
+        # np.take of rows, then the empty slots' rows: 3x faster than indexing and a
+        # (F, 4, 1)-broadcast np.where (whose inner loops are 3 elements long)
+        lo, hi = np.take(node_lo, safe, axis=0), np.take(node_hi, safe, axis=0)
+        empty = ~valid
+        if empty.any():
+            lo[empty], hi[empty] = np.float32(np.inf), np.float32(-np.inf)
         binary_id = cand
         # Inner children whose subtree may end too deep switch to balanced ranges.
         mode = np.zeros(cand.shape, np.int8)  # 0: binary subtree, 1: range

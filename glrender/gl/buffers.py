@@ -52,7 +52,7 @@ class BufferTexture:
         if texels == 0:
             array = np.zeros(comps, dtype)
         self.name, self.format, self.texels = name, fmt, texels
-        self.buffer = mgl.buffer(array.tobytes())
+        self.buffer = mgl.buffer(array)   # read through the buffer protocol: no bytes copy
         handle = ctypes.c_uint(0)
         gl.glGenTextures(1, ctypes.byref(handle))
         self.handle = handle.value

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..scene.model import point_bounds
 from .pack import PackedScene
 
 GENERATED_PATH = "generated/scene.glsl"
@@ -174,8 +175,7 @@ def _mesh_box(packed: PackedScene):
         points.append(np.stack([lo, hi]))
     if not points:
         return None
-    p = np.concatenate(points)
-    lo, hi = p.min(axis=0), p.max(axis=0)
+    lo, hi = point_bounds(np.concatenate(points) if len(points) > 1 else points[0])
     pad = 1e-5 * (np.abs(lo) + np.abs(hi) + (hi - lo)) + 1e-30
     return lo - pad, hi + pad
 

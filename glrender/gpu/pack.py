@@ -266,6 +266,23 @@ def _fresnel_diffuse_reflectance(eta: float) -> float:
     return 0.919317 + x * (-3.4793 + x * (6.75335 + x * (-7.80989 + x * (4.98554 + x * -1.36881))))
 
 
+def _face_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """(T, 3) cross products ``(p1 - p0) x (p2 - p0)`` of triangles ``f`` over vertices ``v``:
+    np.cross's values from contiguous per-axis gathers (half its time on (T, 3, 3) corners)."""
+    columns, corners = np.ascontiguousarray(v.T), np.ascontiguousarray(f.T)
+    e1, e2 = [], []
+    for axis in range(3):
+        p = np.take(columns[axis], corners)             # (3, T): this axis of each corner
+        e1.append(p[1] - p[0])
+        e2.append(p[2] - p[0])
+    out = np.empty((len(f), 3))
+    for k in range(3):
+        i, j = (k + 1) % 3, (k + 2) % 3
+        np.multiply(e1[i], e2[j], out=out[:, k])
+        out[:, k] -= e1[j] * e2[i]
+    return out
+
+
 def _transform_mesh(shape: m.Shape, where: str):
     v = np.asarray(shape.vertices, np.float64)
     f = np.asarray(shape.triangles, np.int64)
@@ -282,8 +299,9 @@ def _transform_mesh(shape: m.Shape, where: str):
     flip = shape.flip_normals != (np.linalg.det(M[:3, :3]) < 0)
     if flip:
         f = f[:, [0, 2, 1]]
-    tri = wv[f]                                          # (T, 3, 3)
-    ng = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    # np.take gathers rows 2-3x faster than indexing with an index array (numpy 2.x)
+    tri = np.take(wv, f, axis=0)                         # (T, 3, 3)
+    ng = _face_normals(wv, f)
     length = np.linalg.norm(ng, axis=1)
     keep = length > 0
     ng = ng / np.where(length > 0, length, 1)[:, None]
@@ -291,16 +309,16 @@ def _transform_mesh(shape: m.Shape, where: str):
         vn = m.transform_normals(M, np.asarray(shape.normals, np.float64))
         if shape.flip_normals:
             vn = -vn
-        normals = vn[f]
+        normals = np.take(vn, f, axis=0)
         # per vertex, then per triangle: the same test as on the (T, 3, 3) corners, 3x less work
         bad_vertex = ~np.isfinite(vn).all(axis=1) | (np.linalg.norm(vn, axis=1) < 0.5)
-        bad = bad_vertex[f].any(axis=1)
-        if bad.any():
+        if bad_vertex.any():
+            bad = np.take(bad_vertex, f).any(axis=1)
             normals[bad] = ng[bad][:, None, :]
     else:
         normals = np.repeat(ng[:, None, :], 3, axis=1)
     if shape.uvs is not None:
-        uvs = np.asarray(shape.uvs, np.float64)[f]
+        uvs = np.take(np.asarray(shape.uvs, np.float64), f, axis=0)
     else:
         uvs = np.broadcast_to(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]), (len(f), 3, 2))
     if keep.all():
@@ -322,7 +340,8 @@ def pack_scene(scene: m.Scene) -> PackedScene:
         nonlocal lo, hi
         p = np.asarray(points, np.float64).reshape(-1, 3)
         if len(p):
-            lo, hi = np.minimum(lo, p.min(axis=0)), np.maximum(hi, p.max(axis=0))
+            p_lo, p_hi = m.point_bounds(p)
+            lo, hi = np.minimum(lo, p_lo), np.maximum(hi, p_hi)
 
     def add_area_light(kind, emission: m.Emission, **fields):
         rec = np.zeros(1, layout.LIGHT)[0]

@@ -322,8 +322,8 @@ class Renderer:
             k = len(mm.positions)
             parts.append((mm.normals, mm.uvs, np.full(k, mm.material, np.uint32), np.zeros(k, np.uint32),
                           mbvh.bvh.prim_order))
-        # each part gathered straight into its rows of the float32 texel arrays (no float64
-        # intermediates: 1M triangles carry ~200 MB of normals and uvs)
+        # each part gathered into its rows of the float32 texel arrays (np.take: 2-3x faster
+        # than indexing with an index array); uv texels hold u0 v0 u1 v1 | u2 v2 0 0
         total = sum(len(o) for *_, o in parts)
         n4 = np.zeros((total, 3, 4), np.float32)
         uv4 = np.zeros((total, 2, 4), np.float32)
@@ -331,10 +331,11 @@ class Renderer:
         row = 0
         for n, u, mt, li, o in parts:
             rows = slice(row, row + len(o))
-            n4[rows, :, :3] = n[o]
-            uv = u[o]
-            uv4[rows, 0, :2], uv4[rows, 0, 2:], uv4[rows, 1, :2] = uv[:, 0], uv[:, 1], uv[:, 2]
-            info[rows, 0], info[rows, 1] = mt[o], li[o]
+            n4[rows, :, :3] = np.take(n, o, axis=0)
+            # one uv triple for every triangle (a mesh without uvs) is broadcast: no gather
+            uv4.reshape(total, 8)[rows, :6] = np.reshape(u[0], 6) if u.strides[0] == 0 and len(o) \
+                else np.take(u, o, axis=0).reshape(len(o), 6)
+            info[rows, 0], info[rows, 1] = np.take(mt, o), np.take(li, o)
             row += len(o)
         data = self._scene_data
         assert data is not None, "the renderer was released"

@@ -59,6 +59,36 @@ def test05_exact_duplicates_removed_in_any_corner_order():
     np.testing.assert_array_equal(p.source, np.arange(len(f)))  # first occurrences kept
 
 
+def test05b_hash_collisions_never_remove_distinct_triangles(monkeypatch):
+    """Vertex hashes only group triangles for the exact comparison: with every hash
+    equal, every distinct triangle is kept (a collision can only leave a duplicate)."""
+    from glrender.accel import mesh
+
+    rng = np.random.default_rng(5)
+    v = rng.random((60, 3)).astype(np.float32)
+    f = rng.permutation(60).reshape(20, 3)
+    tris = np.concatenate([f, f[:6][:, [2, 0, 1]], f[:2]])
+    expected = prepare_triangles(v, tris)
+    monkeypatch.setattr(mesh, "_vertex_hashes", lambda v32: np.zeros(len(v32), np.uint64))
+    collided = prepare_triangles(v, tris)
+    assert expected.removed_duplicates == 8
+    np.testing.assert_array_equal(expected.source, np.arange(20))
+    assert 0 <= collided.removed_duplicates <= 8
+    assert set(range(20)) <= set(collided.source.tolist())
+    removed = sorted(set(range(len(tris))) - set(collided.source.tolist()))
+    assert all(i >= 20 for i in removed)                  # only later copies go
+
+
+@pytest.mark.parametrize("spacing", [1.0, 1 / 128, 0.1])
+def test05c_vertex_hashes_of_grid_points_are_distinct(spacing):
+    """Regular grids are where a weak hash collides: none here (64^3 points)."""
+    from glrender.accel.mesh import _vertex_hashes
+
+    axis = np.arange(64, dtype=np.float32) * np.float32(spacing)
+    v = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), -1).reshape(-1, 3)
+    assert len(np.unique(_vertex_hashes(np.ascontiguousarray(v)))) == len(v)
+
+
 def test06_near_duplicates_are_kept():
     v, f = QUAD
     v2 = np.concatenate([v, v + np.float32(1e-7)])

@@ -19,7 +19,7 @@ def scene_bounds(scene: m.Scene) -> tuple[np.ndarray, np.ndarray] | None:
         M = shape.world_from_object
         if shape.kind == "mesh" and shape.vertices is not None and len(shape.vertices):
             v = np.asarray(shape.vertices, np.float64)
-            points.append(m.transform_points(M, np.stack([v.min(axis=0), v.max(axis=0)]) if
+            points.append(m.transform_points(M, np.stack(m.point_bounds(v)) if
                                              np.allclose(M[:3, :3], np.diag(np.diag(M[:3, :3])))
                                              else v))
         elif shape.kind in ("rectangle", "disk"):
@@ -35,7 +35,7 @@ def scene_bounds(scene: m.Scene) -> tuple[np.ndarray, np.ndarray] | None:
     p = p[np.isfinite(p).all(axis=1)]
     if not len(p):
         return None
-    return p.min(axis=0), p.max(axis=0)
+    return m.point_bounds(p)
 
 
 def default_camera(scene: m.Scene, fov: float = 40.0) -> m.Camera:

@@ -23,25 +23,62 @@ class MeshData:
     uvs: np.ndarray | None = None
 
 
+def _corners(v: np.ndarray, f: np.ndarray) -> list[np.ndarray]:
+    """The corners of every triangle as nine (T,) arrays, ``[x0, y0, z0, x1, ...]``: gathers
+    from the vertex columns, never a (T, 3, 3) array (its gather and strided reads cost
+    twice as much)."""
+    columns, corners = np.ascontiguousarray(v.T), np.ascontiguousarray(f.T)
+    return [np.take(columns[axis], corners[k]) for k in range(3) for axis in range(3)]
+
+
+def _edges(c: list[np.ndarray]) -> list[list[np.ndarray]]:
+    """Edge vectors ``e_k = p_{k+1} - p_k`` (indices mod 3) as three [x, y, z] lists."""
+    return [[c[3 * ((k + 1) % 3) + a] - c[3 * k + a] for a in range(3)] for k in range(3)]
+
+
+def _cross(a: list[np.ndarray], b: list[np.ndarray]) -> list[np.ndarray]:
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def _length(x: list[np.ndarray]) -> np.ndarray:
+    return np.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
+
+
 def vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """Mitsuba's recomputed vertex normals: face normals weighted by the angle of each
     face at the vertex (Thürmer and Wüthrich 1998), normalized; 0 where undefined."""
-    v = np.asarray(vertices, np.float64)
-    f = np.asarray(triangles, np.int64)
-    p = v[f]                                               # (T, 3, 3)
-    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-    out = np.zeros_like(v)
-    for i in range(3):
-        d0 = p[:, (i + 1) % 3] - p[:, i]
-        d1 = p[:, (i + 2) % 3] - p[:, i]
-        d0 /= np.maximum(np.linalg.norm(d0, axis=1, keepdims=True), 1e-300)
-        d1 /= np.maximum(np.linalg.norm(d1, axis=1, keepdims=True), 1e-300)
-        angle = np.arccos(np.clip(np.einsum("ij,ij->i", d0, d1), -1.0, 1.0))
+    v = np.asarray(vertices, np.float64).reshape(-1, 3)
+    f = np.asarray(triangles, np.int64).reshape(-1, 3)
+    e = _edges(_corners(v, f))
+    return _angle_weighted_normals(len(v), f, e, _cross(e[0], [-x for x in e[2]]))
+
+
+def _angle_weighted_normals(count: int, f: np.ndarray, e: list[list[np.ndarray]],
+                            face_normal: list[np.ndarray]) -> np.ndarray:
+    """:func:`vertex_normals` from the triangles' edges ``e`` (:func:`_edges`) and their
+    unnormalized face normals ``(p1 - p0) x (p2 - p0)``."""
+    # divisions, not products with 1 / length, and dot products summed as np.einsum sums
+    # them here ((x0 y0 + x2 y2) + x1 y1): the normals of the per-corner formulation bit
+    # for bit. Each edge is normalized once: corner k lies between e_k and -e_{k-1}.
+    length = np.maximum(_length(face_normal), 1e-300)
+    n = [x / length for x in face_normal]
+    unit = []
+    for edge in e:
+        length = np.maximum(_length(edge), 1e-300)
+        unit.append([x / length for x in edge])
+    out = np.zeros((3, count))
+    corners = np.ascontiguousarray(f.T)      # bincount copies a strided index array
+    for k in range(3):
+        a, b = unit[k], unit[k - 1]
+        cos = -((a[0] * b[0] + a[2] * b[2]) + a[1] * b[1])
+        angle = np.arccos(np.clip(cos, -1.0, 1.0, out=cos), out=cos)
         for axis in range(3):   # bincount: an unbuffered scatter-add, 10x faster than np.add.at
-            out[:, axis] += np.bincount(f[:, i], weights=n[:, axis] * angle, minlength=len(v))
-    length = np.linalg.norm(out, axis=1, keepdims=True)
-    return np.where(length > 0, out / np.where(length > 0, length, 1.0), 0.0)
+            out[axis] += np.bincount(corners[k], weights=n[axis] * angle, minlength=count)
+    length = _length(out)
+    positive = length > 0
+    out /= np.where(positive, length, 1.0)
+    out[:, ~positive] = 0.0
+    return np.ascontiguousarray(out.T)
 
 
 def finish_mesh(mesh: MeshData, source, compute_normals: bool = True) -> MeshData:
@@ -56,20 +93,23 @@ def finish_mesh(mesh: MeshData, source, compute_normals: bool = True) -> MeshDat
         bad = int(np.flatnonzero((f < 0).any(axis=1) | (f >= len(v)).any(axis=1))[0])
         raise SceneError(f"{source}: triangle {bad} refers to vertex {f[bad].tolist()}, "
                          f"outside [0, {len(v)})")
+    e = face_normal = None
     if len(f):
-        p = v[f]
-        area2 = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
-        keep = area2 > 0
-        dropped = int(len(f) - keep.sum())
+        e = _edges(_corners(v, f))
+        face_normal = _cross(e[0], [-x for x in e[2]])
+        keep = _length(face_normal) > 0
+        dropped = int(len(f) - np.count_nonzero(keep))
         if dropped:
             warn(f"{source}: dropped {dropped} zero-area triangle{'s' if dropped > 1 else ''} "
                  f"of {len(f)}")
             f = f[keep]
+            e = [[x[keep] for x in edge] for edge in e]
+            face_normal = [x[keep] for x in face_normal]
     if len(f) == 0:
         raise SceneError(f"{source}: no triangles with non-zero area")
     normals = _per_vertex(mesh.normals, len(v), 3, "normals", source)
     if normals is None and compute_normals:
-        normals = vertex_normals(v, f)
+        normals = _angle_weighted_normals(len(v), f, e, face_normal)
     return MeshData(v, f, normals, _per_vertex(mesh.uvs, len(v), 2, "texture coordinates", source))
 
 
