@@ -101,9 +101,14 @@ vec3 vertex_ns0(Vertex v) {
 
 // arr[index] = value with constant indices: a loop over every index that the compiler
 // unrolls, each a masked vector store. llvmpipe stores to a dynamically indexed local
-// array lane by lane, and the vector loads after such scalar stores stall (measured:
-// the walks' stores took ~60% of the walks; with this, ~8%).
+// array lane by lane, and its vector loads after such scalar stores stall: bdpt samples
+// measured 17-25% cheaper this way (benchmarks/bdpt_cost.py --define
+// BDPT_INDEXED_STORES compiles the plain indexed store for comparison).
+#ifdef BDPT_INDEXED_STORES
+#define STORE_AT(arr, index, value) arr[index] = value
+#else
 #define STORE_AT(arr, index, value) { int at_ = (index); for (int i_ = 0; i_ < arr.length(); ++i_) if (i_ == at_) arr[i_] = value; }
+#endif
 
 Vertex g_camera[kBdptVertices];
 Vertex g_light[kBdptVertices];
