@@ -55,8 +55,8 @@ float lens_weight_generic(int s, Vertex lens) {
 #endif
 
 Vertex vertex_from_hit(SurfaceHit hit, Frame frame, Bsdf b, vec3 beta) {
-    return Vertex(hit.p, hit.ng, frame.z, VERTEX_NS0(hit.ns0) frame.x, beta, hit.uv, kVertexSurface, hit.material, hit.light,
-                  false, !bsdf_is_delta(b), 0.0, 0.0);
+    return Vertex(hit.p, hit.ng, frame.z, VERTEX_NS0(hit.ns0) frame.x, beta, hit.uv, hit.material,
+                  vertex_info(kVertexSurface, hit.light, false, !bsdf_is_delta(b)), 0.0, 0.0);
 }
 
 // Extends a subpath from path[n - 1] along (o, d) until it leaves the scene, reaches
@@ -69,8 +69,10 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
                 int max_vertices, inout SamplerState s, inout Aov aov) {
     vec3 throughput = vec3(1.0);
     float eta_product = 1.0;
-    // the vertex before the next one, kept in registers: llvmpipe reads a record of a
-    // dynamically indexed array field by field, lane by lane (~1/3 of a walk's time)
+    // The newest vertex (index n - 1) stays in registers until its reverse density and
+    // delta flag are known and is then stored once, whole: llvmpipe stores a record of a
+    // dynamically indexed array word by word, lane by lane (the vertex before the walk's
+    // first is stored again with its reverse density).
     Vertex prev = light_path ? g_light[n - 1] : g_camera[n - 1];
     while (n < max_vertices) {
         LOOP_TICK();
@@ -82,10 +84,10 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
                 Vertex v = vertex_point(kVertexInfinite,
                                         prev.p + kInfiniteVertexDistance * u_params.scene_sphere.w * d,
                                         vec3(0.0), beta);
-                v.light = u_params.counts.z;
-                v.connectible = false;
+                v.info = vertex_info(kVertexInfinite, u_params.counts.z, false, false);
                 v.pdf_fwd = pdf_sa;
-                g_camera[n] = v;
+                STORE_AT(g_camera, n - 1, prev);
+                prev = v;
                 n += 1;
             }
             break;
@@ -99,32 +101,32 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
         Vertex v = vertex_from_hit(hit, frame, b, beta);
         v.pdf_fwd = solid_angle_to_area(pdf_sa, prev, v);
         if (!light_path && n == 1) record_aov(aov, hit);
-        if (light_path) g_light[n] = v; else g_camera[n] = v;
         n += 1;
-        if (n >= max_vertices) break;
-
-        vec3 wo = frame_to_local(frame, -d);
-        BsdfSample bs = bsdf_sample(b, wo, u_choice.x, u_bsdf, light_path);
-        if (!bs.valid) break;
-        vec3 wi = frame_from_local(frame, bs.wi);
-        if (dot(wi, hit.ng) * bs.wi.z <= 0.0) break;
-        vec3 weight = bs.weight;
-        if (light_path) weight *= shading_normal_correction(-d, wi, hit.ns, hit.ng);
-        beta *= weight;
-        throughput *= weight;
-        eta_product *= bs.eta;
-        // densities: forward of the next vertex, reverse of the previous one
-        pdf_sa = bs.delta ? 0.0 : bs.pdf;
-        float pdf_rev_sa = bs.delta ? 0.0 : bsdf_pdf(b, bs.wi, wo);
-        float prev_rev = solid_angle_to_area(pdf_rev_sa, v, prev);
-        prev = v;
-        if (light_path) {
-            g_light[n - 1].delta = bs.delta;
-            g_light[n - 2].pdf_rev = prev_rev;
-        } else {
-            g_camera[n - 1].delta = bs.delta;
-            g_camera[n - 2].pdf_rev = prev_rev;
+        // from here the pending vertices are prev (index n - 2) and v (n - 1)
+        bool stop = n >= max_vertices;
+        BsdfSample bs;
+        vec3 wi = vec3(0.0);
+        if (!stop) {
+            vec3 wo = frame_to_local(frame, -d);
+            bs = bsdf_sample(b, wo, u_choice.x, u_bsdf, light_path);
+            wi = frame_from_local(frame, bs.wi);
+            stop = !bs.valid || dot(wi, hit.ng) * bs.wi.z <= 0.0;
+            if (!stop) {
+                vec3 weight = bs.weight;
+                if (light_path) weight *= shading_normal_correction(-d, wi, hit.ns, hit.ng);
+                beta *= weight;
+                throughput *= weight;
+                eta_product *= bs.eta;
+                // densities: forward of the next vertex, reverse of the previous one
+                pdf_sa = bs.delta ? 0.0 : bs.pdf;
+                float pdf_rev_sa = bs.delta ? 0.0 : bsdf_pdf(b, bs.wi, wo);
+                prev.pdf_rev = solid_angle_to_area(pdf_rev_sa, v, prev);
+                vertex_set_delta(v, bs.delta);
+            }
         }
+        if (light_path) { STORE_AT(g_light, n - 2, prev); } else { STORE_AT(g_camera, n - 2, prev); }
+        prev = v;
+        if (stop) break;
         if (n >= kRrDepth) {
             float q = min(max_component(throughput) * (light_path ? 1.0 : eta_product * eta_product), 0.95);
             if (!(u_rr < q)) break;
@@ -136,6 +138,7 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
         d = wi;
         t_max = kInfinity;
     }
+    if (light_path) { STORE_AT(g_light, n - 1, prev); } else { STORE_AT(g_camera, n - 1, prev); }
     return n;
 }
 
@@ -176,11 +179,11 @@ vec3 vertex_f(Vertex v, vec3 from, vec3 to, bool adjoint, out float pdf_to, out 
 // all that the densities and directions toward it need (a whole record read from a
 // dynamically indexed array costs llvmpipe a load per field and lane).
 Vertex camera_point(int i) {
-    return vertex_point(g_camera[i].kind, g_camera[i].p, g_camera[i].ng, vec3(0.0));
+    return vertex_point(info_kind(g_camera[i].info), g_camera[i].p, g_camera[i].ng, vec3(0.0));
 }
 
 Vertex light_point(int i) {
-    return vertex_point(g_light[i].kind, g_light[i].p, g_light[i].ng, vec3(0.0));
+    return vertex_point(info_kind(g_light[i].info), g_light[i].p, g_light[i].ng, vec3(0.0));
 }
 
 bool segment_visible(Vertex a, Vertex b, uint ignore) {
@@ -195,11 +198,11 @@ bool segment_visible(Vertex a, Vertex b, uint ignore) {
 // s = 0: the camera subpath's vertex t - 1 lies on an area light or at infinity.
 vec3 strategy_emission(int t) {
     Vertex pt = g_camera[t - 1];
-    if (pt.light == 0u || (t == 2 && kHideEmitters)) return vec3(0.0);
-    LightData l = scene_light(pt.light - 1u);
+    if (vertex_light(pt) == 0u || (t == 2 && kHideEmitters)) return vec3(0.0);
+    LightData l = scene_light(vertex_light(pt) - 1u);
     vec3 wo = normalize(g_camera[t - 2].p - pt.p);
     float unused;
-    vec3 L = pt.beta * (pt.kind == kVertexInfinite ? environment_radiance(l, -wo, unused)
+    vec3 L = pt.beta * (vertex_kind(pt) == kVertexInfinite ? environment_radiance(l, -wo, unused)
                                                    : area_light_radiance(l, pt.ng, wo));
     if (max_component(L) <= 0.0) return vec3(0.0);
     float w = bdpt_mis_weight(0, t);
@@ -212,7 +215,7 @@ vec3 strategy_light_sample(int t, inout SamplerState smp) {
     vec2 u_light = sampler_2d(smp);
     float u_select = sampler_1d(smp);
     Vertex pt = g_camera[t - 1];
-    if (!pt.connectible) return vec3(0.0);
+    if (!vertex_connectible(pt)) return vec3(0.0);
     LightChoice choice = select_light(u_select);
     LightData l = scene_light(choice.index);
     LightSample ls = sample_light(l, pt.p, u_light);
@@ -228,7 +231,7 @@ vec3 strategy_light_sample(int t, inout SamplerState smp) {
     vec3 n = vec3(0.0);
     if (light_is_area(l)) n = l.info.x == kLightSphere ? normalize(q - l.p.xyz) : l.n.xyz;
     Vertex light = vertex_point(infinite ? kVertexInfinite : kVertexLight, q, n, vec3(1.0));
-    light.light = choice.index + 1u;
+    vertex_set_light(light, choice.index + 1u);
     light.pdf_fwd = vertex_pdf_light_origin(light, pt);
     ConnectionPdfs cp = ConnectionPdfs(vertex_pdf_light(light, pt), solid_angle_to_area(pdf_back, pt, pt_minus),
                                        solid_angle_to_area(pdf_light, pt, light), 0.0);
@@ -241,7 +244,7 @@ vec3 strategy_light_sample(int t, inout SamplerState smp) {
 void strategy_lens(int s, inout SamplerState smp) {
     vec2 u_lens = sampler_2d(smp);
     Vertex qs = g_light[s - 1];
-    if (!qs.connectible) return;
+    if (!vertex_connectible(qs)) return;
     CameraConnection c = camera_connect(qs.p, u_lens, g_time);
     if (!c.valid) return;
     Vertex qs_minus = light_point(s - 2);
@@ -260,7 +263,7 @@ void strategy_lens(int s, inout SamplerState smp) {
 // its BSDF and the point before it come from the caller (the same for every s).
 vec3 strategy_connect(int s, int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus) {
     Vertex qs = g_light[s - 1];
-    if (!qs.connectible) return vec3(0.0);
+    if (!vertex_connectible(qs)) return vec3(0.0);
     Vertex qs_minus = light_point(s - 2);
     vec3 d = pt.p - qs.p;
     float qs_to_pt, qs_to_minus, pt_to_qs, pt_to_minus;
@@ -294,10 +297,9 @@ vec3 bdpt_sample(uvec2 pixel, inout SamplerState s, inout Aov aov) {
         LightData l = scene_light(st.light);
         vec3 n = light_is_area(l) ? st.e.n : vec3(0.0);
         g_light[0] = vertex_point(kVertexLight, st.e.p, n, st.e.Le / (st.pmf * st.e.pdf_pos));
-        g_light[0].light = st.light + 1u;
-        g_light[0].pdf_fwd = st.pmf * st.e.pdf_pos;
         bool infinite = light_is_infinite(l);
-        if (infinite) g_light[0].kind = kVertexInfinite;
+        g_light[0].info = vertex_info(infinite ? kVertexInfinite : kVertexLight, st.light + 1u, false, true);
+        g_light[0].pdf_fwd = st.pmf * st.e.pdf_pos;
         Aov unused = kNoAov;
         n_light = random_walk(true, 1, st.o, st.e.d, kInfinity, st.beta, st.e.pdf_dir,
                               kBdptMaxSegments, s, unused);
@@ -333,7 +335,7 @@ vec3 bdpt_sample(uvec2 pixel, inout SamplerState s, inout Aov aov) {
     for (int t = 2; t <= n_camera; ++t) {
         int k_end = min(n_light, kBdptMaxSegments + 1 - t);
         Vertex pt = g_camera[t - 1];
-        if (k_end < 2 || !pt.connectible) continue;
+        if (k_end < 2 || !vertex_connectible(pt)) continue;
         Vertex pt_minus = camera_point(t - 2);
         VertexBsdf pt_bsdf = vertex_bsdf(pt);
         for (int k = 2; k <= k_end; ++k) {

@@ -45,32 +45,31 @@ void main() {
     Aov aov = kNoAov;
     int n_camera = random_walk(false, 1, c.o, c.d, c.t_max, vec3(1.0), camera_pdf_dir(c.d, c.time),
                                kBdptMaxSegments + 1, s, aov);
-    if (g_camera[n_camera - 1].kind == kVertexInfinite) n_camera -= 1;   // join its last surface vertex
+    if (vertex_kind(g_camera[n_camera - 1]) == kVertexInfinite) n_camera -= 1;   // join its last surface vertex
     LightPathStart st = light_path_start(s);
     results[i] = vec4(0.0);
     if (!st.valid) return;
     LightData l = scene_light(st.light);
     g_light[0] = vertex_point(kVertexLight, st.e.p, light_is_area(l) ? st.e.n : vec3(0.0), vec3(1.0));
-    g_light[0].light = st.light + 1u;
-    if (light_is_infinite(l)) g_light[0].kind = kVertexInfinite;
+    g_light[0].info = vertex_info(light_is_infinite(l) ? kVertexInfinite : kVertexLight, st.light + 1u, false, true);
     int n_light = random_walk(true, 1, st.o, st.e.d, kInfinity, st.beta, st.e.pdf_dir,
                               kBdptMaxSegments, s, aov);
     // the whole path, if its two ends can be joined and it is not too long
     int k = n_light + n_camera;
     if (k - 1 > kBdptMaxSegments || k < 3) return;
-    if (!g_light[n_light - 1].connectible || !g_camera[n_camera - 1].connectible) return;
+    if (!vertex_connectible(g_light[n_light - 1]) || !vertex_connectible(g_camera[n_camera - 1])) return;
     for (int j = 0; j < k; ++j) g_path[j] = j < n_light ? g_light[j] : g_camera[k - 1 - j];
-    g_path[n_light - 1].delta = false;   // the joined ends were not scattered toward each other
-    g_path[n_light].delta = false;
+    vertex_set_delta(g_path[n_light - 1], false);   // the joined ends were not scattered toward each other
+    vertex_set_delta(g_path[n_light], false);
     bool any_delta = false;
     for (int j = 0; j < k; ++j) {
-        any_delta = any_delta || g_path[j].delta || !g_path[j].connectible;
+        any_delta = any_delta || vertex_delta(g_path[j]) || !vertex_connectible(g_path[j]);
         if (j == 0) g_p_light[j] = vertex_pdf_light_origin(g_path[0], g_path[1]);
         else if (j == 1) g_p_light[j] = vertex_pdf_light(g_path[0], g_path[1]);
-        else g_p_light[j] = g_path[j - 1].delta ? 0.0 : vertex_pdf(g_path[j - 1], g_path[j - 2], g_path[j]);
+        else g_p_light[j] = vertex_delta(g_path[j - 1]) ? 0.0 : vertex_pdf(g_path[j - 1], g_path[j - 2], g_path[j]);
         if (j == k - 1) g_p_camera[j] = 0.0;
         else if (j == k - 2) g_p_camera[j] = vertex_pdf(g_path[k - 1], g_path[k - 1], g_path[j]);
-        else g_p_camera[j] = g_path[j + 1].delta ? 0.0 : vertex_pdf(g_path[j + 1], g_path[j + 2], g_path[j]);
+        else g_p_camera[j] = vertex_delta(g_path[j + 1]) ? 0.0 : vertex_pdf(g_path[j + 1], g_path[j + 2], g_path[j]);
     }
     bool delta_light = light_is_delta(g_path[0]);
     float sum = 0.0;
@@ -78,10 +77,10 @@ void main() {
     for (int sl = 0; sl < k; ++sl) {
         int t = k - sl;
         bool valid;
-        if (sl == 0) valid = !delta_light && g_path[0].light != 0u &&
+        if (sl == 0) valid = !delta_light && vertex_light(g_path[0]) != 0u &&
                              (light_is_area(l) || light_is_infinite(l));
-        else valid = !(sl == 1 && t == 1) && !g_path[sl - 1].delta && !g_path[sl].delta &&
-                     g_path[sl - 1].connectible && g_path[sl].connectible &&
+        else valid = !(sl == 1 && t == 1) && !vertex_delta(g_path[sl - 1]) && !vertex_delta(g_path[sl]) &&
+                     vertex_connectible(g_path[sl - 1]) && vertex_connectible(g_path[sl]) &&
                      !(t == 1 && sl < 2);
         if (!valid) continue;
         for (int j = 0; j < sl; ++j) {
@@ -95,7 +94,7 @@ void main() {
             g_camera[j].pdf_rev = g_p_light[k - 1 - j];
         }
         // the light's point, reached by the camera (a light at infinity stays one)
-        if (sl == 0 && !light_is_infinite(l)) g_camera[t - 1].kind = kVertexSurface;
+        if (sl == 0 && !light_is_infinite(l)) vertex_set_kind(g_camera[t - 1], kVertexSurface);
         bdpt_mis_prepare(t, sl);
         sum += bdpt_mis_weight(sl, t);
         strategies += 1;
