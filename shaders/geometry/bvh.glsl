@@ -133,20 +133,22 @@ bool bvh_traverse(uint root, vec3 o, vec3 d, float t_max, const bool any_hit, ou
         // One triangle of the current leaf ...
         if (leaf_count > 0u) {
             int base = int(leaf_first) * kBvhTexelsPerTriangle;
-            float t;
-            vec2 bary;
-            bool solid = intersect_triangle_watertight(tri_ray, texelFetch(u_bvh_triangles, base).xyz,
-                                                       texelFetch(u_bvh_triangles, base + 1).xyz,
-                                                       texelFetch(u_bvh_triangles, base + 2).xyz,
-                                                       hit.t, t, bary);
+            vec4 uvwt;
+            if (watertight_candidate(tri_ray, texelFetch(u_bvh_triangles, base).xyz,
+                                     texelFetch(u_bvh_triangles, base + 1).xyz,
+                                     texelFetch(u_bvh_triangles, base + 2).xyz, hit.t, uvwt)) {
+                float t;
+                vec2 bary;
+                bool solid = watertight_resolve(uvwt, hit.t, t, bary);
 #ifdef GLRENDER_ALPHA_CUTOUTS
-            solid = solid && bvh_alpha_pass(leaf_first, bary);
+                solid = solid && bvh_alpha_pass(leaf_first, bary);
 #endif
-            if (solid) {
-                hit = BvhHit(t, leaf_first, bary);
-                found = true;
-                if (any_hit) {
-                    return true;
+                if (solid) {
+                    hit = BvhHit(t, leaf_first, bary);
+                    found = true;
+                    if (any_hit) {
+                        return true;
+                    }
                 }
             }
             leaf_first++;
