@@ -12,11 +12,11 @@ texel 2      per child (byte k = child k): q_lo.x, q_hi.x, q_lo.y, q_hi.y
 texel 3      q_lo.z, q_hi.z, 0, 0
 ===========  ===============================================================
 
-A plane decodes as ``p + q * 2^e`` with ``q`` in 0..255: ``q * 2^e`` is exact,
-so the decoded value is one float32 addition, which this module reproduces in
-numpy to round every plane outwards: the decoded box always contains the child's
-float box, and the slab test stays as conservative as with float boxes
-(watertight traversal is kept). Empty slots decode to an inverted box
+A plane decodes as ``p + q * 2^e`` with ``q`` in 0..255: ``q * 2^e`` is exact.
+Every plane is rounded outwards so that the exact real ``p + q * 2^e`` (which the
+traversal's fused slab test, geometry/bvh.glsl, works from) and so also its
+float32 rounding contain the child's float box, and the slab test stays as
+conservative as with float boxes (watertight traversal is kept). Empty slots decode to an inverted box
 (``q_lo = 255 > q_hi = 0``) that no ray can enter.
 """
 from __future__ import annotations
@@ -56,6 +56,22 @@ def _per_child(node_values: np.ndarray) -> np.ndarray:
     return np.repeat(node_values[:, None, :], 4, axis=1)
 
 
+def exact_sign(p: np.ndarray, qs: np.ndarray, bound: np.ndarray) -> np.ndarray:
+    """Sign of the exact real ``p + qs - bound`` for float32 arrays (qs = q * 2^e, exact).
+
+    The float64 sum x is exact or off by the two-sum error r (Knuth), itself exact:
+    ``p + qs = x + r``. A plane contained by this test is contained both as the exact
+    real the traversal's fused decode uses and as its float32 rounding (rounding is
+    monotonic and ``bound`` is a float32).
+    """
+    a, b = p.astype(np.float64), qs.astype(np.float64)
+    x = a + b
+    bb = x - a
+    r = (a - (x - bb)) + (b - bb)
+    c = bound.astype(np.float64)
+    return np.where(x != c, np.sign(x - c), np.sign(r))
+
+
 def quantize_planes(lo: np.ndarray, hi: np.ndarray, valid: np.ndarray,
                     origin: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Outward-rounded 8-bit planes of boxes ``lo``/``hi`` (N, 4, 3) in their node's grid."""
@@ -70,9 +86,9 @@ def quantize_planes(lo: np.ndarray, hi: np.ndarray, valid: np.ndarray,
         qhi = np.ceil((hi.astype(np.float64) - p) * inv)
     qlo = np.clip(np.where(valid3, qlo, 255), 0, 255).astype(np.float32)
     qhi = np.clip(np.where(valid3, qhi, 0), 0, 255).astype(np.float32)
-    for _ in range(_MAX_FIX_STEPS):  # fix float32 rounding of the decode, outwards
-        over = valid3 & ((p + qlo * s) > lo)
-        under = valid3 & ((p + qhi * s) < hi)
+    for _ in range(_MAX_FIX_STEPS):  # fix rounding, outwards: the exact planes contain the box
+        over = valid3 & (exact_sign(p, qlo * s, lo) > 0)
+        under = valid3 & (exact_sign(p, qhi * s, hi) < 0)
         if not (over.any() or under.any()):
             break
         qlo = np.where(over, qlo - 1, qlo)

@@ -52,29 +52,51 @@ vec3 bvh_triangle_vertex(uint prim, uint k) {
     return texelFetch(u_bvh_triangles, int(prim) * kBvhTexelsPerTriangle + int(k)).xyz;
 }
 
-// The four 8-bit planes in word w (byte k = child k) decoded as p + q * scale.
-vec4 bvh_decode_planes(uint w, float p, float scale) {
-    return p + vec4((uvec4(w) >> uvec4(0u, 8u, 16u, 24u)) & 255u) * scale;
+// The four 8-bit planes in word w (byte k = child k) as floats 0..255 (the
+// bytes are below 2^31, so the signed conversion is exact: one instruction on
+// AVX2, which has no unsigned one).
+vec4 bvh_plane_bytes(uint w) {
+    return vec4(ivec4(w & 255u, (w >> 8u) & 255u, (w >> 16u) & 255u, w >> 24u));
 }
 
 // Entry distances of the ray into the four children of a node (+inf: missed or
 // beyond t_max), and the children's references.
+//
+// A plane p + q s (q = 0..255, s = 2^e) meets the ray at t = (p + q s - o) / d =
+// q (s / d) + (p - o) / d: per node and axis a = s * inv_d (exact: s is a power of
+// two) and b = (p - o) * inv_d (two roundings), then one fused multiply-add per
+// plane. Unlike (plane - o) * inv_d, whose rounding is relative to the result (the
+// far factor kRobustFar covers it), b's error is relative to b, and an unfused
+// q * a would add one relative to q a <= 255 |a|: the near planes take b - pad and
+// the far planes b + pad, pad = 5 ulp(1) (|b| + 255 |a|) > those errors and the
+// subtraction's, so before the last rounding the near distance never exceeds the
+// exact one and the far distance never falls short of it; kRobustFar covers the
+// last rounding as before: no box the ray touches is rejected. The planes are
+// exact reals p + q s that contain the child boxes (glrender/accel/quantize.py).
 vec4 bvh_node_entry(SlabRay r, uint node, float t_max, out uvec4 child) {
+    const float kPlaneError = 5.0 * kMachineEpsilon;
+    const float kRobustFar = 1.0 + 2.0 * 3.0 * kMachineEpsilon / (1.0 - 3.0 * kMachineEpsilon) + 1e-7;
     int base = int(node) * kBvhTexelsPerNode;
     uvec4 head = texelFetch(u_bvh_nodes, base);
     child = texelFetch(u_bvh_nodes, base + 1);
     uvec4 xy = texelFetch(u_bvh_nodes, base + 2);  // lo.x, hi.x, lo.y, hi.y
     uvec2 z = texelFetch(u_bvh_nodes, base + 3).xy;  // lo.z, hi.z
-    vec3 p = uintBitsToFloat(head.xyz);
     vec3 scale = uintBitsToFloat(((uvec3(head.w) >> uvec3(0u, 8u, 16u)) & 255u) << 23u);
+    vec3 a = scale * r.inv_d;
+    vec3 b = (uintBitsToFloat(head.xyz) - r.o) * r.inv_d;
+    vec3 pad = (abs(b) + 255.0 * abs(a)) * kPlaneError;
+    vec3 bn = b - pad;
+    vec3 bf = b + pad;
     // The near plane of an axis is its min plane unless the ray runs towards -axis.
-    return slab_entry4(r,
-                       bvh_decode_planes(r.neg.x ? xy.y : xy.x, p.x, scale.x),
-                       bvh_decode_planes(r.neg.x ? xy.x : xy.y, p.x, scale.x),
-                       bvh_decode_planes(r.neg.y ? xy.w : xy.z, p.y, scale.y),
-                       bvh_decode_planes(r.neg.y ? xy.z : xy.w, p.y, scale.y),
-                       bvh_decode_planes(r.neg.z ? z.y : z.x, p.z, scale.z),
-                       bvh_decode_planes(r.neg.z ? z.x : z.y, p.z, scale.z), t_max);
+    vec4 nx = fma(bvh_plane_bytes(r.neg.x ? xy.y : xy.x), vec4(a.x), vec4(bn.x));
+    vec4 fx = fma(bvh_plane_bytes(r.neg.x ? xy.x : xy.y), vec4(a.x), vec4(bf.x));
+    vec4 ny = fma(bvh_plane_bytes(r.neg.y ? xy.w : xy.z), vec4(a.y), vec4(bn.y));
+    vec4 fy = fma(bvh_plane_bytes(r.neg.y ? xy.z : xy.w), vec4(a.y), vec4(bf.y));
+    vec4 nz = fma(bvh_plane_bytes(r.neg.z ? z.y : z.x), vec4(a.z), vec4(bn.z));
+    vec4 fz = fma(bvh_plane_bytes(r.neg.z ? z.x : z.y), vec4(a.z), vec4(bf.z));
+    vec4 tn = max(max(nx, ny), max(nz, vec4(0.0)));
+    vec4 tf = min(min(min(fx, fy), fz) * kRobustFar, vec4(t_max));
+    return mix(vec4(kInfinity), tn, lessThanEqual(tn, tf));
 }
 
 // Compare-exchange of (t, ref) pairs: afterwards ta <= tb.
@@ -111,20 +133,22 @@ bool bvh_traverse(uint root, vec3 o, vec3 d, float t_max, const bool any_hit, ou
         // One triangle of the current leaf ...
         if (leaf_count > 0u) {
             int base = int(leaf_first) * kBvhTexelsPerTriangle;
-            float t;
-            vec2 bary;
-            bool solid = intersect_triangle_watertight(tri_ray, texelFetch(u_bvh_triangles, base).xyz,
-                                                       texelFetch(u_bvh_triangles, base + 1).xyz,
-                                                       texelFetch(u_bvh_triangles, base + 2).xyz,
-                                                       hit.t, t, bary);
+            vec4 uvwt;
+            if (watertight_candidate(tri_ray, texelFetch(u_bvh_triangles, base).xyz,
+                                     texelFetch(u_bvh_triangles, base + 1).xyz,
+                                     texelFetch(u_bvh_triangles, base + 2).xyz, hit.t, uvwt)) {
+                float t;
+                vec2 bary;
+                bool solid = watertight_resolve(uvwt, hit.t, t, bary);
 #ifdef GLRENDER_ALPHA_CUTOUTS
-            solid = solid && bvh_alpha_pass(leaf_first, bary);
+                solid = solid && bvh_alpha_pass(leaf_first, bary);
 #endif
-            if (solid) {
-                hit = BvhHit(t, leaf_first, bary);
-                found = true;
-                if (any_hit) {
-                    return true;
+                if (solid) {
+                    hit = BvhHit(t, leaf_first, bary);
+                    found = true;
+                    if (any_hit) {
+                        return true;
+                    }
                 }
             }
             leaf_first++;

@@ -39,28 +39,33 @@ vec3 watertight_vertex(WatertightRay r, vec3 p) {
     return vec3(x, y, r.shear.z * az);
 }
 
-// Intersects the ray with triangle (v0, v1, v2), both faces.
-// Returns true for a hit at distance t in (0, t_max); bary = barycentrics (b1, b2)
-// of v1 and v2 (the hit point is (1 - b1 - b2) v0 + b1 v1 + b2 v2).
-bool intersect_triangle_watertight(WatertightRay r, vec3 v0, vec3 v1, vec3 v2, float t_max,
-                                   out float t, out vec2 bary) {
+// Intersects the ray with triangle (v0, v1, v2), both faces, in two steps so that
+// the division runs only for candidates: watertight_candidate tests the edge
+// functions and the distance against (0, t_max) scaled by the determinant, and
+// returns (u, v, w, t det) of a candidate; watertight_resolve divides. A hit is a
+// candidate that resolve accepts: distance t in (0, t_max), bary = barycentrics
+// (b1, b2) of v1 and v2 (the hit point is (1 - b1 - b2) v0 + b1 v1 + b2 v2).
+bool watertight_candidate(WatertightRay r, vec3 v0, vec3 v1, vec3 v2, float t_max,
+                          out vec4 uvwt) {
     vec3 a = watertight_vertex(r, v0);
     vec3 b = watertight_vertex(r, v1);
     vec3 c = watertight_vertex(r, v2);
     precise float u = c.x * b.y - c.y * b.x;
     precise float v = a.x * c.y - a.y * c.x;
     precise float w = b.x * a.y - b.y * a.x;
-    t = 0.0;
-    bary = vec2(0.0);
-    if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) {
-        return false;
-    }
     float det = u + v + w;
-    if (det == 0.0) {
-        return false;
-    }
-    float inv_det = 1.0 / det;
-    t = (u * a.z + v * b.z + w * c.z) * inv_det;
-    bary = vec2(v, w) * inv_det;
+    float t_det = u * a.z + v * b.z + w * c.z;
+    uvwt = vec4(u, v, w, t_det);
+    bool inside = !((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0));
+    // t = t_det / det in (0, t_max), by the sign of det (det == 0 fails both)
+    float limit = t_max * det;
+    return inside && (det > 0.0 ? (t_det > 0.0 && t_det < limit)
+                                : (det < 0.0 && t_det < 0.0 && t_det > limit));
+}
+
+bool watertight_resolve(vec4 uvwt, float t_max, out float t, out vec2 bary) {
+    float inv_det = 1.0 / (uvwt.x + uvwt.y + uvwt.z);
+    t = uvwt.w * inv_det;
+    bary = uvwt.yz * inv_det;
     return t > 0.0 && t < t_max;
 }

@@ -6,7 +6,7 @@ from bvh_reference import icosphere, load_mesh, random_soup
 from glrender.accel import build_bvh
 from glrender.accel.bvh import LEAF_COUNT_SHIFT, LEAF_FLAG, MAX_DEPTH
 from glrender.accel.collapse import KIND_EMPTY, KIND_INNER, KIND_LEAF, MAX_LEAF_SIZE
-from glrender.accel.quantize import TEXELS_PER_NODE, decode_planes, pack_nodes
+from glrender.accel.quantize import TEXELS_PER_NODE, decode_planes, exact_sign, pack_nodes
 
 METHODS = ["ploc", "binned_sah"]
 
@@ -148,6 +148,15 @@ def test07_quantized_boxes_contain_the_float_boxes(scale, offset):
     packed = pack_nodes(lo, hi, valid, refs)
     dlo, dhi = decode_planes(packed)
     assert np.all(dlo[valid] <= lo[valid]) and np.all(dhi[valid] >= hi[valid])
+    # ... and so do the exact reals p + q s the traversal's fused slab test works from
+    rec = packed.reshape(n, TEXELS_PER_NODE, 4)
+    p = np.broadcast_to(rec[:, None, 0, :3].view(np.float32), lo.shape)
+    e = np.stack([(rec[:, 0, 3] >> (8 * a)) & 255 for a in range(3)], axis=1).astype(np.int64) - 127
+    s = np.broadcast_to(np.ldexp(np.float32(1), e).astype(np.float32)[:, None, :], lo.shape)
+    words = np.stack([rec[:, 2, 0], rec[:, 2, 2], rec[:, 3, 0], rec[:, 2, 1], rec[:, 2, 3], rec[:, 3, 1]], 1)
+    q = np.stack([(words >> (8 * k)) & 255 for k in range(4)], axis=1).astype(np.float32)
+    assert np.all(exact_sign(p, q[..., :3] * s, lo)[valid] <= 0)
+    assert np.all(exact_sign(p, q[..., 3:] * s, hi)[valid] >= 0)
     assert np.all(np.any(dlo[~valid] > dhi[~valid], axis=-1))  # empty slots stay empty
     np.testing.assert_array_equal(packed.reshape(n, 4, 4)[:, 1], refs)
     # Not needlessly loose: each plane within 2 grid steps of the float plane.
