@@ -45,6 +45,8 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("log")
     ap.add_argument("--top", type=int, default=25, help="rows per table (default 25)")
+    ap.add_argument("--drop", default="", help="comma-separated defines (or 'generated'): how "
+                    "many programs would remain were they all not part of the source")
     args = ap.parse_args(argv)
     programs, dispatch = load(args.log)
     compile_s = sum(p["seconds"] for p in programs.values())
@@ -94,6 +96,26 @@ def main(argv: list[str] | None = None) -> int:
     print("\ndefines that vary within one entry point and slot set (distinct values):")
     for name, values in sorted(varying.items(), key=lambda kv: -len(kv[1]))[:args.top]:
         print(f"  {len(values):4d}  {name}")
+
+    # what each part of the key costs: the programs that would merge if it were not part of
+    # the source (a define turned into a parameter, or one kernel for all generated scenes)
+    def shape(p, drop):
+        defines = {k: v for k, v in p["defines"].items() if k not in drop}
+        generated = "" if "(generated scene code)" in drop else p["generated"]
+        return json.dumps([p["entry"], p["slots"], generated, defines], sort_keys=True)
+
+    parts = sorted(set().union(*(p["defines"] for p in programs.values())) | {"(generated scene code)"}) \
+        if programs else []
+    total = len({shape(p, ()) for p in programs.values()})
+    print(f"\nprograms saved if one part were not in the source (of {total}):")
+    saved = [(total - len({shape(p, {part}) for p in programs.values()}), part) for part in parts]
+    for n, part in sorted(saved, reverse=True)[:args.top]:
+        if n:
+            print(f"  {n:5d}  {part}")
+    if args.drop:
+        drop = {"(generated scene code)" if d == "generated" else d for d in args.drop.split(",")}
+        left = len({shape(p, drop) for p in programs.values()})
+        print(f"\nwithout {', '.join(sorted(drop))} in the source: {left} of {total} programs")
     return 0
 
 

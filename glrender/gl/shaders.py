@@ -272,8 +272,13 @@ def _describe(pre: Preprocessed, entry: str | None, name: str, defines, slots,
     generated = dict(library.generated) if library is not None else {}
     scene = hashlib.sha256(repr(sorted(generated.items())).encode()).hexdigest()[:16] \
         if generated else ""
+    # each generated file's blank-line separated blocks, hashed: which parts of the scene
+    # code (lights, materials, geometry) tell two programs apart
+    blocks = {path: [hashlib.sha256(b.encode()).hexdigest()[:8] for b in text.split("\n\n")]
+              for path, text in sorted(generated.items())}
     return {"entry": entry or name, "key": pre.key[:16], "defines": dict(defines or {}),
-            "slots": dict(slots or {}), "generated": scene, "lines": pre.source.count("\n")}
+            "slots": dict(slots or {}), "generated": scene, "generated_blocks": blocks,
+            "lines": pre.source.count("\n")}
 
 
 class ComputeKernel:
