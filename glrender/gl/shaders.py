@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import hashlib
 import importlib.resources
+import json
+import os
 import re
 import time
 from dataclasses import dataclass, field
@@ -242,14 +244,51 @@ def _raise_mapped(pre: Preprocessed, exc: Exception, stage: str):
 #: then, or loads it from its disk cache). The test suite prints these in its summary.
 COMPILE_STATS = {"programs": 0, "seconds": 0.0, "first_dispatch_seconds": 0.0}
 
+#: ``GLRENDER_SHADER_LOG=FILE`` appends one JSON line per program built (and one per compute
+#: kernel's first dispatch) to FILE, from every process that inherits the variable (the
+#: test suite's CLI subprocesses too): ``tools/shader_report.py FILE`` groups them by test
+#: and by kernel to show which tests build which programs.
+SHADER_LOG_ENV = "GLRENDER_SHADER_LOG"
+
+
+def _log_event(record: dict) -> None:
+    path = os.environ.get(SHADER_LOG_ENV)
+    if not path:
+        return
+    record = {"pid": os.getpid(), "test": os.environ.get("PYTEST_CURRENT_TEST", ""), **record}
+    line = (json.dumps(record, sort_keys=True, default=str) + "\n").encode()
+    fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+    try:
+        os.write(fd, line)   # one write of one line: lines of concurrent processes stay whole
+    finally:
+        os.close(fd)
+
+
+def _describe(pre: Preprocessed, entry: str | None, name: str, defines, slots,
+              library: ShaderLibrary | None) -> dict:
+    """What the shader log says about one program: its entry point, defines and slots,
+    the hash of its final source (``key``) and of its in-memory generated files (e.g. the
+    scene code the renderer writes), so programs that differ only there can be told apart."""
+    generated = dict(library.generated) if library is not None else {}
+    scene = hashlib.sha256(repr(sorted(generated.items())).encode()).hexdigest()[:16] \
+        if generated else ""
+    # each generated file's blank-line separated blocks, hashed: which parts of the scene
+    # code (lights, materials, geometry) tell two programs apart
+    blocks = {path: [hashlib.sha256(b.encode()).hexdigest()[:8] for b in text.split("\n\n")]
+              for path, text in sorted(generated.items())}
+    return {"entry": entry or name, "key": pre.key[:16], "defines": dict(defines or {}),
+            "slots": dict(slots or {}), "generated": scene, "generated_blocks": blocks,
+            "lines": pre.source.count("\n")}
+
 
 class ComputeKernel:
     """A compiled compute shader (moderngl's, every attribute passed through) whose first
     ``run`` waits for the device and adds its time to ``COMPILE_STATS``."""
 
-    def __init__(self, program: moderngl.ComputeShader):
+    def __init__(self, program: moderngl.ComputeShader, key: str = ""):
         self._program = program
         self._first = True
+        self._key = key
 
     def run(self, *args, **kwargs):
         if not self._first:
@@ -258,7 +297,9 @@ class ComputeKernel:
         t0 = time.perf_counter()
         self._program.run(*args, **kwargs)
         self._program.ctx.finish()
-        COMPILE_STATS["first_dispatch_seconds"] += time.perf_counter() - t0
+        seconds = time.perf_counter() - t0
+        COMPILE_STATS["first_dispatch_seconds"] += seconds
+        _log_event({"event": "first_dispatch", "key": self._key, "seconds": round(seconds, 4)})
 
     def __getattr__(self, name):
         return getattr(self._program, name)
@@ -270,13 +311,16 @@ class ComputeKernel:
         self._program[name] = value
 
 
-def _timed_build(build):
+def _timed_build(build, describe=None):
     t0 = time.perf_counter()
     try:
         return build()
     finally:
+        seconds = time.perf_counter() - t0
         COMPILE_STATS["programs"] += 1
-        COMPILE_STATS["seconds"] += time.perf_counter() - t0
+        COMPILE_STATS["seconds"] += seconds
+        if describe is not None and os.environ.get(SHADER_LOG_ENV):
+            _log_event({"event": "compile", "seconds": round(seconds, 4), **describe()})
 
 
 def _cache_of(ctx) -> dict:
@@ -299,7 +343,10 @@ def compile_compute(ctx, entry: str | None = None, *, source: str | None = None,
     program = cache.get(pre.key)
     if program is None:
         try:
-            program = ComputeKernel(_timed_build(lambda: gl.compute_shader(pre.source)))
+            program = ComputeKernel(
+                _timed_build(lambda: gl.compute_shader(pre.source),
+                             lambda: _describe(pre, entry, name, defines, slots, library)),
+                pre.key[:16])
         except moderngl.Error as exc:
             _raise_mapped(pre, exc, "compute shader compile")
         cache[pre.key] = program
@@ -318,8 +365,11 @@ def compile_program(ctx, vertex: str, fragment: str, *,
     program = cache.get(key)
     if program is None:
         try:
-            program = _timed_build(lambda: gl.program(vertex_shader=vs.source,
-                                                      fragment_shader=fs.source))
+            program = _timed_build(
+                lambda: gl.program(vertex_shader=vs.source, fragment_shader=fs.source),
+                lambda: {"entry": f"{vertex} + {fragment}", "key": key[:16],
+                         "defines": dict(defines or {}), "slots": {}, "generated": "",
+                         "lines": vs.source.count("\n") + fs.source.count("\n")})
         except moderngl.Error as exc:
             text = str(exc)
             _raise_mapped(fs if "fragment_shader" in text else vs, exc, "program link")

@@ -23,16 +23,21 @@ GatherPoint gather_point(SurfaceHit hit, Bsdf b, vec3 d) {
     return GatherPoint(hit.p, hit.ng, b, frame, frame_to_local(frame, -d));
 }
 
-// One gather ray from g (camera segments to g: `segments`): the global map's estimate at
-// the first non-delta surface it reaches, times the path's BSDF weights.
-vec3 final_gather(GatherPoint g, SurfaceHit hit, float time, int segments, int max_segments,
-                  inout SamplerState s) {
+// One gather ray from g (camera segments to g: `segments`): true when it reaches a
+// non-delta surface, its gather point in `at`, the camera segments to it in `at_segments`
+// and the path's BSDF weights from g to it in `weight` (the global map's estimate there,
+// times `weight`, is the gather's contribution).
+bool final_gather(GatherPoint g, SurfaceHit hit, float time, int segments, int max_segments,
+                  inout SamplerState s, out GatherPoint at, out int at_segments, out vec3 weight) {
+    at = g;
+    at_segments = 0;
+    weight = vec3(0.0);
     vec2 u_lobe = sampler_2d(s);
     vec2 u_bsdf = sampler_2d(s);
     BsdfSample bs = bsdf_sample(g.b, g.wo_l, u_lobe.x, u_bsdf, false);
-    if (!bs.valid) return vec3(0.0);
+    if (!bs.valid) return false;
     vec3 d = frame_from_local(g.frame, bs.wi);
-    if (dot(d, hit.ng) * bs.wi.z <= 0.0) return vec3(0.0);
+    if (dot(d, hit.ng) * bs.wi.z <= 0.0) return false;
     vec3 beta = bs.weight, o = offset_ray_origin(hit.p, hit.ng, d);
     for (int k = segments + 1; k < max_segments; ++k) {
         LOOP_TICK();
@@ -40,8 +45,10 @@ vec3 final_gather(GatherPoint g, SurfaceHit hit, float time, int segments, int m
         if (!scene_intersect(o, d, kInfinity, time, h)) break;
         Bsdf b = bsdf_from_material(h.material, h.uv);
         if (!bsdf_is_delta(b)) {
-            uint all_types = (1u << kPhotonDirect) | (1u << kPhotonCaustic) | (1u << kPhotonIndirect);
-            return beta * photon_estimate(kGlobalMap, gather_point(h, b, d), all_types, max_segments - k);
+            at = gather_point(h, b, d);
+            at_segments = k;
+            weight = beta;
+            return true;
         }
         Frame frame = shading_frame(h);
         bsdf_normal_frame(b, h.ns0, frame);
@@ -49,7 +56,7 @@ vec3 final_gather(GatherPoint g, SurfaceHit hit, float time, int segments, int m
         vec2 u_d = sampler_2d(s);
         if (!continue_camera_path(h, b, frame, frame_to_local(frame, -d), u_l.x, u_d, beta, o, d)) break;
     }
-    return vec3(0.0);
+    return false;
 }
 
 vec3 integrator_li(vec3 o, vec3 d, float t_max, float time, inout SamplerState s, inout Aov aov) {
@@ -84,9 +91,26 @@ vec3 integrator_li(vec3 o, vec3 d, float t_max, float time, inout SamplerState s
                 types |= 1u << kPhotonDirect;   // direct light from the photons too (tests)
             else
                 L += beta * next_event(hit.p, hit, b, g.frame, g.wo_l, time, u_choice.x, u_light, false);
-            L += beta * photon_estimate(kCausticMap, g, 1u << kPhotonCaustic, max_segments - segments);
-            if (types != 0u) L += beta * photon_estimate(kGlobalMap, g, types, max_segments - segments);
-            if (gather) L += beta * final_gather(g, hit, time, segments, max_segments, s);
+            GatherPoint g_gather;
+            int gather_segments;
+            vec3 gather_weight;
+            bool gathered = gather && final_gather(g, hit, time, segments, max_segments, s,
+                                                   g_gather, gather_segments, gather_weight);
+            // The lookups, in this order: caustics at x, the global map at x, the global map
+            // where the gather ray ends (every photon type). One call of photon_estimate in
+            // a loop: GLSL functions are inlined at each call, and each copy of the lookup
+            // (its kNN heap, two BSDF evaluations) added ~15 s of llvmpipe code generation.
+            uint all_types = (1u << kPhotonDirect) | (1u << kPhotonCaustic) | (1u << kPhotonIndirect);
+            int lookups = gathered ? 3 : 2;
+            for (int j = 0; j < lookups; ++j) {
+                if (j == 1 && types == 0u) continue;
+                bool at_gather = j == 2;
+                vec3 est = photon_estimate(j == 0 ? kCausticMap : kGlobalMap,
+                                           at_gather ? g_gather : g,
+                                           j == 0 ? 1u << kPhotonCaustic : (at_gather ? all_types : types),
+                                           max_segments - (at_gather ? gather_segments : segments));
+                L += beta * (at_gather ? gather_weight * est : est);
+            }
             break;
         }
         if (!continue_camera_path(hit, b, g.frame, g.wo_l, u_choice.y, u_bsdf, beta, o, d)) break;

@@ -124,3 +124,34 @@ def test13_packaged_shaders_found_without_cwd(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     lib = ShaderLibrary()
     assert lib.find("common/constants.glsl") is not None
+
+
+def test14_shader_log_records_each_program_and_its_first_dispatch(gl_ctx, tmp_path, monkeypatch):
+    """GLRENDER_SHADER_LOG: one compile line per program built (not for a cached one), one
+    line per first dispatch, each naming the test; tools/shader_report.py reads them."""
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    log = tmp_path / "shaders.jsonl"
+    monkeypatch.setenv("GLRENDER_SHADER_LOG", str(log))
+    lib = ShaderLibrary().with_generated({"generated/t.glsl": "// scene A\n\nconst float kT = 1.0;"})
+    src = entry('#include "generated/t.glsl"\n// test14 shader log')
+    a = compile_compute(gl_ctx, source=src, defines={"T14": 1}, library=lib)
+    compile_compute(gl_ctx, source=src, defines={"T14": 1}, library=lib)       # cached
+    compile_compute(gl_ctx, source=src, defines={"T14": 2}, library=lib)
+    a.run(1)
+    a.run(1)
+    records = [json.loads(line) for line in log.read_text().splitlines()]
+    compiles = [r for r in records if r["event"] == "compile"]
+    dispatches = [r for r in records if r["event"] == "first_dispatch"]
+    assert [r["defines"] for r in compiles] == [{"T14": 1}, {"T14": 2}]
+    assert len({r["key"] for r in compiles}) == 2 and compiles[0]["generated"]
+    assert len(compiles[0]["generated_blocks"]["generated/t.glsl"]) == 2
+    assert all("test14_shader_log" in r["test"] and r["seconds"] >= 0 for r in records)
+    assert [r["key"] for r in dispatches] == [compiles[0]["key"]]
+    report = subprocess.run([sys.executable, str(Path(__file__).parents[2] / "tools" / "shader_report.py"),
+                             str(log), "--drop", "T14"], capture_output=True, text=True, check=True)
+    assert report.stdout.startswith("2 distinct programs:")
+    assert "without T14 in the source: 1 of 2 programs" in report.stdout
