@@ -175,7 +175,7 @@ def _mesh_box(packed: PackedScene):
         points.append(np.stack([lo, hi]))
     if not points:
         return None
-    lo, hi = point_bounds(np.concatenate(points) if len(points) > 1 else points[0])
+    lo, hi = point_bounds(np.concatenate(points))
     pad = 1e-5 * (np.abs(lo) + np.abs(hi) + (hi - lo)) + 1e-30
     return lo - pad, hi + pad
 

@@ -266,23 +266,6 @@ def _fresnel_diffuse_reflectance(eta: float) -> float:
     return 0.919317 + x * (-3.4793 + x * (6.75335 + x * (-7.80989 + x * (4.98554 + x * -1.36881))))
 
 
-def _face_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
-    """(T, 3) cross products ``(p1 - p0) x (p2 - p0)`` of triangles ``f`` over vertices ``v``:
-    np.cross's values from contiguous per-axis gathers (half its time on (T, 3, 3) corners)."""
-    columns, corners = np.ascontiguousarray(v.T), np.ascontiguousarray(f.T)
-    e1, e2 = [], []
-    for axis in range(3):
-        p = np.take(columns[axis], corners)             # (3, T): this axis of each corner
-        e1.append(p[1] - p[0])
-        e2.append(p[2] - p[0])
-    out = np.empty((len(f), 3))
-    for k in range(3):
-        i, j = (k + 1) % 3, (k + 2) % 3
-        np.multiply(e1[i], e2[j], out=out[:, k])
-        out[:, k] -= e1[j] * e2[i]
-    return out
-
-
 def _transform_mesh(shape: m.Shape, where: str):
     v = np.asarray(shape.vertices, np.float64)
     f = np.asarray(shape.triangles, np.int64)
@@ -301,7 +284,7 @@ def _transform_mesh(shape: m.Shape, where: str):
         f = f[:, [0, 2, 1]]
     # np.take gathers rows 2-3x faster than indexing with an index array (numpy 2.x)
     tri = np.take(wv, f, axis=0)                         # (T, 3, 3)
-    ng = _face_normals(wv, f)
+    ng = np.stack(m.face_normals(m.triangle_edges(wv, f)), axis=1)
     length = np.linalg.norm(ng, axis=1)
     keep = length > 0
     ng = ng / np.where(length > 0, length, 1)[:, None]

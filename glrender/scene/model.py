@@ -93,6 +93,23 @@ def point_bounds(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             np.array([p[:, k].max() for k in range(3)], p.dtype))
 
 
+def triangle_edges(vertices: np.ndarray, triangles: np.ndarray) -> list[list[np.ndarray]]:
+    """Edge vectors ``e_k = p_{k+1} - p_k`` (indices mod 3) of every triangle as three
+    [x, y, z] lists of (T,) arrays: gathers from the vertex columns, never a (T, 3, 3)
+    array (its gather and strided reads cost twice as much)."""
+    columns = np.ascontiguousarray(np.asarray(vertices).T)
+    corners = np.ascontiguousarray(np.asarray(triangles).T)
+    c = [[np.take(columns[axis], corners[k]) for axis in range(3)] for k in range(3)]
+    return [[c[(k + 1) % 3][a] - c[k][a] for a in range(3)] for k in range(3)]
+
+
+def face_normals(edges: list[list[np.ndarray]]) -> list[np.ndarray]:
+    """The unnormalized face normals ``(p1 - p0) x (p2 - p0)`` from :func:`triangle_edges`,
+    as an [x, y, z] list (p2 - p0 is -e_2, exactly)."""
+    a, b = edges[0], [-x for x in edges[2]]
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
 def transform_points(m: np.ndarray, p: np.ndarray) -> np.ndarray:
     p = np.asarray(p, np.float64)
     out: np.ndarray

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import SceneError
+from .. import model as m
 from .diagnostics import warn
 
 
@@ -23,23 +24,6 @@ class MeshData:
     uvs: np.ndarray | None = None
 
 
-def _corners(v: np.ndarray, f: np.ndarray) -> list[np.ndarray]:
-    """The corners of every triangle as nine (T,) arrays, ``[x0, y0, z0, x1, ...]``: gathers
-    from the vertex columns, never a (T, 3, 3) array (its gather and strided reads cost
-    twice as much)."""
-    columns, corners = np.ascontiguousarray(v.T), np.ascontiguousarray(f.T)
-    return [np.take(columns[axis], corners[k]) for k in range(3) for axis in range(3)]
-
-
-def _edges(c: list[np.ndarray]) -> list[list[np.ndarray]]:
-    """Edge vectors ``e_k = p_{k+1} - p_k`` (indices mod 3) as three [x, y, z] lists."""
-    return [[c[3 * ((k + 1) % 3) + a] - c[3 * k + a] for a in range(3)] for k in range(3)]
-
-
-def _cross(a: list[np.ndarray], b: list[np.ndarray]) -> list[np.ndarray]:
-    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-
-
 def _length(x: list[np.ndarray]) -> np.ndarray:
     return np.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
 
@@ -49,13 +33,13 @@ def vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     face at the vertex (Thürmer and Wüthrich 1998), normalized; 0 where undefined."""
     v = np.asarray(vertices, np.float64).reshape(-1, 3)
     f = np.asarray(triangles, np.int64).reshape(-1, 3)
-    e = _edges(_corners(v, f))
-    return _angle_weighted_normals(len(v), f, e, _cross(e[0], [-x for x in e[2]]))
+    e = m.triangle_edges(v, f)
+    return _angle_weighted_normals(len(v), f, e, m.face_normals(e))
 
 
 def _angle_weighted_normals(count: int, f: np.ndarray, e: list[list[np.ndarray]],
                             face_normal: list[np.ndarray]) -> np.ndarray:
-    """:func:`vertex_normals` from the triangles' edges ``e`` (:func:`_edges`) and their
+    """:func:`vertex_normals` from the triangles' edges ``e`` (``model.triangle_edges``) and their
     unnormalized face normals ``(p1 - p0) x (p2 - p0)``."""
     # divisions, not products with 1 / length, and dot products summed as np.einsum sums
     # them here ((x0 y0 + x2 y2) + x1 y1): the normals of the per-corner formulation bit
@@ -95,8 +79,8 @@ def finish_mesh(mesh: MeshData, source, compute_normals: bool = True) -> MeshDat
                          f"outside [0, {len(v)})")
     e = face_normal = None
     if len(f):
-        e = _edges(_corners(v, f))
-        face_normal = _cross(e[0], [-x for x in e[2]])
+        e = m.triangle_edges(v, f)
+        face_normal = m.face_normals(e)
         keep = _length(face_normal) > 0
         dropped = int(len(f) - np.count_nonzero(keep))
         if dropped:
