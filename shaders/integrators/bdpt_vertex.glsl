@@ -78,9 +78,6 @@ void vertex_set_light(inout Vertex v, uint light) { v.info = (v.info & 15u) | (l
 void vertex_set_delta(inout Vertex v, bool delta) {
     v.info = (v.info & ~kVertexDeltaBit) | (delta ? kVertexDeltaBit : 0u);
 }
-void vertex_set_connectible(inout Vertex v, bool connectible) {
-    v.info = (v.info & ~kVertexConnectibleBit) | (connectible ? kVertexConnectibleBit : 0u);
-}
 
 // Vertex's constructor argument ns0 (n), in scenes with a normal map's shadowing term only:
 // the others keep no copy of it in their subpaths.
