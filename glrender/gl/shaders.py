@@ -31,7 +31,7 @@ from typing import Iterable, Mapping
 
 import moderngl
 
-from ..errors import ShaderError
+from ..errors import ShaderError, UsageError
 
 _INCLUDE = re.compile(r'^\s*#\s*include\s+(?:"([^"]*)"|<([^>]*)>)\s*(?://.*)?$')
 _VERSION = re.compile(r"^\s*#\s*version\s+\d+")
@@ -257,7 +257,11 @@ def _log_event(record: dict) -> None:
         return
     record = {"pid": os.getpid(), "test": os.environ.get("PYTEST_CURRENT_TEST", ""), **record}
     line = (json.dumps(record, sort_keys=True, default=str) + "\n").encode()
-    fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+    except OSError as exc:
+        raise UsageError(f"{SHADER_LOG_ENV}={path}: cannot append to it "
+                         f"({exc.strerror or exc}); expected a writable file path") from None
     try:
         os.write(fd, line)   # one write of one line: lines of concurrent processes stay whole
     finally:

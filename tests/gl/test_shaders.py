@@ -4,7 +4,7 @@ import re
 import numpy as np
 import pytest
 
-from glrender.errors import ShaderError
+from glrender.errors import ShaderError, UsageError
 from glrender.gl.shaders import ShaderLibrary, compile_compute, format_define, preprocess
 
 ENTRY = """#version 450
@@ -155,3 +155,10 @@ def test14_shader_log_records_each_program_and_its_first_dispatch(gl_ctx, tmp_pa
                              str(log), "--drop", "T14"], capture_output=True, text=True, check=True)
     assert report.stdout.startswith("2 distinct programs:")
     assert "without T14 in the source: 1 of 2 programs" in report.stdout
+
+
+def test15_shader_log_path_that_cannot_be_written_is_a_clear_error(gl_ctx, tmp_path, monkeypatch):
+    log = tmp_path / "missing" / "shaders.jsonl"
+    monkeypatch.setenv("GLRENDER_SHADER_LOG", str(log))
+    with pytest.raises(UsageError, match=r"GLRENDER_SHADER_LOG=.*missing.*cannot append"):
+        compile_compute(gl_ctx, source=entry("// test15 shader log path"), defines={"T15": 1})
