@@ -19,6 +19,7 @@ SSBO_RECORDS = 15
 # bytes per pixel of the SPPM device buffers: position 16, shading 32, extra 32,
 # radiance 16, radius^2 4, deposits 16 (the grid adds 4 per listed cell and entry)
 BYTES_PER_PIXEL = 16 + 32 + 32 + 16 + 4 + 16
+WIDEST_PER_PIXEL = 32      # the largest of those: a slice of pixels fits one binding of it
 BYTES_PER_RECORD = 16      # a photon's emission record (tests, photon statistics)
 RECORD_HEADER_WORDS = 4    # counters before the records: skipped, visited, max visited, -
 
@@ -27,7 +28,7 @@ PHOTON_PARAMS = np.dtype([
     ("grid_size", "<u4", 4),   # cells xyz, hash table size
     ("grid_lo", "<f4", 4),     # corner xyz, cell edge
     ("options", "<u4", 4),     # deposit from segment, max segments, record emission, photon view
-    ("estimate", "<u4", 4),    # density kernel, -, -, -
+    ("estimate", "<u4", 4),    # density kernel, camera slice: first pixel row, rows; -
 ])
 assert PHOTON_PARAMS.itemsize == 80
 

@@ -14,6 +14,10 @@ and the image is L = Ld / n + tau / (n P pi r^2) after n iterations of P photons
 (pbrt-v3's SPPMIntegrator). The radius shrinks like n^((alpha - 1) / 2), so the bias
 (proportional to r^2) and the noise both vanish: the estimate is consistent.
 
+An image whose visible points exceed one storage-block binding runs each iteration in
+slices of pixel rows (a camera pass and the same photons per slice), and a slice whose
+grid exceeds a binding is traced grid by grid: the deposits are the one-slice image's.
+
 The scene is packed, uploaded and compiled by a :class:`Renderer` held inside (its
 scene buffers, parameter block and defines); only the photon kernels are compiled here.
 """
@@ -22,7 +26,7 @@ from __future__ import annotations
 import hashlib
 import math
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any, Callable
 
 import numpy as np
@@ -74,6 +78,23 @@ class SppmSettings:
         a = self.alpha
         if not (isinstance(a, (int, float)) and 0 < a < 1):
             raise UsageError(f"alpha: expected a number in (0, 1), got {a!r}")
+
+
+@dataclass
+class _Iteration:
+    """An SPPM iteration in progress: per slice of pixel rows a camera pass, then the
+    photons traced into each grid of the slice's visible points."""
+
+    index: int
+    slices: list[tuple[int, int]]
+    radiance: np.ndarray            # (N, 3): the camera passes' radiance
+    phi: np.ndarray                 # (N, 3): flux deposited
+    m: np.ndarray                   # (N,): photons counted
+    slice: int = 0                  # the slice in progress
+    grids: list[Any] = field(default_factory=list)   # its grids still to trace
+    prm: Any = None                 # the photon block of the grid in progress (None: none)
+    next_photon: int = 0
+    first_group: bool = True        # the photon-map view not drawn yet
 
 
 class SppmRenderer:
@@ -151,13 +172,32 @@ class SppmRenderer:
         self.photon_kernel.run(group_x=1)
         self.gl.finish()
 
+    def _binding_limit(self) -> int:
+        """Bytes one storage-block binding may hold on this device."""
+        return int(self.gl.info["GL_MAX_SHADER_STORAGE_BLOCK_SIZE"])
+
+    def slices(self) -> list[tuple[int, int]]:
+        """The image's pixel rows in slices (first row, rows) whose visible points fit one
+        storage-block binding of every per-pixel buffer (llvmpipe's 128 MiB: 4.2M pixels a
+        slice). An iteration runs a camera pass and a photon pass per slice: the same
+        photons (the same numbers) deposit into each slice's visible points, so the image
+        is the one-slice image up to the order of the float sums."""
+        per_row = pl.WIDEST_PER_PIXEL * self.width
+        rows = self._binding_limit() // per_row
+        if rows < 1:
+            raise UsageError(f"sppm: a {self.width}-pixel-wide image does not fit this device's "
+                             f"storage buffers ({self._binding_limit()} bytes a binding): render "
+                             f"fewer columns")
+        return [(y, min(rows, self.height - y)) for y in range(0, self.height, rows)]
+
     def _allocate(self) -> None:
-        gl, n = self.gl, self.width * self.height
-        limit = int(gl.info["GL_MAX_SHADER_STORAGE_BLOCK_SIZE"])
-        if 32 * n > limit:
-            raise UsageError(f"sppm: a {self.width}x{self.height} image needs {32 * n >> 20} MiB "
-                             f"storage buffers, above the device's {limit >> 20} MiB: render fewer "
-                             f"pixels")
+        gl = self.gl
+        n = max(rows for _, rows in self.slices()) * self.width    # pixels of the largest slice
+        if self.photon_view and 24 * self.width * self.height > self._binding_limit():
+            raise UsageError(f"sppm: the photons AOV of a {self.width}x{self.height} image needs "
+                             f"{24 * self.width * self.height >> 20} MiB, above the device's "
+                             f"{self._binding_limit() >> 20} MiB storage buffers: leave it out or "
+                             f"render fewer pixels")
         self._vp_position = gl.buffer(reserve=16 * n)
         self._vp_shading = gl.buffer(reserve=32 * n)
         self._vp_extra = gl.buffer(reserve=32 * n)
@@ -170,7 +210,7 @@ class SppmRenderer:
         self._records = gl.buffer(reserve=records)
         self._photon_params = gl.buffer(reserve=pl.PHOTON_PARAMS.itemsize)
         # the photon-map view: 64-bit fixed-point sums per pixel and channel (integrators/splat.glsl)
-        self._view = gl.buffer(reserve=24 * n if self.photon_view else 16)
+        self._view = gl.buffer(reserve=24 * self.width * self.height if self.photon_view else 16)
         self._view.clear()
         self._own = [self._view, self._vp_position, self._vp_shading, self._vp_extra, self._vp_radiance,
                      self._radius2, self._deposits, self._grid, self._records, self._photon_params]
@@ -185,6 +225,7 @@ class SppmRenderer:
         self.tau = np.zeros((n, 3), np.float64)
         self.ld_sum = np.zeros((n, 3), np.float64)
         self.counters = {"skipped": 0, "visited": 0, "max_visited": 0, "max_cell": 0}
+        self._work: _Iteration | None = None
         if getattr(self, "_view", None) is not None:
             self._view.clear()
 
@@ -228,86 +269,131 @@ class SppmRenderer:
         return prm
 
     @current
-    def camera_pass(self, iteration: int) -> tuple[np.ndarray, np.ndarray]:
-        """Runs the camera pass of ``iteration``: visible points' positions (N, 4: xyz and
-        camera segments, 0 for none) and the camera paths' radiance (N, 3)."""
+    def camera_pass(self, iteration: int, rows: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+        """Runs the camera pass of ``iteration`` over the pixel rows ``rows`` (first, count;
+        one of :meth:`slices`): the slice's visible points' positions (N, 4: xyz and camera
+        segments, 0 for none) and the camera paths' radiance (N, 3)."""
         prm = self.base._param_block(iteration, 1)
         self._bind()
         self.base._params.write(prm.tobytes())
-        self._photon_params.write(self._photon_block(iteration).tobytes())
-        self.camera_kernel.run(group_x=-(-self.width // 8), group_y=-(-self.height // 8))
+        photon = self._photon_block(iteration)
+        photon["estimate"][1:3] = rows
+        self._photon_params.write(photon.tobytes())
+        self.camera_kernel.run(group_x=-(-self.width // 8), group_y=-(-rows[1] // 8))
         self.gl.memory_barrier()
-        position = np.frombuffer(self._vp_position.read(), np.float32).reshape(-1, 4)
-        radiance = np.frombuffer(self._vp_radiance.read(), np.float32).reshape(-1, 4)[:, :3]
+        n = rows[1] * self.width
+        position = np.frombuffer(self._vp_position.read(16 * n), np.float32).reshape(-1, 4)
+        radiance = np.frombuffer(self._vp_radiance.read(16 * n), np.float32).reshape(-1, 4)[:, :3]
         return position, radiance
 
-    @current
-    def photon_pass(self, iteration: int, position: np.ndarray,
-                    should_stop: Callable[[], bool] | None = None) -> tuple[np.ndarray, np.ndarray] | None:
-        """Traces the photons of ``iteration`` into the visible points ``position`` (from
-        camera_pass): their flux Phi (N, 3) and photon counts M (N,); None if stopped."""
-        prm = self.begin_photons(iteration, position)
-        first = 0
-        while first < self.photons_per_iteration:
-            if first > 0 and should_stop is not None and should_stop():
-                return None
-            first = self.dispatch_photons(prm, first)
-        return self.end_photons()
+    def _grids(self, position: np.ndarray, first: int) -> list[Any]:
+        """Hash grids over a slice's visible points (``first``: the slice's first pixel),
+        each within one storage-block binding: the points split in halves (in pixel
+        order) until each half's grid fits. Always at least one grid (it may be empty:
+        the photons still draw the photon-map view)."""
+        limit = self._binding_limit()
 
-    @current
-    def begin_photons(self, iteration: int, position: np.ndarray) -> Any:
-        """The photon pass's set-up: the grid over the visible points ``position``, the
-        radii and cleared deposits on the device; returns the parameter block for
-        :meth:`dispatch_photons`."""
-        valid = np.nonzero(position[:, 3] > 0)[0]
-        grid = build_grid(position[valid, :3], self.radius[valid], valid.astype(np.uint32))
-        self.counters["max_cell"] = max(self.counters["max_cell"], grid.max_cell_entries)
-        limit = int(self.gl.info["GL_MAX_SHADER_STORAGE_BLOCK_SIZE"])
-        if grid.cells.nbytes > limit:
-            raise UsageError(f"sppm: the visible points' grid takes {grid.cells.nbytes >> 20} MiB, above "
-                             f"the device's {limit >> 20} MiB storage buffers: render fewer pixels or "
-                             f"lower --initial-radius")
+        def split(points: np.ndarray) -> list[Any]:
+            grid = build_grid(position[points, :3], self.radius[first + points], points.astype(np.uint32))
+            if grid.cells.nbytes <= limit:
+                return [grid]
+            if len(points) < 2:
+                raise UsageError(f"sppm: one visible point's grid takes {grid.cells.nbytes} bytes, "
+                                 f"above the device's {limit} per storage buffer")
+            half = len(points) // 2
+            return split(points[:half]) + split(points[half:])
+
+        grids = split(np.nonzero(position[:, 3] > 0)[0])
+        for grid in grids:
+            self.counters["max_cell"] = max(self.counters["max_cell"], grid.max_cell_entries)
+        return grids
+
+    def _begin_group(self, work: "_Iteration") -> None:
+        """Uploads the next grid of the slice in progress; its photons start at 0."""
+        grid = work.grids.pop(0)
         self._grid.orphan(grid.cells.nbytes)
         self._grid.write(grid.cells.tobytes())
-        self._radius2.write((self.radius ** 2).astype(np.float32).tobytes())
-        self._deposits.clear()
         self._records.write(np.zeros(pl.RECORD_HEADER_WORDS, np.uint32).tobytes())
-        prm = self._photon_block(iteration)
+        prm = self._photon_block(work.index)
         prm["grid_size"] = (*grid.size, grid.table_size)
         prm["grid_lo"] = (*grid.lo, grid.cell)
-        return prm
+        # the photon-map view is drawn once an iteration: by the first group's photons
+        prm["options"][3] = int(self.photon_view and work.first_group)
+        work.first_group = False
+        work.prm, work.next_photon = prm, 0
 
-    @current
-    def dispatch_photons(self, prm: Any, first: int) -> int:
-        """Traces the next dispatch of photons from ``first``; returns where the next
-        one starts (photons_per_iteration when the pass is done)."""
+    def _begin_slice(self, work: "_Iteration") -> None:
+        """A slice's camera pass, its radii and cleared deposits, and its first grid."""
+        first_row, rows = work.slices[work.slice]
+        position, radiance = self.camera_pass(work.index, (first_row, rows))
+        lo, n = first_row * self.width, rows * self.width
+        work.radiance[lo:lo + n] = radiance
+        self._radius2.write((self.radius[lo:lo + n] ** 2).astype(np.float32).tobytes())
+        self._deposits.clear()
+        work.grids = self._grids(position, lo)
+        self._begin_group(work)
+
+    def _dispatch_photons(self, work: "_Iteration") -> None:
+        """Traces the next dispatch of photons into the grid in progress; at its end,
+        reads the counters, and at the slice's end its deposits."""
         self._bind()
         self._view.bind_to_storage_buffer(scene_layout.SSBO_SPLAT)
+        prm, first = work.prm, work.next_photon
         count = min(PHOTONS_PER_DISPATCH, self.photons_per_iteration - first)
         prm["photons"][:2] = (first, count)
         self._photon_params.write(prm.tobytes())
         self.photon_kernel.run(group_x=-(-count // 64))
-        return first + count
-
-    @current
-    def end_photons(self) -> tuple[np.ndarray, np.ndarray]:
-        """The photon pass's deposits: flux Phi (N, 3) and photon counts M (N,)."""
+        work.next_photon = first + count
+        if work.next_photon < self.photons_per_iteration:
+            return
         self.gl.memory_barrier()
-        dep = np.frombuffer(self._deposits.read(), np.float32).reshape(-1, 4).astype(np.float64)
         head = np.frombuffer(self._records.read(pl.RECORD_HEADER_WORDS * 4), np.uint32)
         self.counters["skipped"] += int(head[0])
         self.counters["visited"] += int(head[1])
         self.counters["max_visited"] = max(self.counters["max_visited"], int(head[2]))
-        return dep[:, :3], dep[:, 3]
+        if work.grids:
+            self._begin_group(work)
+            return
+        first_row, rows = work.slices[work.slice]
+        lo, n = first_row * self.width, rows * self.width
+        dep = np.frombuffer(self._deposits.read(16 * n), np.float32).reshape(-1, 4)
+        work.phi[lo:lo + n], work.m[lo:lo + n] = dep[:, :3], dep[:, 3]
+        work.prm = None
+        work.slice += 1
+
+    @property
+    def iteration_in_progress(self) -> bool:
+        """Whether an iteration was begun by :meth:`iteration_piece` and not finished."""
+        return self._work is not None
 
     @current
-    def emission_records(self) -> tuple[np.ndarray, np.ndarray]:
-        """The last photon pass's emitted photons (record_emission=True): power (P, 3)
-        float64 and light index (P,), 0xFFFFFFFF for a photon that could not start."""
-        if not self.record_emission:
-            raise UsageError("emission_records: construct the renderer with record_emission=True")
-        words = np.frombuffer(self._records.read(), np.uint32)[pl.RECORD_HEADER_WORDS:].reshape(-1, 4)
-        return words[:, :3].copy().view(np.float32).astype(np.float64), words[:, 3].copy()
+    def iteration_piece(self) -> bool:
+        """Does the next piece of the iteration in progress (beginning one if none is): a
+        slice's camera pass with the grid over its visible points, or one dispatch of
+        photons. Returns True when the piece finished the iteration, which is then added
+        to the state. The preview calls it within its frame budget; :meth:`iterate`
+        until it returns True."""
+        work = self._work
+        if work is None:
+            n = self.width * self.height
+            work = self._work = _Iteration(self.iterations, self.slices(), np.zeros((n, 3)),
+                                           np.zeros((n, 3)), np.zeros(n))
+        if work.prm is None:
+            self._begin_slice(work)
+            return False
+        self._dispatch_photons(work)
+        if work.slice < len(work.slices):
+            return False
+        self._work = None
+        self.ld_sum += work.radiance
+        self._update(work.phi, work.m)
+        self.iterations += 1
+        return True
+
+    @current
+    def abandon_iteration(self) -> None:
+        """Drops the iteration in progress (the state stays as it was before it)."""
+        self._work = None
 
     def _update(self, phi: np.ndarray, m_new: np.ndarray) -> None:
         """Hachisuka & Jensen's progressive radius and flux update (pbrt-v3's form)."""
@@ -323,21 +409,25 @@ class SppmRenderer:
 
     @current
     def iterate(self, should_stop: Callable[[], bool] | None = None) -> bool:
-        """One SPPM iteration; False (and nothing changed) when stopped part way."""
-        t = self.iterations
-        position, radiance = self.camera_pass(t)
-        deposits = self.photon_pass(t, position, should_stop)
-        if deposits is None:
-            return False
-        self.finish_iteration(radiance, deposits)
-        return True
+        """One SPPM iteration; False (and nothing changed) when stopped part way.
+        ``should_stop()`` is asked before every piece after the first."""
+        self.abandon_iteration()
+        self.iteration_piece()
+        while True:
+            if should_stop is not None and should_stop():
+                self.abandon_iteration()
+                return False
+            if self.iteration_piece():
+                return True
 
     @current
-    def finish_iteration(self, radiance: np.ndarray, deposits: tuple[np.ndarray, np.ndarray]) -> None:
-        """Adds an iteration's camera radiance and photon deposits to the state."""
-        self.ld_sum += radiance
-        self._update(*deposits)
-        self.iterations += 1
+    def emission_records(self) -> tuple[np.ndarray, np.ndarray]:
+        """The last photon pass's emitted photons (record_emission=True): power (P, 3)
+        float64 and light index (P,), 0xFFFFFFFF for a photon that could not start."""
+        if not self.record_emission:
+            raise UsageError("emission_records: construct the renderer with record_emission=True")
+        words = np.frombuffer(self._records.read(), np.uint32)[pl.RECORD_HEADER_WORDS:].reshape(-1, 4)
+        return words[:, :3].copy().view(np.float32).astype(np.float64), words[:, 3].copy()
 
     @current
     def step(self, iterations: int, callback: Callable[[int, int], None] | None = None,
@@ -444,8 +534,8 @@ class SppmRenderer:
         return pl.BYTES_PER_PIXEL + self.base.device_bytes_per_pixel()
 
     def _slices(self) -> list[tuple[int, int]]:
-        """SPPM binds its per-pixel buffers whole: one slice."""
-        return [self.rows]
+        """The slices of pixel rows an iteration runs (:meth:`slices`; --stats counts them)."""
+        return self.slices()
 
     def photon_stats(self) -> dict[str, Any]:
         """What --stats reports of SPPM: photons per iteration, alpha, kernel, the radii

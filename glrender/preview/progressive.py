@@ -134,13 +134,11 @@ class SppmProgressive:
         self.renderer = renderer
         self.target_spp = target_spp
         self.samples_added = 0     # pixel samples (camera samples) since the last reset
-        self._stage: tuple | None = None   # (radiance, photon parameter block, next photon) mid-iteration
         self._show()
 
     def reset(self) -> None:
         """Forget every iteration (radii back to the initial one)."""
         self.renderer.reset()
-        self._stage = None
         self.samples_added = 0
         self._show()
 
@@ -150,7 +148,7 @@ class SppmProgressive:
 
     @property
     def done(self) -> bool:
-        return self._stage is None and self.target_spp is not None and self.spp >= self.target_spp
+        return not self.renderer.iteration_in_progress and self.target_spp is not None and self.spp >= self.target_spp
 
     def _show(self) -> None:
         r = self.renderer
@@ -165,23 +163,14 @@ class SppmProgressive:
         r.base._squares.write(np.zeros((n, 3, 4), np.uint32).tobytes())
 
     def _step(self) -> None:
-        """One piece of work: a camera pass and the grid, or one photon dispatch (the
-        last one ends the iteration)."""
+        """One piece of work (SppmRenderer.iteration_piece): a slice's camera pass and its
+        grid, or one photon dispatch (the last one ends the iteration)."""
         r = self.renderer
-        if self._stage is None:
-            position, radiance = r.camera_pass(r.iterations)
-            self._stage = (radiance.copy(), r.begin_photons(r.iterations, position), 0)
-            return
-        radiance, prm, first = self._stage
-        first = r.dispatch_photons(prm, first)
+        finished = r.iteration_piece()
         r.gl.finish()
-        if first < r.photons_per_iteration:
-            self._stage = (radiance, prm, first)
-            return
-        r.finish_iteration(radiance, r.end_photons())
-        self._stage = None
-        self.samples_added += r.width * r.height
-        self._show()
+        if finished:
+            self.samples_added += r.width * r.height
+            self._show()
 
     def advance(self, budget: float) -> bool:
         """Work for about ``budget`` seconds (at least one piece, unless done); returns
@@ -197,5 +186,5 @@ class SppmProgressive:
 
     def finish_pass(self) -> None:
         """Complete the iteration in progress (before a screenshot)."""
-        while self._stage is not None:
+        while self.renderer.iteration_in_progress:
             self._step()

@@ -11,7 +11,8 @@ layout(std140, binding = 1) uniform PhotonParams {
     uvec4 options;        // x: deposit from this photon segment on (2: skip direct light),
                           // y: camera segments allowed (max depth), z: record emission (1),
                           // w: splat the photon-map view into storage block 7 (1)
-    uvec4 estimate;       // x: density kernel (kKernel*, photon/density.glsl), yzw: unused
+    uvec4 estimate;       // x: density kernel (kKernel*, photon/density.glsl), y: first pixel
+                          // row of the camera pass's slice, z: its rows, w: unused
 } u_photon;
 
 // ---- storage blocks (std430) ----------------------------------------------------------

@@ -20,9 +20,13 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "photon/camera_path.glsl"
 
 void main() {
-    uvec2 pixel = gl_GlobalInvocationID.xy;
-    if (any(greaterThanEqual(pixel, u_params.image.xy))) return;
-    uint i = pixel.y * u_params.image.x + pixel.x;
+    // a slice of pixel rows [estimate.y, estimate.y + estimate.z): the visible-point
+    // buffers hold the slice alone (glrender/photon/sppm.py, SppmRenderer.slices)
+    uvec2 local = gl_GlobalInvocationID.xy;
+    if (local.x >= u_params.image.x || local.y >= u_photon.estimate.z) return;
+    uvec2 pixel = local + uvec2(0u, u_photon.estimate.y);
+    if (pixel.y >= u_params.image.y) return;
+    uint i = local.y * u_params.image.x + local.x;
     int max_segments = kMaxDepth < 0 ? kUnboundedDepthCap : kMaxDepth;
     SamplerState s = pixel_sampler(sampler_pixel_hash(pixel, u_params.dispatch.z), u_photon.photons.w);
     CameraSample c = camera_sample(pixel, s);
@@ -65,5 +69,6 @@ void main() {
     }
     vp_position[i] = position;
     vp_radiance[i] = vec4(L, 0.0);
-    if (kCountLoops) debug_counters[i] = max(debug_counters[i], g_loop_count);
+    uint p = pixel.y * u_params.image.x + pixel.x;
+    if (kCountLoops) debug_counters[p] = max(debug_counters[p], g_loop_count);
 }
