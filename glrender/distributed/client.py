@@ -102,20 +102,20 @@ class Result:
     calibration: dict | None = None               # how the default unit size was found
 
 
-def check_integrator(settings) -> None:
+def check_integrator(settings, photon=None) -> None:
     if settings.integrator.kind == "sppm":
         raise UsageError("--integrator sppm does not run on a cluster yet (its iterations "
                          "depend on each other): render it in one process")
-    if settings.integrator.kind == "photon":
-        raise UsageError("--integrator photon does not run on a cluster yet (each worker would "
-                         "need the photon maps): render it in one process")
+    if settings.integrator.kind == "photon" and getattr(photon, "photon_view", False):
+        raise UsageError("--aov photons does not run on a cluster (every worker traces the "
+                         "maps and would draw the view again): render it in one process")
 
 
 def make_plan(width: int, height: int, settings, unit_size: int | None, frames,
               largest: int | None = None) -> Plan:
     """The plan of a render (unit_size None: plan.default_unit_size, with ``largest`` the
     calibrated size). Integrators that splat onto the whole film get whole-frame bands;
-    SPPM's and the photon integrator's renders do not split."""
+    SPPM's renders do not split (the photon integrator's do: each worker traces the maps)."""
     from ..render.renderer import SPLATTING
 
     check_integrator(settings)
@@ -147,7 +147,7 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
            unit_size: int | None = None, device=None, params: dict | None = None,
            width: int | None = None, height: int | None = None, source=None,
            scene_on_workers: str | None = None, done: dict | None = None, stop=None,
-           progress=None, poll: float = 0.2) -> Result:
+           progress=None, poll: float = 0.2, photon=None) -> Result:
     """Render ``scene`` (a scene file's path, sent to the workers by value, or a Scene,
     sent pickled) on the Dask cluster of ``client``.
 
@@ -160,7 +160,9 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
     {(frame, band): Partial} of an earlier run with the same plan, e.g. a checkpoint),
     ``source`` (the SceneSource workers load, when ``scene`` is that source's Scene),
     ``stop()`` (asked while waiting: True ends the render early, with the finished
-    bands in the result), ``progress(units_done, units, pixel_samples_done, seconds)``.
+    bands in the result), ``progress(units_done, units, pixel_samples_done, seconds)``,
+    ``photon`` (PhotonSettings of the photon integrator; None: its defaults): every worker
+    traces the same photon maps from the seed, so the image is the one process's.
     """
     distributed = _dask()
     from ..render.renderer import settings_from_scene
@@ -179,8 +181,13 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
     frame_list = (None,) if frames is None else tuple(int(f) for f in frames)
     if frames is not None and scene_obj.animation is None:
         raise UsageError(f"{scene_obj.source} has no [animation]: render it without frames")
-    check_integrator(settings)
-    job = Job(source, settings, width, height, device)
+    if settings.integrator.kind == "photon" and photon is None:
+        from ..photon import PhotonSettings
+
+        photon = PhotonSettings()
+    check_integrator(settings, photon)
+    job = Job(source, settings, width, height, device,
+              photon if settings.integrator.kind == "photon" else None)
     done = dict(done or {})
     t0 = time.perf_counter()
 

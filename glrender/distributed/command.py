@@ -196,8 +196,12 @@ def run_distributed(args, signals) -> int:
                                    light_samples=args.light_samples, split=args.split,
                                    strategy=args.strategy,
                                    aovs=any(n in FIRST_HIT_AOVS for n in aov_names))
-    cl.check_integrator(settings)
-    job = cl.Job(source, settings, width, height, args.device)
+    from ..photon.command import photon_settings
+
+    settings, photon = photon_settings(args, settings)
+    cl.check_integrator(settings, photon)
+    job = cl.Job(source, settings, width, height, args.device,
+                 photon if settings.integrator.kind == "photon" else None)
     # the unit size: --unit-size, else the one the checkpoint recorded (--resume), else
     # the calibrated one (glrender.distributed.calibrate, once the cluster is up)
     unit_size, unit_from, calibration = args.unit_size, "option", None
@@ -245,7 +249,8 @@ def run_distributed(args, signals) -> int:
             result = cl.render(scene, client=client, settings=settings, frames=None if frames ==
                                [None] else frames, unit_size=unit_size, device=args.device,
                                done=done, stop=signals.requested, source=source,
-                               progress=bar.update if bar is not None else None)
+                               progress=bar.update if bar is not None else None,
+                               photon=job.photon)
         finally:
             if bar is not None:
                 bar.close()

@@ -33,10 +33,11 @@ class Job:
     width: int
     height: int
     device: str | int | None = None
+    photon: object = None        # glrender.photon.PhotonSettings (--integrator photon)
 
     def key(self, frame) -> tuple:
         return (self.source.digest, repr(self.settings), self.width, self.height,
-                str(self.device), frame)
+                str(self.device), frame, repr(self.photon))
 
 
 def _context(device):
@@ -68,7 +69,14 @@ def _renderer(job: Job, frame):
         scene = scene_at_frame(scene, frame)
     if (scene.film.width, scene.film.height) != (job.width, job.height):
         scene = replace(scene, film=replace(scene.film, width=job.width, height=job.height))
-    renderer = Renderer(scene, job.settings, ctx=_context(job.device))
+    if job.settings.integrator.kind == "photon":
+        # every worker traces the same maps from the seed (sorted into one order), so each
+        # renders its pixels as one process would
+        from ..photon import PhotonRenderer
+
+        renderer = PhotonRenderer(scene, job.settings, job.photon, ctx=_context(job.device))
+    else:
+        renderer = Renderer(scene, job.settings, ctx=_context(job.device))
     cache[key] = renderer
     while len(cache) > RENDERERS_PER_THREAD:
         cache.popitem(last=False)[1].release()

@@ -56,6 +56,19 @@ def test01b_split_sample_ranges_write_the_same_exr(tmp_path):
 
 
 @pytest.mark.slow
+def test01c_photon_integrator_writes_the_same_exr(tmp_path):
+    """--integrator photon with its options on 2 workers, bands split into sample ranges:
+    every worker traces the maps the options ask for, and the EXR is the single
+    process's, byte for byte."""
+    photon = ["--integrator", "photon", "--photons", 20000, "--knn", 8]
+    out, ref = tmp_path / "cluster.exr", tmp_path / "single.exr"
+    r = run("render", CORNELL, *SMALL, *photon, "-o", out, "--workers", 2, "--unit-size", 4096)
+    assert r.returncode == 0, r.stderr
+    assert run("render", CORNELL, *SMALL, *photon, "-o", ref, "--quiet").returncode == 0
+    assert out.read_bytes() == ref.read_bytes()
+
+
+@pytest.mark.slow
 def test02_dask_scheduler_and_workers(tmp_path):
     """`dask scheduler` and two `dask worker` processes on 127.0.0.1: the same file."""
     cluster = DaskProcesses(tmp_path)
@@ -110,8 +123,9 @@ def test04_bad_input_is_one_line(tmp_path):
     assert "--tls-ca" in one_error_line(r)
     r = run("render", CORNELL, *SMALL, "-o", out, "--workers", 2, "--integrator", "sppm")
     assert "sppm does not run on a cluster" in one_error_line(r)
-    r = run("render", CORNELL, *SMALL, "-o", out, "--workers", 2, "--integrator", "photon")
-    assert "photon does not run on a cluster" in one_error_line(r)
+    r = run("render", CORNELL, *SMALL, "-o", out, "--workers", 2, "--integrator", "photon",
+            "--aov", "photons")
+    assert "--aov photons does not run on a cluster" in one_error_line(r)
     assert list(tmp_path.glob("*.exr")) == [] and list(tmp_path.glob("*.ckpt")) == []
 
 

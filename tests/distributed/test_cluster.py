@@ -181,6 +181,29 @@ def test06_splatting_integrators_render_whole_frames(gl_ctx, cluster, kind):
     assert_same(split.films[None], ref)
 
 
+@pytest.mark.slow
+def test06b_photon_integrator_bitwise_the_single_process_image(gl_ctx, cluster, scene):
+    """The photon integrator: every worker traces the same maps from the seed (sorted into
+    one order), so bands and sample ranges give the single process's image bit for bit;
+    kNN lookups too."""
+    from glrender.photon import PhotonRenderer, PhotonSettings
+
+    _, client = cluster
+    settings = settings_from_scene(scene, spp=16, seed=4, integrator="photon")
+    for photon in (PhotonSettings(photons=1 << 14), PhotonSettings(photons=1 << 14, knn=8)):
+        r = PhotonRenderer(scene, settings, photon)
+        r.step(16)
+        ref = r.film()
+        r.release()
+        bands = render(scene, client=client, settings=settings, photon=photon,
+                       unit_size=72 * 8 * 16 * 3)
+        assert len(bands.plan.bands) == 3 and bands.plan.ranges == ((0, 16),)
+        assert_same(bands.films[None], ref)
+        ranges = render(scene, client=client, settings=settings, photon=photon, unit_size=72 * 8 * 8)
+        assert ranges.plan.ranges == ((0, 8), (8, 16))
+        assert_same(ranges.films[None], ref)
+
+
 def test07_default_unit_size_is_calibrated_once(gl_ctx, cluster, scene, tmp_path, monkeypatch):
     """The Python API without a unit size: the first render measures on a worker and
     writes the cache, the second reads it; both plan with the recorded size and give
