@@ -22,9 +22,8 @@ def main(argv: list[str] | None = None) -> glrender.Film:
     args = parser.parse_args(argv)
 
     scene = glrender.load(args.scene)
-    if args.width or args.height:   # a smaller image of the same view
-        scene.film.width = args.width or scene.film.width
-        scene.film.height = args.height or scene.film.height
+    # another size of the same view: one of --width/--height keeps the aspect ratio
+    scene.film = scene.film.resized(args.width, args.height)
     film = glrender.render(scene, spp=args.spp, seed=1)
     film.save(args.output)
 

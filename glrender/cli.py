@@ -231,8 +231,10 @@ def _add_render(sub) -> None:
 
     add_photon_arguments(p)
     g = p.add_argument_group("scene")
-    g.add_argument("--width", type=int, default=None, metavar="W", help="image width in pixels")
-    g.add_argument("--height", type=int, default=None, metavar="H", help="image height in pixels")
+    g.add_argument("--width", type=int, default=None, metavar="W",
+                   help="image width in pixels (alone: the height keeps the scene's aspect ratio)")
+    g.add_argument("--height", type=int, default=None, metavar="H",
+                   help="image height in pixels (alone: the width keeps the scene's aspect ratio)")
     g.add_argument("--crop", default=None, metavar="X0,Y0,X1,Y1",
                    help="render only pixels X0 <= x < X1, Y0 <= y < Y1 of the film; they equal "
                         "the same pixels of a full render bitwise")

@@ -187,9 +187,8 @@ def run_distributed(args, signals) -> int:
     ckpt_path = Path(args.checkpoint) if args.checkpoint else Path(str(first) + ".ckpt")
     if args.workers is None and args.scheduler is None:
         args.workers = 1
-    width = args.width or scene.film.width
-    height = args.height or scene.film.height
-    scene = replace(scene, film=replace(scene.film, width=width, height=height))
+    scene = replace(scene, film=scene.film.resized(args.width, args.height))
+    width, height = scene.film.width, scene.film.height
     settings = settings_from_scene(scene, integrator=args.integrator, spp=args.spp, seed=args.seed,
                                    sampler=args.sampler, max_depth=args.max_depth,
                                    rr=args.rr, rr_depth=args.rr_depth,

@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import argparse
 import math
-from dataclasses import replace
 from pathlib import Path
 
 from ..errors import UsageError
@@ -40,8 +39,10 @@ def add_preview_parser(sub) -> None:
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("scene", help="scene file")
     g = p.add_argument_group("image and light transport")
-    g.add_argument("--width", type=int, default=None, metavar="W", help="image width in pixels")
-    g.add_argument("--height", type=int, default=None, metavar="H", help="image height in pixels")
+    g.add_argument("--width", type=int, default=None, metavar="W",
+                   help="image width in pixels (alone: the height keeps the scene's aspect ratio)")
+    g.add_argument("--height", type=int, default=None, metavar="H",
+                   help="image height in pixels (alone: the width keeps the scene's aspect ratio)")
     g.add_argument("--integrator", choices=INTEGRATORS, default=None,
                    help="first integrator (default: the scene's; key I switches)")
     g.add_argument("--strategy", choices=tuple(STRATEGIES), default=None,
@@ -138,9 +139,7 @@ def run_preview(args) -> int:
     app = None
     try:
         scene = load(scene_path, **params)
-        if args.width is not None or args.height is not None:
-            scene.film = replace(scene.film, width=args.width or scene.film.width,
-                                 height=args.height or scene.film.height)
+        scene.film = scene.film.resized(args.width, args.height)
         options = PreviewOptions(
             scene_name=name, integrator=args.integrator, strategy=args.strategy,
             max_depth=args.max_depth, sampler=args.sampler, seed=args.seed, spp=args.spp,

@@ -316,9 +316,7 @@ def run_render(args, signals) -> int:
     # -- scene and renderer ------------------------------------------------------------------
     with timer("load"):
         scene = load(scene_path, **params)
-    if "width" in options or "height" in options:
-        scene.film = replace(scene.film, width=options.get("width", scene.film.width),
-                             height=options.get("height", scene.film.height))
+    scene.film = scene.film.resized(options.get("width"), options.get("height"))
     # --denoise guides the denoiser with the albedo and normal AOVs
     first_hit = any(n in FIRST_HIT_AOVS for n in aov_names) or getattr(args, "denoise", False)
     settings = settings_from_scene(scene, integrator=options.get("integrator"),

@@ -17,7 +17,7 @@ its scenes load unchanged:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Optional, Union
 
 import numpy as np
@@ -331,6 +331,18 @@ class Film:
             value = getattr(self, name)
             if not isinstance(value, (int, np.integer)) or not 1 <= value <= 65536:
                 raise SceneError(f"film.{name}: expected an integer in [1, 65536], got {value!r}")
+
+    def resized(self, width: Optional[int] = None, height: Optional[int] = None) -> "Film":
+        """This film at another size. Given one of ``width`` and ``height``, the other keeps
+        the film's aspect ratio (rounded, at least 1 pixel), so the camera frames the same
+        view; given both, they are used as they are."""
+        if width is None and height is None:
+            return self
+        if height is None:
+            height = min(65536, max(1, round(int(width) * self.height / self.width)))
+        elif width is None:
+            width = min(65536, max(1, round(int(height) * self.width / self.height)))
+        return replace(self, width=int(width), height=int(height))
 
     @property
     def radius(self) -> float:
