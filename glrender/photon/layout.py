@@ -36,12 +36,14 @@ assert PHOTON_PARAMS.itemsize == 80
 KERNELS = {"uniform": 0, "cone": 1, "epanechnikov": 2}
 
 # the photon integrator (shaders/photon/map_layout.glsl)
-SSBO_GLOBAL_PHOTONS = 8     # also the map being traced
-SSBO_GLOBAL_CELLS = 9
-SSBO_CAUSTIC_PHOTONS = 10
-SSBO_CAUSTIC_CELLS = 11
+SSBO_TRACED_PHOTONS = 8     # the map being traced, in the order stored
 SSBO_MAP_COUNTERS = 12
+TEX_GLOBAL_MAP = 10         # buffer textures: the maps' records in grid order, 3 texels a photon
+TEX_CAUSTIC_MAP = 11
+TEX_GLOBAL_CELLS = 12       # and their grids' hash tables
+TEX_CAUSTIC_CELLS = 13
 BYTES_PER_PHOTON = 48       # position and type, direction and normal, power and segments
+TEXELS_PER_PHOTON = 3
 MAP_COUNTER_WORDS = 4       # stored, candidates skipped, visited, most visited by one lookup
 
 PHOTON_MAP_PARAMS = np.dtype([
@@ -53,11 +55,5 @@ PHOTON_MAP_PARAMS = np.dtype([
     ("caustic_lo", "<f4", 4),
     ("radius", "<f4", 4),        # lookup radius global, caustic; 1 / photons global, caustic
     ("mode", "<u4", 4),          # kernel, k nearest (0: fixed radius), final gather, direct by photons
-    ("pages", "<u4", 4),         # first record of global pages 1, 2, caustic page 1 (NO_PAGE: none)
 ])
-assert PHOTON_MAP_PARAMS.itemsize == 144
-
-# a map longer than one storage-block binding continues in further pages (map_layout.glsl)
-GLOBAL_PAGES = (SSBO_GLOBAL_PHOTONS, 13, 14)
-CAUSTIC_PAGES = (SSBO_CAUSTIC_PHOTONS, 15)
-NO_PAGE = 0xFFFFFFFF
+assert PHOTON_MAP_PARAMS.itemsize == 128

@@ -28,6 +28,7 @@ import numpy as np
 from ..errors import UsageError
 from ..film import Film
 from ..gl import shaders
+from ..gl.buffers import BufferTexture
 from ..gl.context import current
 from ..gpu import codegen
 from ..gpu import layout as scene_layout
@@ -35,6 +36,8 @@ from ..render import accum
 from ..render.renderer import SPLAT_SCALE, Renderer
 from . import layout as pl
 from .grid import PointGrid, build_point_grid, typical_radius
+
+MAP_NAMES = ("global map", "caustic map")
 
 PHOTONS_PER_DISPATCH = 1 << 16   # photons per tracing dispatch (64 per work group)
 MAX_KNN = 64                     # kMaxKnn in shaders/photon/photon_gather.glsl
@@ -118,8 +121,8 @@ class PhotonRenderer(Renderer):
         super().__init__(scene, settings, ctx=ctx, device=device, **overrides)
         t0 = time.perf_counter()
         # per map: photons stored, dispatches traced again (their photons overflowed a
-        # buffer), pages the map takes on the device
-        self.counters: dict[str, list[Any]] = {"stored": [0, 0], "retraced": [0, 0], "pages": [1, 1]}
+        # buffer)
+        self.counters: dict[str, list[Any]] = {"stored": [0, 0], "retraced": [0, 0]}
         self.grids: list[PointGrid] = []
         self._trace_maps()
         self.timings["photons"] = time.perf_counter() - t0
@@ -144,8 +147,10 @@ class PhotonRenderer(Renderer):
                                     slots=slots, library=library).source
         self._store_hash = hashlib.sha256(source.encode()).hexdigest()
         gl = self.gl
-        self._maps: list[list[Any]] = [[gl.buffer(reserve=16)], [gl.buffer(reserve=16)]]   # pages
-        self._cells = [gl.buffer(reserve=16), gl.buffer(reserve=16)]
+        empty = np.zeros((0, 4), np.float32)
+        self._maps: list[Any] = [BufferTexture(gl, empty, "rgba32f", name) for name in MAP_NAMES]
+        self._cells: list[Any] = [BufferTexture(gl, np.zeros(0, np.uint32), "r32ui", f"{name} table")
+                                  for name in MAP_NAMES]
         self._counters = gl.buffer(reserve=4 * pl.MAP_COUNTER_WORDS)
         self._counters.clear()
         self._map_params = gl.buffer(reserve=pl.PHOTON_MAP_PARAMS.itemsize)
@@ -179,26 +184,35 @@ class PhotonRenderer(Renderer):
         return r * (KNN_REACH if self.photon.knn else 1.0)
 
     def _map_binding_limit(self) -> int:
-        """Bytes one storage-block binding of a photon map may hold: the device's
-        GL_MAX_SHADER_STORAGE_BLOCK_SIZE (tests lower it to split small maps)."""
+        """Bytes the tracing kernel's storage block may hold: the device's
+        GL_MAX_SHADER_STORAGE_BLOCK_SIZE (tests lower it so that small maps are traced
+        in pieces)."""
         return self._binding_limit()
 
-    def page_photons(self) -> int:
-        """Photons one page of a map holds: one storage-block binding's worth."""
+    def _texel_limit(self) -> int:
+        """Texels one buffer texture may hold: GL_MAX_TEXTURE_BUFFER_SIZE."""
+        return int(self.gl.info["GL_MAX_TEXTURE_BUFFER_SIZE"])
+
+    def trace_photons(self) -> int:
+        """Photons the tracing buffer holds at most: one storage-block binding's worth."""
         return max(1, self._map_binding_limit() // pl.BYTES_PER_PHOTON)
+
+    def map_photons(self) -> int:
+        """Photons one map may hold: one buffer texture's worth (llvmpipe: 44.7M)."""
+        return self._texel_limit() // pl.TEXELS_PER_PHOTON
 
     def _trace(self, which: int) -> np.ndarray:
         """Traces map ``which``: its stored photons (S, 12) float32, in no set order.
 
-        The tracing kernel stores into a buffer of at most one page (first sized for 4
+        The tracing kernel stores into a buffer of at most one binding (first sized for 4
         photons an emitted photon in the global map, 1 in the caustic map), reading the
         count back after every dispatch. A dispatch that overflows the buffer is traced
         again into an emptied one (photon j's numbers depend on j alone: the same
         photons), after the photons of the dispatches before are read back; the
-        buffer doubles at every overflow, up to a page, and the dispatch halves when it
-        alone does not fit a page. The photon-map view splats each
+        buffer doubles at every overflow, up to a binding, and the dispatch halves when it
+        alone does not fit one. The photon-map view splats each
         photon once (store.w: photons below it were splatted already)."""
-        page = self.page_photons()
+        page = self.trace_photons()
         total = self.photons[which]
         capacity = min(page, 4 * total if which == 0 else total)
         prm = self._param_block(0, 0)
@@ -215,7 +229,7 @@ class PhotonRenderer(Renderer):
             while first < total:
                 if buf is None:
                     buf = self.gl.buffer(reserve=max(16, pl.BYTES_PER_PHOTON * capacity))
-                    buf.bind_to_storage_buffer(pl.SSBO_GLOBAL_PHOTONS)
+                    buf.bind_to_storage_buffer(pl.SSBO_TRACED_PHOTONS)
                     self._counters.clear()
                     stored = 0
                 count = min(per_dispatch, total - first)
@@ -252,34 +266,21 @@ class PhotonRenderer(Renderer):
     def _read_photons(buf: Any, n: int) -> np.ndarray:
         return np.frombuffer(buf.read(pl.BYTES_PER_PHOTON * n), np.float32).reshape(n, 12)
 
-    def _upload_map(self, which: int, records: np.ndarray) -> None:
-        """Map ``which``'s photons (in grid order) to its device pages, one storage-block
-        binding each, split at photon boundaries; at most len(GLOBAL_PAGES) (global) or
-        len(CAUSTIC_PAGES) (caustic) pages."""
-        page = self.page_photons()
-        bindings = (pl.GLOBAL_PAGES, pl.CAUSTIC_PAGES)[which]
-        pages = max(1, -(-len(records) // page))
-        if pages > len(bindings):
-            name = ("--photons", "--caustic-photons")[which]
-            raise UsageError(f"{name} {self.photons[which]}: the {('global', 'caustic')[which]} map "
-                             f"stores {len(records)} photons, above the {len(bindings) * page} of its "
-                             f"{len(bindings)} storage buffers on this device: trace fewer")
-        for buf in self._maps[which]:
-            buf.release()
-        self._maps[which] = [self.gl.buffer(np.ascontiguousarray(records[i * page:(i + 1) * page]).tobytes()
-                                            if len(records) > i * page else b"\0" * 16)
-                             for i in range(pages)]
-        self.counters["pages"][which] = pages
-        starts = [3 * page * i for i in range(1, len(bindings))]     # first record of pages 1, ...
-        starts = [st if i + 1 < pages else pl.NO_PAGE for i, st in enumerate(starts)]
-        if which == 0:
-            self._block["pages"][:2] = starts
-        else:
-            self._block["pages"][2] = starts[0]
+    def _upload_map(self, which: int, records: np.ndarray, cells: np.ndarray) -> None:
+        """Map ``which``'s photons (in grid order) and its grid's hash table to their
+        buffer textures."""
+        name = ("--photons", "--caustic-photons")[which]
+        if len(records) > self.map_photons() or len(cells) > self._texel_limit():
+            raise UsageError(f"{name} {self.photons[which]}: the {MAP_NAMES[which]} stores "
+                             f"{len(records)} photons, above the {self.map_photons()} a buffer "
+                             f"texture holds on this device: trace fewer")
+        self._maps[which].release()
+        self._cells[which].release()
+        self._maps[which] = BufferTexture(self.gl, records, "rgba32f", MAP_NAMES[which])
+        self._cells[which] = BufferTexture(self.gl, cells, "r32ui", f"{MAP_NAMES[which]} table")
 
     def _trace_maps(self) -> None:
         self._radii = [0.0, 0.0]
-        self._block["pages"] = pl.NO_PAGE
         for which in (0, 1):
             records = self._trace(which)
             stored = len(records)
@@ -289,13 +290,8 @@ class PhotonRenderer(Renderer):
             self._radii[which] = self._estimate_radius(records[:, :3])
             grid = build_point_grid(records[:, :3], self._radii[which])
             self.grids.append(grid)
-            self._upload_map(which, records[grid.order])
-            if 4 * (grid.table_size + 1) > self._map_binding_limit():
-                raise UsageError(f"{('--photons', '--caustic-photons')[which]} {self.photons[which]}: "
-                                 f"the map's hash table takes {4 * (grid.table_size + 1)} bytes, above "
-                                 f"the device's {self._map_binding_limit()} per storage buffer: trace fewer")
-            self._cells[which].release()
-            self._cells[which] = self.gl.buffer(grid.offsets.tobytes() if grid.table_size else b"\0" * 16)
+            self._upload_map(which, records[grid.order],
+                             grid.offsets if grid.table_size else np.zeros(1, np.uint32))
             size = "global_size" if which == 0 else "caustic_size"
             lo = "global_lo" if which == 0 else "caustic_lo"
             self._block[size] = (*grid.size, grid.table_size)
@@ -311,12 +307,10 @@ class PhotonRenderer(Renderer):
 
     def _bind(self) -> None:
         super()._bind()
-        for binding, buf in ((pl.SSBO_GLOBAL_CELLS, self._cells[0]), (pl.SSBO_CAUSTIC_CELLS, self._cells[1]),
-                             (pl.SSBO_MAP_COUNTERS, self._counters)):
-            buf.bind_to_storage_buffer(binding)
-        for pages, bindings in zip(self._maps, (pl.GLOBAL_PAGES, pl.CAUSTIC_PAGES)):
-            for i, binding in enumerate(bindings):    # a page not there: page 0 (never read)
-                pages[i if i < len(pages) else 0].bind_to_storage_buffer(binding)
+        self._counters.bind_to_storage_buffer(pl.SSBO_MAP_COUNTERS)
+        for tex, unit in zip((*self._maps, *self._cells), (pl.TEX_GLOBAL_MAP, pl.TEX_CAUSTIC_MAP,
+                                                           pl.TEX_GLOBAL_CELLS, pl.TEX_CAUSTIC_CELLS)):
+            tex.bind(unit)
         self._map_params.bind_to_uniform_block(pl.UBO_PHOTON)
 
     def fingerprint(self) -> str:
@@ -330,12 +324,11 @@ class PhotonRenderer(Renderer):
     # -- outputs -----------------------------------------------------------------------------
     @current
     def map_records(self, which: int) -> np.ndarray:
-        """The global (0) or caustic (1) map's photons as the device holds them, its pages
-        read back in order: (stored, 12) float32 records (photon/map_layout.glsl)."""
-        stored, page = self.counters["stored"][which], self.page_photons()
-        parts = [np.frombuffer(buf.read(pl.BYTES_PER_PHOTON * min(page, stored - i * page)), np.float32)
-                 for i, buf in enumerate(self._maps[which]) if stored > i * page]
-        return np.concatenate(parts).reshape(-1, 12) if parts else np.zeros((0, 12), np.float32)
+        """The global (0) or caustic (1) map's photons as the device holds them: (stored,
+        12) float32 records in grid order (photon/map_layout.glsl)."""
+        stored = self.counters["stored"][which]
+        words = np.frombuffer(self._maps[which].buffer.read(pl.BYTES_PER_PHOTON * stored), np.float32)
+        return words.reshape(stored, 12)
 
     @current
     def lookup_counters(self) -> dict[str, int]:
@@ -371,17 +364,16 @@ class PhotonRenderer(Renderer):
     def memory(self) -> dict[str, Any]:
         """Device bytes per photon stored (and 4 more in its map's hash table) and per
         pixel (the camera pass's accumulation), photons stored per map, the maps' bytes,
-        and the pages of each map: storage-block bindings of ``page_photons`` photons."""
+        the most photons a map holds (one buffer texture) and the tracing buffer holds."""
         stored = self.counters["stored"]
         return {"bytes_per_photon": pl.BYTES_PER_PHOTON, "bytes_per_pixel": self.device_bytes_per_pixel(),
                 "global_photons": stored[0], "caustic_photons": stored[1],
                 "map_bytes": sum(pl.BYTES_PER_PHOTON * s + 4 * (g.table_size + 1)
                                  for s, g in zip(stored, self.grids)),
-                "pages": list(self.counters["pages"]), "page_photons": self.page_photons()}
+                "map_photons_limit": self.map_photons(), "trace_photons_limit": self.trace_photons()}
 
     @current
     def release(self) -> None:
-        for buf in (*self._maps[0], *self._maps[1], *self._cells, self._counters, self._map_params,
-                    self._view):
+        for buf in (*self._maps, *self._cells, self._counters, self._map_params, self._view):
             buf.release()
         super().release()

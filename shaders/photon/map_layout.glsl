@@ -17,37 +17,33 @@ layout(std140, binding = 1) uniform PhotonMapParams {
                           // largest), z, w: 1 / photons emitted for each map
     uvec4 mode;           // x: density kernel, y: k nearest neighbours (0: fixed radius),
                           // z: final gather (1), w: direct light from the photons (1) or NEE (0)
-    uvec4 pages;          // x, y: the global map's first record in its pages 1 and 2, z: the
-                          // caustic map's in its page 1 (0xffffffff: no such page), w: -
 } u_map;
 
-// 8, 10: photons of the global and caustic maps in their grid's order, 3 records each
-// (a map longer than one storage-block binding continues in pages 13, 14 and 15 below):
+// The global and caustic maps' photons in their grid's order, 3 texels each, in buffer
+// textures (random reads from a buffer texture are faster than from a storage block on
+// llvmpipe, and one holds 44M photons there, GL_MAX_TEXTURE_BUFFER_SIZE / 3):
 //   [3 k] = (position xyz, type as uint bits: 0 direct, 1 caustic, 2 indirect),
 //   [3 k + 1] = (unit direction back toward where it came from xyz, geometric normal
 //   as packSnorm4x8 bits), [3 k + 2] = (power rgb, path segments from the light)
-// 9, 11: their grids' hash tables: cells[h] .. cells[h + 1] are the photons under hash h
-// (glrender/photon/grid.py build_point_grid).
-// The tracing kernel writes the map it traces through binding 8.
-layout(std430, binding = 8) buffer GlobalPhotons { vec4 global_photons[]; };
-layout(std430, binding = 9) readonly buffer GlobalCells { uint global_cells[]; };
-layout(std430, binding = 10) readonly buffer CausticPhotons { vec4 caustic_photons[]; };
-layout(std430, binding = 11) readonly buffer CausticCells { uint caustic_cells[]; };
-// 13, 14: the global map's pages 1 and 2, 15: the caustic map's page 1; a map's records
-// split at photon boundaries (glrender/photon/photon.py), read through map_record.
-layout(std430, binding = 13) readonly buffer GlobalPhotons1 { vec4 global_photons_1[]; };
-layout(std430, binding = 14) readonly buffer GlobalPhotons2 { vec4 global_photons_2[]; };
-layout(std430, binding = 15) readonly buffer CausticPhotons1 { vec4 caustic_photons_1[]; };
+// and their grids' hash tables: cells[h] .. cells[h + 1] are the photons under hash h
+// (glrender/photon/grid.py build_point_grid). Texture units 10-13 (glrender/photon/layout.py).
+layout(binding = 10) uniform samplerBuffer u_global_map;
+layout(binding = 11) uniform samplerBuffer u_caustic_map;
+layout(binding = 12) uniform usamplerBuffer u_global_cells;
+layout(binding = 13) uniform usamplerBuffer u_caustic_cells;
+// 8: the tracing kernel's photons, the same 3 records each, in the order stored.
+layout(std430, binding = 8) buffer TracedPhotons { vec4 traced_photons[]; };
 
-// Record k of the global (map 0) or caustic (map 1) map, from the page holding it.
+// Record k of the global (map 0) or caustic (map 1) map.
 vec4 map_record(uint map, uint k) {
-    if (map == 0u) {
-        if (k < u_map.pages.x) return global_photons[k];
-        if (k < u_map.pages.y) return global_photons_1[k - u_map.pages.x];
-        return global_photons_2[k - u_map.pages.y];
-    }
-    if (k < u_map.pages.z) return caustic_photons[k];
-    return caustic_photons_1[k - u_map.pages.z];
+    if (map == 0u) return texelFetch(u_global_map, int(k));
+    return texelFetch(u_caustic_map, int(k));
+}
+
+// Entry h of the global (map 0) or caustic (map 1) map's hash table.
+uint map_cell(uint map, uint h) {
+    if (map == 0u) return texelFetch(u_global_cells, int(h)).x;
+    return texelFetch(u_caustic_cells, int(h)).x;
 }
 
 // 12: counters: [0] photons stored (the tracing kernel), [1] lookup candidates skipped by

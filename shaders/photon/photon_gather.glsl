@@ -27,13 +27,6 @@ const float kDiscThickness = 0.25;    // the disk's half thickness over its radi
 const uint kGlobalMap = 0u;
 const uint kCausticMap = 1u;
 
-vec4 map_photon(uint map, uint k) {
-    return map_record(map, k);
-}
-
-uint map_cell(uint map, uint h) {
-    return map == kGlobalMap ? global_cells[h] : caustic_cells[h];
-}
 
 // What the lookup needs of a surface point: position, geometric normal, BSDF and the
 // outgoing direction in its shading frame.
@@ -49,7 +42,7 @@ struct GatherPoint {
 // type in `types` (a bit per kPhoton* type), at most `segments` light segments): its
 // squared distance in d2.
 bool photon_candidate(uint map, uint k, GatherPoint g, float r2, uint types, float segments, out float d2) {
-    vec4 a = map_photon(map, k);
+    vec4 a = map_record(map, k);
     d2 = 0.0;
     if ((types & (1u << floatBitsToUint(a.w))) == 0u) return false;
     vec3 dp = a.xyz - g.p;
@@ -57,16 +50,16 @@ bool photon_candidate(uint map, uint k, GatherPoint g, float r2, uint types, flo
     if (d2 > r2) return false;
     float h = dot(dp, g.ng);
     if (h * h > kDiscThickness * kDiscThickness * r2) return false;
-    vec4 b = map_photon(map, k + 1u);
+    vec4 b = map_record(map, k + 1u);
     if (dot(unpackSnorm4x8(floatBitsToUint(b.w)).xyz, g.ng) < kNormalAgreement) return false;
-    return map_photon(map, k + 2u).w <= segments;
+    return map_record(map, k + 2u).w <= segments;
 }
 
 // The photon's contribution (kernel weight w) at g: f Phi w.
 vec3 photon_term(uint map, uint k, GatherPoint g, float w) {
     vec3 f;
-    if (!photon_bsdf(g.b, g.frame, g.wo_l, g.ng, map_photon(map, k + 1u).xyz, f)) return vec3(0.0);
-    return f * map_photon(map, k + 2u).rgb * w;
+    if (!photon_bsdf(g.b, g.frame, g.wo_l, g.ng, map_record(map, k + 1u).xyz, f)) return vec3(0.0);
+    return f * map_record(map, k + 2u).rgb * w;
 }
 
 // The 8 hash buckets around g.p, each once (0xffffffff: a cell outside the grid or a

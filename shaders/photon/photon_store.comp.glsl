@@ -22,9 +22,9 @@ layout(local_size_x = 64) in;
 void store_photon(SurfaceHit hit, Photon ph, uint type, int segments) {
     uint k = atomicAdd(map_counters[0], 1u);
     if (k >= u_map.store.x) return;
-    global_photons[3u * k] = vec4(hit.p, uintBitsToFloat(type));
-    global_photons[3u * k + 1u] = vec4(-ph.d, uintBitsToFloat(packSnorm4x8(vec4(hit.ng, 0.0))));
-    global_photons[3u * k + 2u] = vec4(ph.beta, float(segments));
+    traced_photons[3u * k] = vec4(hit.p, uintBitsToFloat(type));
+    traced_photons[3u * k + 1u] = vec4(-ph.d, uintBitsToFloat(packSnorm4x8(vec4(hit.ng, 0.0))));
+    traced_photons[3u * k + 2u] = vec4(ph.beta, float(segments));
 }
 
 void main() {
