@@ -338,10 +338,11 @@ class Film:
         view; given both, they are used as they are."""
         if width is None and height is None:
             return self
-        if height is None:
-            height = min(65536, max(1, round(int(width) * self.height / self.width)))
-        elif width is None:
+        if width is None:
+            assert height is not None
             width = min(65536, max(1, round(int(height) * self.width / self.height)))
+        elif height is None:
+            height = min(65536, max(1, round(int(width) * self.height / self.width)))
         return replace(self, width=int(width), height=int(height))
 
     @property
