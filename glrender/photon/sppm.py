@@ -38,7 +38,7 @@ from ..gl.context import Context, current
 from ..gpu import codegen
 from ..gpu import layout as scene_layout
 from ..render import accum
-from ..render.renderer import (SPLAT_SCALE, RenderSettings, Renderer, camera_tangents,
+from ..render.renderer import (SPLAT_SCALE, TILE, RenderSettings, Renderer, camera_tangents,
                                settings_from_scene)
 from ..scene import model as m
 from . import layout as pl
@@ -188,7 +188,9 @@ class SppmRenderer:
             raise UsageError(f"sppm: a {self.width}-pixel-wide image does not fit this device's "
                              f"storage buffers ({self._binding_limit()} bytes a binding): render "
                              f"fewer columns")
-        return [(y, min(rows, self.height - y)) for y in range(0, self.height, rows)]
+        top = TILE * self.rows[0]
+        end = top + self.band_height
+        return [(y, min(rows, end - y)) for y in range(top, end, rows)]
 
     def _allocate(self) -> None:
         gl = self.gl
@@ -216,9 +218,18 @@ class SppmRenderer:
                      self._radius2, self._deposits, self._grid, self._records, self._photon_params]
 
     @current
-    def reset(self) -> None:
-        """Forget every iteration: radii back to the initial radius."""
-        n = self.width * self.height
+    def reset(self, start: int = 0, rows: tuple[int, int] | None = None) -> None:
+        """Forget every iteration: radii back to the initial radius. ``rows``: ``(first,
+        count)`` tile rows (of 8 pixel rows) to render, as :meth:`Renderer.reset` takes
+        them (``--crop``); the rest of the image is not rendered (None: the whole
+        image). The photons are the same either way, so a band's pixels are the whole
+        image's. SPPM has no sample ranges: ``start`` is 0."""
+        if start != 0:
+            raise UsageError(f"sppm: start {start}: SPPM runs whole iterations from the first (0)")
+        if (tuple(rows) if rows is not None else (0, self.base.tiles_y)) != self.base.rows:
+            self.base.reset(rows=rows)      # checks the rows; its accumulation follows the band
+        self.rows = self.base.rows
+        n = self.width * self.band_height
         self.iterations = 0
         self.radius = np.full(n, self.initial_radius, np.float64)
         self.n_photons = np.zeros(n, np.float64)
@@ -236,7 +247,9 @@ class SppmRenderer:
 
     @property
     def band_height(self) -> int:
-        return self.height
+        """Pixel rows rendered (the image's height unless ``rows`` is a band)."""
+        first, count = self.rows
+        return min(self.height, TILE * (first + count)) - TILE * first
 
     def fingerprint(self) -> str:
         """The inner renderer's fingerprint (scene, camera, sampler, seed) with SPPM's
@@ -326,7 +339,7 @@ class SppmRenderer:
         """A slice's camera pass, its radii and cleared deposits, and its first grid."""
         first_row, rows = work.slices[work.slice]
         position, radiance = self.camera_pass(work.index, (first_row, rows))
-        lo, n = first_row * self.width, rows * self.width
+        lo, n = (first_row - TILE * self.rows[0]) * self.width, rows * self.width
         work.radiance[lo:lo + n] = radiance
         self._radius2.write((self.radius[lo:lo + n] ** 2).astype(np.float32).tobytes())
         self._deposits.clear()
@@ -355,7 +368,7 @@ class SppmRenderer:
             self._begin_group(work)
             return
         first_row, rows = work.slices[work.slice]
-        lo, n = first_row * self.width, rows * self.width
+        lo, n = (first_row - TILE * self.rows[0]) * self.width, rows * self.width
         dep = np.frombuffer(self._deposits.read(16 * n), np.float32).reshape(-1, 4)
         work.phi[lo:lo + n], work.m[lo:lo + n] = dep[:, :3], dep[:, 3]
         work.prm = None
@@ -375,7 +388,7 @@ class SppmRenderer:
         until it returns True."""
         work = self._work
         if work is None:
-            n = self.width * self.height
+            n = self.width * self.band_height
             work = self._work = _Iteration(self.iterations, self.slices(), np.zeros((n, 3)),
                                            np.zeros((n, 3)), np.zeros(n))
         if work.prm is None:
@@ -453,16 +466,17 @@ class SppmRenderer:
         n = max(self.iterations, 1)
         photons = float(n) * self.photons_per_iteration
         L = self.ld_sum / n + self.tau / (photons * math.pi * self.radius ** 2)[:, None]
-        return L.reshape(self.height, self.width, 3)
+        return L.reshape(self.band_height, self.width, 3)
 
     def image(self) -> Film:
         return self.film()
 
     @current
     def film(self) -> Film:
-        """The image as a :class:`Film`: ``count`` holds the iterations; SPPM has no
-        per-sample variance (``m2`` is zero), error bars come from independent runs."""
-        h, w = self.height, self.width
+        """The image (the band of ``rows`` only) as a :class:`Film`: ``count`` holds the
+        iterations; SPPM has no per-sample variance (``m2`` is zero), error bars come from
+        independent runs."""
+        h, w = self.band_height, self.width
         return Film(mean=self.radiance().astype(np.float32), m2=np.zeros((h, w, 3), np.float32),
                     count=np.full((h, w), float(self.iterations), np.float32),
                     nonfinite=np.zeros((h, w), np.float32), spp=self.iterations,
@@ -476,13 +490,16 @@ class SppmRenderer:
     def aovs(self) -> dict[str, np.ndarray]:
         """SPPM's pictures: ``radius`` (H, W), each pixel's search radius in scene units,
         and with ``photon_view=True`` ``photons`` (H, W, 3), the power of the photon hits
-        the camera sees in each pixel per emitted photon (not part of the checkpoint)."""
-        h, w = self.height, self.width
+        the camera sees in each pixel per emitted photon (not part of the checkpoint); the
+        band of ``rows`` only."""
+        h, w = self.band_height, self.width
         out = {"radius": self.radius.reshape(h, w).astype(np.float32)}
         if self.photon_view:
             sums = accum.fixed_sums(np.frombuffer(self._view.read(), np.uint32)).astype(np.float64)
             photons = max(self.iterations, 1) * self.photons_per_iteration
-            out["photons"] = (sums / (SPLAT_SCALE * photons)).reshape(h, w, 3).astype(np.float32)
+            view = (sums / (SPLAT_SCALE * photons)).reshape(self.height, w, 3)
+            top = TILE * self.rows[0]
+            out["photons"] = view[top:top + h].astype(np.float32)
         return out
 
     @current
@@ -491,7 +508,7 @@ class SppmRenderer:
         uint32 arrays (``sums``, ``squares``, ``aov``, ``splat``): ``sums`` carries the
         float64 state's bits (radius, N, tau rgb, Ld sum rgb per pixel) viewed as uint32,
         so a resumed render continues exactly where it stopped."""
-        n = self.width * self.height
+        n = self.width * self.band_height
         packed = np.concatenate([np.asarray(getattr(self, name), np.float64).reshape(n, k)
                                  for name, k in self._STATE], axis=1)
         return {"fingerprint": self.fingerprint(), "spp_done": self.iterations,
@@ -506,7 +523,11 @@ class SppmRenderer:
         if state.get("fingerprint") != self.fingerprint():
             raise UsageError("the saved SPPM state belongs to a different scene or different "
                              "render settings (fingerprints differ)")
-        n = self.width * self.height
+        rows = tuple(state.get("rows", (0, self.base.tiles_y)))
+        if rows != self.rows:
+            raise UsageError(f"the saved SPPM state holds tile rows {rows}, this renderer "
+                             f"{self.rows} (reset(rows=...) first)")
+        n = self.width * self.band_height
         width = sum(k for _, k in self._STATE)
         bits = np.ascontiguousarray(state["sums"], np.uint32)
         if bits.size != 2 * width * n:

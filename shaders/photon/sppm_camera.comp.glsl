@@ -69,6 +69,6 @@ void main() {
     }
     vp_position[i] = position;
     vp_radiance[i] = vec4(L, 0.0);
-    uint p = pixel.y * u_params.image.x + pixel.x;
+    uint p = (pixel.y - 8u * u_params.counts.w) * u_params.image.x + pixel.x;   // in the band
     if (kCountLoops) debug_counters[p] = max(debug_counters[p], g_loop_count);
 }

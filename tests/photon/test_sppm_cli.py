@@ -50,6 +50,28 @@ def test03_resume_continues_the_sppm_state(tmp_path):
     assert a.mean() > 0.1
 
 
+def test03b_crop_renders_the_whole_image_s_pixels(tmp_path):
+    """--crop with sppm: only the crop's rows are rendered, with the same photons, so the
+    crop is the whole render's pixels there (deposits are float atomics: 1e-5 relative);
+    a checkpoint of the crop resumes."""
+    common = ("--integrator", "sppm", "--photons", 4096, "--iterations", 3, *SMALL)
+    r = glrender("render", CORNELL, "-o", tmp_path / "whole.exr", *common)
+    assert r.returncode == 0, r.stderr
+    r = glrender("render", CORNELL, "-o", tmp_path / "crop.exr", "--crop", "5,9,27,20", *common)
+    assert r.returncode == 0, r.stderr
+    whole, crop = read_exr(tmp_path / "whole.exr"), read_exr(tmp_path / "crop.exr")
+    assert crop.shape[:2] == (11, 22)
+    np.testing.assert_allclose(crop, whole[9:20, 5:27], rtol=1e-5, atol=1e-6)
+    assert crop.mean() > 0.1
+    ckpt, out = tmp_path / "c.ckpt", tmp_path / "resumed.exr"
+    for iterations, extra in ((2, ()), (3, ("--resume",))):
+        r = glrender("render", CORNELL, "-o", out, "--crop", "5,9,27,20", *common, "--iterations", iterations,
+                     "--checkpoint", ckpt, *extra)
+        assert r.returncode == 0, r.stderr
+    assert "resuming" in r.stderr and "at 2 spp" in r.stderr
+    np.testing.assert_allclose(read_exr(out), crop, rtol=1e-5, atol=1e-6)
+
+
 @pytest.mark.parametrize("args, message", [
     (("--photons", 0), "--photons"),
     (("--caustic-photons", 0), "--caustic-photons"),

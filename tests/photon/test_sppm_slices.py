@@ -114,3 +114,30 @@ def test03_stopped_iteration_changes_nothing(gl_ctx, monkeypatch):
         np.testing.assert_array_equal(s.radius, once)
     finally:
         s.release()
+
+
+@pytest.mark.parametrize("limit", [None, 32 * W * 5])
+def test04_a_band_of_rows_renders_the_whole_image_s_pixels(gl_ctx, whole, monkeypatch, limit):
+    """reset(rows=...) (--crop): tile rows 1-3 (pixel rows 8-31) alone, in one slice and in
+    slices of 5 rows: the band's photon counts and radii are the whole image's exactly,
+    its radiance to float summation order, its photon-map view bitwise."""
+    radiance0, radius0, n0, view0, _, _ = whole
+    if limit is not None:
+        monkeypatch.setattr(SppmRenderer, "_binding_limit", lambda self: limit)
+    r = SppmRenderer(cornell(), sppm=SETTINGS, ctx=gl_ctx, seed=7, photon_view=limit is None)
+    try:
+        r.reset(rows=(1, 3))
+        assert r.band_height == 24
+        assert r.slices() == ([(8, 24)] if limit is None else [(8, 5), (13, 5), (18, 5), (23, 5), (28, 4)])
+        r.step(ITERATIONS)
+        film = r.film()
+        band = slice(8 * W, 32 * W)
+        np.testing.assert_array_equal(r.n_photons, n0[band])
+        np.testing.assert_array_equal(r.radius, radius0[band])
+        np.testing.assert_allclose(film.mean, radiance0[8:32], rtol=1e-5, atol=1e-7)
+        if limit is None:
+            np.testing.assert_array_equal(film.aovs["photons"], view0[8:32])
+        with pytest.raises(UsageError, match="start 3"):
+            r.reset(start=3)
+    finally:
+        r.release()
