@@ -27,7 +27,6 @@ const float kDiscThickness = 0.25;    // the disk's half thickness over its radi
 const uint kGlobalMap = 0u;
 const uint kCausticMap = 1u;
 
-
 // What the lookup needs of a surface point: position, geometric normal, BSDF and the
 // outgoing direction in its shading frame.
 struct GatherPoint {
