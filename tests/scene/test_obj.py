@@ -83,6 +83,36 @@ def test04_mtl_mapping(write):
     np.testing.assert_allclose(tex.image, ((128 / 255 + 0.055) / 1.055) ** 2.4, rtol=1e-6)
 
 
+def test04b_pbr_extension_pr_pm(write):
+    """MTL's PBR extension: Pr and Pm pick the material as glTF's metallic-roughness does
+    (conductor from Pm >= 0.5 reflecting Kd, else plastic; GGX alpha = Pr^2; smooth below
+    0.03); a missing Pr is the roughness whose alpha matches Ns; glass stays glass; a value
+    outside [0, 1] names the file and line."""
+    path = write("m.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl gold\nf 1 2 3\n")
+    write("m.mtl", "newmtl gold\nKd 1 0.8 0.3\nPr 0.4\nPm 1\n"
+                   "newmtl paint\nKd 0.2 0.3 0.6\nPr 0.5\nPm 0\n"
+                   "newmtl mirror\nKd 0.9 0.9 0.9\nPm 0.9\nPr 0.01\n"
+                   "newmtl lacquer\nKd 0.5 0.1 0.1\nNs 198\nPm 0.2\n"
+                   "newmtl glass\nKd 1 1 1\nillum 7\nPr 0.3\n")
+    mtl = read_obj(path).materials
+    gold, _ = obj_material(mtl["gold"], "gold")
+    assert gold.kind == "roughconductor" and gold.distribution == "ggx"
+    assert gold.alpha == pytest.approx((0.16, 0.16)) and gold.specular_reflectance == (1.0, 0.8, 0.3)
+    paint, _ = obj_material(mtl["paint"], "paint")
+    assert paint.kind == "roughplastic" and paint.alpha == pytest.approx((0.25, 0.25))
+    assert paint.reflectance == (0.2, 0.3, 0.6)
+    mirror, _ = obj_material(mtl["mirror"], "mirror")
+    assert mirror.kind == "conductor"
+    lacquer, _ = obj_material(mtl["lacquer"], "lacquer")
+    assert lacquer.kind == "roughplastic" and lacquer.alpha == pytest.approx((0.1, 0.1))   # sqrt(2 / 200)
+    glass, _ = obj_material(mtl["glass"], "glass")
+    assert glass.kind == "dielectric"
+    write("bad.mtl", "newmtl a\nKd 1 1 1\nPr 1.5\n")
+    bad = write("bad.obj", "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n")
+    with pytest.raises(SceneError, match=r"bad\.mtl:3: Pr: expected a number in \[0, 1\], got 1.5"):
+        read_obj(bad)
+
+
 @pytest.mark.parametrize("text, message", [
     ("v 0 0 0\nv 1 0 0\nf 1 2\n", ":3: a face needs at least 3 vertices"),
     ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", "refers to vertex 4"),

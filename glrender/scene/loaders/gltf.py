@@ -3,15 +3,10 @@
 Read: the node hierarchy (matrix or TRS), meshes instanced by several nodes (the
 arrays are shared), triangle / strip / fan primitives with POSITION, NORMAL and
 TEXCOORD_0, metallic-roughness materials, perspective cameras and
-KHR_lights_punctual. Materials map onto the renderer's BSDFs (docs/scene-format.md):
-
-- transmission (KHR_materials_transmission) > 0: a (rough) dielectric of IOR
-  KHR_materials_ior (default 1.5), tinted by the base colour;
-- metallic >= 0.5: a rough conductor that reflects the base colour (texture included);
-- otherwise: a rough plastic with the base colour (texture included) as its diffuse
-  reflectance and IOR 1.5;
-- roughness r becomes GGX alpha = r^2 (glTF's convention); emissive factor times
-  KHR_materials_emissive_strength makes the primitive an area light.
+KHR_lights_punctual. Materials map onto the renderer's BSDFs by the metallic-roughness
+rule of :mod:`.pbr` (docs/scene-format.md), with KHR_materials_transmission and
+KHR_materials_ior (default 1.5); emissive factor times KHR_materials_emissive_strength
+makes the primitive an area light.
 
 glTF is top-left based: uv (0, 0) is the first texel of the image, which is Mitsuba's
 convention too, so texture coordinates are used as they are. Light intensities are
@@ -34,6 +29,7 @@ from ...errors import SceneError
 from .. import model as m
 from .diagnostics import Notes, SceneFiles, check_image_size, read_bytes
 from .meshes import MeshData, finish_mesh
+from .pbr import metallic_roughness_material
 
 SUPPORTED_EXTENSIONS = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
                         "KHR_materials_transmission", "KHR_materials_ior", "KHR_texture_transform",
@@ -324,25 +320,13 @@ class _Gltf:
 
                 tex = replace(tex, image=tex.image * np.asarray(base, np.float32))
             color = tex
-        alpha = max(roughness * roughness, 1e-3)
         ior = _floats([(ext.get("KHR_materials_ior") or {}).get("ior", 1.5)], 1, self, where)[0]
         ior = ior if ior > 1.0 else 1.5
         transmission = _floats([(ext.get("KHR_materials_transmission") or {}).get(
             "transmissionFactor", 0.0)], 1, self, where)[0]
         two_sided = bool(mdef.get("doubleSided", double_sided_default))
-        if transmission > 0:
-            kind = "dielectric" if roughness < 0.03 else "roughdielectric"
-            mat = m.Material(kind, int_ior=ior, ext_ior=1.0, alpha=(alpha, alpha), distribution="ggx",
-                             specular_transmittance=color if not isinstance(color, m.Texture) else (1, 1, 1),
-                             name=name)
-        elif metallic >= 0.5:
-            kind = "conductor" if roughness < 0.03 else "roughconductor"
-            mat = m.Material(kind, eta=(0.0, 0.0, 0.0), k=(1.0, 1.0, 1.0), specular_reflectance=color,
-                             alpha=(alpha, alpha), distribution="ggx", two_sided=two_sided, name=name)
-        else:
-            kind = "plastic" if roughness < 0.03 else "roughplastic"
-            mat = m.Material(kind, reflectance=color, int_ior=1.5, ext_ior=1.0, alpha=(alpha, alpha),
-                             distribution="ggx", two_sided=two_sided, name=name)
+        mat = metallic_roughness_material(color, metallic, roughness, ior=ior, transmission=transmission,
+                                          two_sided=two_sided, name=name)
         if "normalTexture" in mdef:
             info = mdef["normalTexture"]
             mat.normal_map = self.texture(info, f"{where}.normalTexture", srgb=False)

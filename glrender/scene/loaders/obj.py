@@ -14,7 +14,10 @@ MTL to materials (docs/scene-format.md has the table): ``Kd`` diffuse reflectanc
 a rough specular layer (alpha = sqrt(2 / (Ns + 2)), Walter et al. 2007's
 Phong-Beckmann match): roughplastic over ``Kd``, or a roughconductor when ``Kd`` is
 black; ``illum`` 4, 6, 7, 9 or ``d`` < 1 a dielectric of IOR ``Ni``; ``Ke`` an area
-light on the faces that use the material.
+light on the faces that use the material. The PBR extension's ``Pr`` (roughness) and ``Pm``
+(metallic), where either is given, choose the material by glTF's metallic-roughness rule
+(:mod:`.pbr`) with ``Kd`` (or ``map_Kd``) as the base colour; a missing ``Pr`` is the
+roughness whose GGX alpha matches ``Ns``, a missing ``Pm`` 0.
 """
 from __future__ import annotations
 
@@ -28,6 +31,7 @@ from ...errors import SceneError
 from .. import model as m
 from .diagnostics import Notes, SceneFiles, read_bytes, read_image_checked, warn
 from .meshes import MeshData, finish_mesh
+from .pbr import metallic_roughness_material
 
 MAX_FILE_BYTES = 1 << 31
 FAST_PATH_BYTES = 1 << 16     # files above this try the bulk parser first
@@ -45,6 +49,8 @@ class MtlMaterial:
     Ni: float = 1.5
     d: float = 1.0
     illum: int = 2
+    Pr: float | None = None                 # PBR extension: roughness, metallic in [0, 1]
+    Pm: float | None = None
     map_Kd: m.Texture | None = None
     map_d: m.Texture | None = None          # opacity (alpha cutout)
     norm: m.Texture | None = None           # tangent-space normal map
@@ -540,6 +546,11 @@ def read_mtl(path: Path, files: SceneFiles) -> dict[str, MtlMaterial]:
                 setattr(cur, key, value)
         elif key == "illum":
             cur.illum = int(_floats(parts, 1, 1, path, lineno, key)[0])
+        elif key in ("Pr", "Pm"):
+            value = _floats(parts, 1, 1, path, lineno, key)[0]
+            if not 0.0 <= value <= 1.0:
+                raise SceneError(f"{path}:{lineno}: {key}: expected a number in [0, 1], got {parts[1]}")
+            setattr(cur, key, value)
         elif key == "map_Kd":
             cur.map_Kd = _texture_map(parts, path, lineno, files)
         elif key == "map_d":
@@ -571,6 +582,9 @@ def obj_material(mtl: MtlMaterial | None, name: str) -> tuple[m.Material, m.Emis
     if glass:
         mat = m.Material("dielectric", int_ior=ior, ext_ior=1.0, name=name,
                          specular_transmittance=tuple(mtl.Tf) if mtl.Tf else (1.0, 1.0, 1.0))
+    elif mtl.Pr is not None or mtl.Pm is not None:
+        roughness = mtl.Pr if mtl.Pr is not None else math.sqrt(phong_alpha(mtl.Ns))
+        mat = metallic_roughness_material(reflectance, mtl.Pm or 0.0, roughness, name=name)
     elif max(mtl.Ks) > 0 and mtl.illum != 1 and black_kd:
         mat = m.Material("roughconductor", eta=(0.0, 0.0, 0.0), k=(1.0, 1.0, 1.0),
                          specular_reflectance=tuple(mtl.Ks), alpha=(phong_alpha(mtl.Ns),) * 2,
