@@ -128,6 +128,46 @@ def test05_indices_out_of_range(write):
         glrender.load(write("i.gltf", json.dumps(doc)))
 
 
+def _sparse_doc(base_view: bool, indices, values, count: int = 2):
+    """The triangle document whose POSITION accessor replaces ``count`` vertices sparsely
+    (on the dense positions, or on zeros without a base bufferView)."""
+    doc = _triangle_doc()
+    pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], "<f4")
+    idx = np.array([0, 1, 2], "<u2")
+    sp_idx = np.asarray(indices, "<u1")
+    sp_val = np.asarray(values, "<f4")
+    pad = b"\0" * 2
+    blob = pos.tobytes() + idx.tobytes() + pad + sp_val.tobytes() + sp_idx.tobytes()
+    doc["buffers"][0] = {"uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode(),
+                         "byteLength": len(blob)}
+    doc["bufferViews"] += [{"buffer": 0, "byteOffset": 44, "byteLength": sp_val.nbytes},
+                           {"buffer": 0, "byteOffset": 44 + sp_val.nbytes, "byteLength": sp_idx.nbytes}]
+    accessor = {"componentType": 5126, "count": 3, "type": "VEC3",
+                "sparse": {"count": count, "indices": {"bufferView": 3, "componentType": 5121},
+                           "values": {"bufferView": 2}}}
+    if base_view:
+        accessor["bufferView"] = 0
+    doc["accessors"][0] = accessor
+    return doc
+
+
+def test05b_sparse_accessors(write, caught):
+    """Sparse accessors: the listed elements replaced, on the dense data or on zeros; bad
+    sparse indices (out of range, not increasing) are errors naming the accessor."""
+    with caught:
+        scene = glrender.load(write("s.gltf", json.dumps(_sparse_doc(True, [1, 2], [[2, 0, 0], [0, 3, 0]]))))
+    np.testing.assert_array_equal(scene.shapes[0].vertices, [[0, 0, 0], [2, 0, 0], [0, 3, 0]])
+    with caught:
+        scene = glrender.load(write("z.gltf", json.dumps(_sparse_doc(False, [0, 2], [[1, 1, 0], [0, 1, 0]]))))
+    np.testing.assert_array_equal(scene.shapes[0].vertices, [[1, 1, 0], [0, 0, 0], [0, 1, 0]])
+    for indices, message in (([1, 3], r"accessors\[0\]\.sparse\.indices.*strictly increasing indices below 3"),
+                             ([2, 1], r"strictly increasing")):
+        with pytest.raises(SceneError, match=message):
+            glrender.load(write("b.gltf", json.dumps(_sparse_doc(True, indices, [[2, 0, 0], [0, 3, 0]]))))
+    with pytest.raises(SceneError, match=r"sparse.*count must be an integer in \[1, 3\]"):
+        glrender.load(write("c.gltf", json.dumps(_sparse_doc(True, [1, 2], [[2, 0, 0], [0, 3, 0]], count=4))))
+
+
 @pytest.mark.parametrize("cut", [10, 30, 200, 1000])
 def test06_truncated_glb(write, cut):
     data = (GLTF / "BoxTextured.glb").read_bytes()

@@ -112,33 +112,62 @@ class _Gltf:
     def accessor(self, index, where: str) -> np.ndarray:
         a = self.item("accessors", index, where)
         where = f"accessors[{index}]"
-        if "sparse" in a:
-            self.fail(where, "sparse accessors are not supported")
         ctype, atype, count = a.get("componentType"), a.get("type"), a.get("count")
         if ctype not in _COMPONENT or atype not in _WIDTH:
             self.fail(where, f"unknown componentType {ctype!r} or type {atype!r}")
         if not isinstance(count, int) or count < 0:
             self.fail(where, f"count must be a non-negative integer, got {count!r}")
         dtype, width = np.dtype(_COMPONENT[ctype]), _WIDTH[atype]
-        if "bufferView" not in a:
+        if "bufferView" in a:
+            arr = self._elements(a["bufferView"], a.get("byteOffset", 0), count, dtype, width, where)
+        elif "sparse" in a:
+            arr = np.zeros((count, width), dtype)
+        else:
             return np.zeros((count, width), np.float64)
-        data, view_offset, view_length, stride = self.view(a["bufferView"], where)
+        if "sparse" in a:
+            self._apply_sparse(arr, a["sparse"], dtype, width, f"{where}.sparse")
+        if a.get("normalized") and ctype in _NORMALIZE:
+            arr = np.maximum(arr.astype(np.float64) / _NORMALIZE[ctype], -1.0)
+        return arr
+
+    def _elements(self, view, offset, count: int, dtype: np.dtype, width: int, where: str) -> np.ndarray:
+        """``count`` elements of ``width`` components of ``dtype`` from bufferView ``view``
+        at ``offset`` (its byteStride honoured), checked against the view's bytes."""
+        data, view_offset, view_length, stride = self.view(view, where)
         elem = dtype.itemsize * width
         stride = stride or elem
-        offset = a.get("byteOffset", 0)
         if not isinstance(offset, int) or offset < 0:
             self.fail(where, f"byteOffset must be a non-negative integer, got {offset!r}")
         need = offset + (stride * (count - 1) + elem if count else 0)
         if need > view_length:
-            self.fail(where, f"{count} elements need {need} bytes of bufferView {a['bufferView']}, "
+            self.fail(where, f"{count} elements need {need} bytes of bufferView {view}, "
                       f"which has {view_length}")
         if count == 0:
             return np.zeros((0, width), dtype)
-        arr = np.ndarray((count, width), dtype, buffer=data, offset=view_offset + offset,
-                         strides=(stride, dtype.itemsize)).copy()
-        if a.get("normalized") and ctype in _NORMALIZE:
-            arr = np.maximum(arr.astype(np.float64) / _NORMALIZE[ctype], -1.0)
-        return arr
+        return np.ndarray((count, width), dtype, buffer=data, offset=view_offset + offset,
+                          strides=(stride, dtype.itemsize)).copy()
+
+    def _apply_sparse(self, arr: np.ndarray, sparse, dtype: np.dtype, width: int, where: str) -> None:
+        """Sparse storage: ``sparse.count`` elements of ``arr`` replaced, at the strictly
+        increasing ``indices``, by ``values``."""
+        if not isinstance(sparse, dict):
+            self.fail(where, "expected an object")
+        n = sparse.get("count")
+        if not isinstance(n, int) or not 1 <= n <= len(arr):
+            self.fail(where, f"count must be an integer in [1, {len(arr)}], got {n!r}")
+        indices, values = sparse.get("indices"), sparse.get("values")
+        if not isinstance(indices, dict) or not isinstance(values, dict) \
+                or "bufferView" not in indices or "bufferView" not in values:
+            self.fail(where, "needs indices and values, each with a bufferView")
+        itype = indices.get("componentType")
+        if itype not in (5121, 5123, 5125):
+            self.fail(f"{where}.indices", f"componentType must be 5121, 5123 or 5125, got {itype!r}")
+        idx = self._elements(indices["bufferView"], indices.get("byteOffset", 0), n,
+                             np.dtype(_COMPONENT[itype]), 1, f"{where}.indices").reshape(-1).astype(np.int64)
+        if idx.max() >= len(arr) or (n > 1 and np.any(np.diff(idx) <= 0)):
+            self.fail(f"{where}.indices", f"expected strictly increasing indices below {len(arr)}")
+        arr[idx] = self._elements(values["bufferView"], values.get("byteOffset", 0), n, dtype, width,
+                                  f"{where}.values")
 
     # -- meshes --------------------------------------------------------------------------
     def primitive_mesh(self, mesh_index: int, k: int, prim: dict) -> MeshData | None:
