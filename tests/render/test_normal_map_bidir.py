@@ -68,3 +68,37 @@ def test01_matches_path_with_the_term(gl_ctx, path_reference, integrator):
     effect = 1.0 - ref.mean() / plain.mean()
     assert effect > 0.01, effect
     assert c.detectable_bias < effect / 2, (c.summary(), effect)
+
+
+REFS = Path(__file__).resolve().parents[1] / "parity" / "refs"
+SEEDS_STRONG = tuple(range(500, 516))
+SPP_STRONG = {"path": 256, "bdpt": 64}
+
+
+def strong_comparison(integrator):
+    ref = np.load(REFS / "bsdf-normalmap-mitsuba-defaults.npy")[..., :3]
+    ref_se = np.load(REFS / "bsdf-normalmap-mitsuba-defaults-stderr.npy")[..., :3]
+    scene = panel_scene()
+    other = renders(scene, integrator, SPP_STRONG[integrator], SEEDS_STRONG)
+    return compare_images(other, ref, ref_se, block=BLOCK, extra_tests=block_tests(scene))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("integrator", [
+    "path",
+    pytest.param("bdpt", marks=pytest.mark.xfail(strict=True, reason=(
+        "known bias: with 16 seeds BDPT is 0.3-0.5% dark on the floor in front of the "
+        "normal-mapped panel (worst block about -7 sigma against Mitsuba; the path tracer "
+        "passes the same comparison). Suspect: strategies disagree on which directions at a "
+        "normal-mapped vertex are valid (the walks reject a sampled direction whose "
+        "geometric and shading sides differ, next-event estimation and the connections do "
+        "not, and the MIS densities count them all), so the weights of such paths do not "
+        "sum to 1."))),
+])
+def test02_sixteen_seeds_against_mitsuba(gl_ctx, integrator):
+    """The panel with the term, 16 seeds, against Mitsuba's reference per 16x16 block (a
+    test with four times the seeds of test01, so a bias of a few tenths of a percent on
+    a block shows)."""
+    c = strong_comparison(integrator)
+    print(f"{integrator} vs Mitsuba: {c.summary()}")
+    assert c.passed, c.summary() + " " + "; ".join(c.messages)
