@@ -98,6 +98,9 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
         Bsdf b = bsdf_from_material(hit.material, hit.uv);
         Frame frame = shading_frame(hit);
         bsdf_normal_frame(b, hit.ns0, frame);
+        // a light path arriving on opposite sides of the geometric and the shading surface:
+        // the path tracer never samples that direction (it ends such paths), so it ends here
+        if (light_path && dot(-d, hit.ng) * dot(-d, frame.z) <= 0.0) break;
         Vertex v = vertex_from_hit(hit, frame, b, beta);
         v.pdf_fwd = solid_angle_to_area(pdf_sa, prev, v);
         if (!light_path && n == 1) record_aov(aov, hit);

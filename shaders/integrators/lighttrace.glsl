@@ -53,6 +53,9 @@ void light_trace(inout SamplerState s) {
         Frame frame = shading_frame(hit);
         bsdf_normal_frame(b, hit.ns0, frame);
         vec3 wo = frame_to_local(frame, -d);
+        // the direction back toward the light on opposite sides of the geometric and the
+        // shading surface: the path tracer never samples it (it ends such paths)
+        if (dot(-d, hit.ng) * wo.z <= 0.0) break;
 
         // Connect the vertex to the lens
         if (!bsdf_is_delta(b)) {

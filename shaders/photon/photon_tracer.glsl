@@ -35,8 +35,11 @@ void photon_scatter(inout Photon ph, SurfaceHit hit, Bsdf b, float u_lobe, vec2 
     Frame frame = frame_from_z(hit.ns);
     bsdf_normal_frame(b, hit.ns0, frame);
     vec3 wo = frame_to_local(frame, -ph.d);
-    BsdfSample bs = bsdf_sample(b, wo, u_lobe, u_dir, true);
     ph.alive = false;
+    // arrived on opposite sides of the geometric and the shading surface: a direction the
+    // path tracer never samples (it ends such paths; the deposits skip it too)
+    if (dot(-ph.d, hit.ng) * wo.z <= 0.0) return;
+    BsdfSample bs = bsdf_sample(b, wo, u_lobe, u_dir, true);
     if (!bs.valid) return;
     vec3 wi = frame_from_local(frame, bs.wi);
     if (dot(wi, hit.ng) * bs.wi.z <= 0.0) return;
