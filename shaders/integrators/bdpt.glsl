@@ -98,8 +98,10 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
         Bsdf b = bsdf_from_material(hit.material, hit.uv);
         Frame frame = shading_frame(hit);
         bsdf_normal_frame(b, hit.ns0, frame);
-        // a light path arriving on opposite sides of the geometric and the shading surface:
-        // the path tracer never samples that direction (it ends such paths), so it ends here
+        // Shading normals: a direction on the light side of a vertex must lie on the same
+        // side of the geometric and the shading surface, the camera side is free (the path
+        // tracer's rule; integrators/lighttrace.glsl). A light path's arrival is its light
+        // side, a camera path's sampled direction (below) is.
         if (light_path && dot(-d, hit.ng) * dot(-d, frame.z) <= 0.0) break;
         Vertex v = vertex_from_hit(hit, frame, b, beta);
         v.pdf_fwd = solid_angle_to_area(pdf_sa, prev, v);
@@ -113,7 +115,7 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
             vec3 wo = frame_to_local(frame, -d);
             bs = bsdf_sample(b, wo, u_choice.x, u_bsdf, light_path);
             wi = frame_from_local(frame, bs.wi);
-            stop = !bs.valid || dot(wi, hit.ng) * bs.wi.z <= 0.0;
+            stop = !bs.valid || (!light_path && dot(wi, hit.ng) * bs.wi.z <= 0.0);
             if (!stop) {
                 vec3 weight = bs.weight;
                 if (light_path) weight *= shading_normal_correction(-d, wi, hit.ns, hit.ng);
@@ -189,6 +191,12 @@ Vertex light_point(int i) {
     return vertex_point(info_kind(g_light[i].info), g_light[i].p, g_light[i].ng, vec3(0.0));
 }
 
+// Whether the direction w (world, toward the light side) at camera-subpath vertex v lies on
+// the same side of its geometric and its shading surface (random_walk's rule).
+bool light_side_valid(Vertex v, vec3 w) {
+    return !vertex_on_surface(v) || dot(w, v.ng) * dot(w, v.ns) > 0.0;
+}
+
 bool segment_visible(Vertex a, Vertex b, uint ignore) {
     vec3 d = b.p - a.p;
     float dist = length(d);
@@ -225,6 +233,7 @@ vec3 strategy_light_sample(int t, inout SamplerState smp) {
     if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return vec3(0.0);
     bool infinite = light_is_infinite(l);
     vec3 q = pt.p + (infinite ? kInfiniteVertexDistance * u_params.scene_sphere.w : ls.dist) * ls.wi;
+    if (!light_side_valid(pt, ls.wi)) return vec3(0.0);
     Vertex pt_minus = camera_point(t - 2);
     float pdf_light, pdf_back;
     vec3 L = pt.beta * vertex_f(pt, pt_minus.p, q, false, pdf_light, pdf_back) * ls.Le / (choice.pmf * ls.pdf);
@@ -269,6 +278,7 @@ vec3 strategy_connect(int s, int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_min
     if (!vertex_connectible(qs)) return vec3(0.0);
     Vertex qs_minus = light_point(s - 2);
     vec3 d = pt.p - qs.p;
+    if (!light_side_valid(pt, -d)) return vec3(0.0);
     float qs_to_pt, qs_to_minus, pt_to_qs, pt_to_minus;
     vec3 L = qs.beta * vertex_f(qs, qs_minus.p, pt.p, true, qs_to_pt, qs_to_minus) *
              vertex_f_bsdf(pt, pt_bsdf, pt_minus.p, qs.p, false, pt_to_qs, pt_to_minus) * pt.beta / dot(d, d);

@@ -53,8 +53,10 @@ void light_trace(inout SamplerState s) {
         Frame frame = shading_frame(hit);
         bsdf_normal_frame(b, hit.ns0, frame);
         vec3 wo = frame_to_local(frame, -d);
-        // the direction back toward the light on opposite sides of the geometric and the
-        // shading surface: the path tracer never samples it (it ends such paths)
+        // Shading normals: a direction on the light side of a vertex must lie on the same
+        // side of the geometric and the shading surface, the camera side is free (the path
+        // tracer ends a sampled direction that is not, and takes any arriving camera ray;
+        // Mitsuba's normalmap the same). The light side here is the arrival.
         if (dot(-d, hit.ng) * wo.z <= 0.0) break;
 
         // Connect the vertex to the lens
@@ -63,7 +65,7 @@ void light_trace(inout SamplerState s) {
             if (c.valid) {
                 vec3 wi = frame_to_local(frame, c.wi);
                 vec3 f = bsdf_eval(b, wo, wi, true) * shading_normal_correction(-d, c.wi, hit.ns, hit.ng);
-                if (dot(c.wi, hit.ng) * wi.z > 0.0 && max_component(f) > 0.0 &&
+                if (max_component(f) > 0.0 &&
                     camera_visible(hit.p, hit.ng, c, st.time, kNoPrimitive))
                     splat_film(c.film, beta * f * c.importance);
             }
@@ -73,8 +75,7 @@ void light_trace(inout SamplerState s) {
         // Sample the adjoint BSDF to continue the path
         BsdfSample bs = bsdf_sample(b, wo, u_choice.y, u_bsdf, true);
         if (!bs.valid) break;
-        vec3 wi = frame_from_local(frame, bs.wi);
-        if (dot(wi, hit.ng) * bs.wi.z <= 0.0) break;
+        vec3 wi = frame_from_local(frame, bs.wi);    // the camera side: free
         vec3 weight = bs.weight * shading_normal_correction(-d, wi, hit.ns, hit.ng);
         beta *= weight;
         beta_bsdf *= weight;

@@ -30,19 +30,19 @@ Photon photon_start(inout SamplerState s) {
 
 // Continues photon ph from surface hit `hit` (BSDF b) with u_lobe in [0,1), u_dir in
 // [0,1)^2 for the adjoint BSDF sample and u_rr in [0,1) for Russian roulette; sets
-// ph.alive = false when it is absorbed or leaves through the wrong side of a surface.
+// ph.alive = false when it is absorbed or arrived on the wrong side of a surface.
 void photon_scatter(inout Photon ph, SurfaceHit hit, Bsdf b, float u_lobe, vec2 u_dir, float u_rr) {
     Frame frame = frame_from_z(hit.ns);
     bsdf_normal_frame(b, hit.ns0, frame);
     vec3 wo = frame_to_local(frame, -ph.d);
     ph.alive = false;
-    // arrived on opposite sides of the geometric and the shading surface: a direction the
-    // path tracer never samples (it ends such paths; the deposits skip it too)
+    // the light side (the arrival) on the same side of the geometric and the shading
+    // surface, the camera side (the sampled direction) free: the path tracer's rule
+    // (integrators/lighttrace.glsl); the deposits check the arrival too
     if (dot(-ph.d, hit.ng) * wo.z <= 0.0) return;
     BsdfSample bs = bsdf_sample(b, wo, u_lobe, u_dir, true);
     if (!bs.valid) return;
     vec3 wi = frame_from_local(frame, bs.wi);
-    if (dot(wi, hit.ng) * bs.wi.z <= 0.0) return;
     vec3 weight = bs.weight * shading_normal_correction(-ph.d, wi, hit.ns, hit.ng);
     // Russian roulette by the scattering weight (the surface's albedo along wo)
     float q = min(max_component(weight), 1.0);
