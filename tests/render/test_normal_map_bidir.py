@@ -108,7 +108,7 @@ def test03_light_paths_do_not_arrive_through_the_panel(gl_ctx):
     while in front of the mapped shading normal (from the floor behind it) must end
     there, as the path tracer ends a sampled direction like that: before, light tracing
     was +1.2% (5 sigma) on the panel's lower middle block with the term and the flip off.
-    The panel's pixels only (the floor's bias of test02 is another matter), 16 seeds."""
+    The panel's pixels only, 16 seeds."""
     scene = panel_scene(shadowing=False)
     scene.materials = [replace(mat, normal_flip=False) if mat.normal_map is not None else mat
                        for mat in scene.materials]
@@ -120,6 +120,15 @@ def test03_light_paths_do_not_arrive_through_the_panel(gl_ctx):
     c = compare_images(other, ref, ref_se, block=BLOCK, mask=mask, check_mse=False)
     print(f"lighttrace vs path on the panel: {c.summary()}")
     assert c.passed, c.summary() + " " + "; ".join(c.messages)
+
+
+def against_path(scene, integrator, seeds):
+    """``integrator`` (BDPT at 128 spp, light tracing at 512) against the path tracer at
+    512 spp per block, 16 seeds each."""
+    paths = renders(scene, "path", 512, SEEDS_STRONG)
+    other = renders(scene, integrator, 128 if integrator == "bdpt" else 512, seeds)
+    ref, ref_se = paths.mean(axis=0), paths.std(axis=0, ddof=1) / np.sqrt(len(SEEDS_STRONG))
+    return compare_images(other, ref, ref_se, block=BLOCK, extra_tests=block_tests(scene), check_mse=False)
 
 
 @pytest.mark.slow
@@ -142,11 +151,7 @@ def test04_light_side_rule_under_a_steep_map(gl_ctx, integrator):
     tilt = flat_map((0.0, -math.sin(0.7), math.cos(0.7)))
     scene.materials = [replace(mat, normal_flip=False, normal_map=tilt) if mat.normal_map is not None
                        else mat for mat in scene.materials]
-    paths = renders(scene, "path", 512, SEEDS_STRONG)
-    spp = 128 if integrator == "bdpt" else 512
-    other = renders(scene, integrator, spp, tuple(range(700, 716)))
-    ref, ref_se = paths.mean(axis=0), paths.std(axis=0, ddof=1) / np.sqrt(len(SEEDS_STRONG))
-    c = compare_images(other, ref, ref_se, block=BLOCK, extra_tests=block_tests(scene), check_mse=False)
+    c = against_path(scene, integrator, tuple(range(700, 716)))
     print(f"{integrator} vs path under the steep map: {c.summary()}")
     assert c.passed, c.summary() + " " + "; ".join(c.messages)
 
@@ -160,10 +165,6 @@ def test05_textured_map_with_the_term_without_the_flip(gl_ctx, integrator):
     scene = panel_scene()
     scene.materials = [replace(mat, normal_flip=False) if mat.normal_map is not None else mat
                        for mat in scene.materials]
-    paths = renders(scene, "path", 512, SEEDS_STRONG)
-    spp = 128 if integrator == "bdpt" else 512
-    other = renders(scene, integrator, spp, tuple(range(950, 966)))
-    ref, ref_se = paths.mean(axis=0), paths.std(axis=0, ddof=1) / np.sqrt(len(SEEDS_STRONG))
-    c = compare_images(other, ref, ref_se, block=BLOCK, extra_tests=block_tests(scene), check_mse=False)
+    c = against_path(scene, integrator, tuple(range(950, 966)))
     print(f"{integrator} vs path, term on, flip off: {c.summary()}")
     assert c.passed, c.summary() + " " + "; ".join(c.messages)
