@@ -212,9 +212,9 @@ class PhotonRenderer(Renderer):
         buffer doubles at every overflow, up to a binding, and the dispatch halves when it
         alone does not fit one. The photon-map view splats each
         photon once (store.w: photons below it were splatted already)."""
-        page = self.trace_photons()
+        most = self.trace_photons()
         total = self.photons[which]
-        capacity = min(page, 4 * total if which == 0 else total)
+        capacity = min(most, 4 * total if which == 0 else total)
         prm = self._param_block(0, 0)
         self._bind()
         self._params.write(prm.tobytes())
@@ -246,12 +246,12 @@ class PhotonRenderer(Renderer):
                 splatted = max(splatted, first + count)
                 if stored:
                     chunks.append(self._read_photons(buf, stored))
-                elif capacity == page:
+                elif capacity == most:
                     if count == 1:
                         raise UsageError(f"photon maps: one photon stores {n} hits, more than a "
-                                         f"storage buffer's {page}")
+                                         f"storage buffer's {most}")
                     per_dispatch = count // 2
-                capacity = min(page, 2 * capacity)
+                capacity = min(most, 2 * capacity)
                 buf.release()
                 buf = None
             if buf is not None and stored:
@@ -270,7 +270,7 @@ class PhotonRenderer(Renderer):
         """Map ``which``'s photons (in grid order) and its grid's hash table to their
         buffer textures."""
         name = ("--photons", "--caustic-photons")[which]
-        if len(records) > self.map_photons() or len(cells) > self._texel_limit():
+        if len(records) > self.map_photons():     # (its hash table holds one entry more)
             raise UsageError(f"{name} {self.photons[which]}: the {MAP_NAMES[which]} stores "
                              f"{len(records)} photons, above the {self.map_photons()} a buffer "
                              f"texture holds on this device: trace fewer")

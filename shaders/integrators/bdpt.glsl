@@ -98,11 +98,9 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
         Bsdf b = bsdf_from_material(hit.material, hit.uv);
         Frame frame = shading_frame(hit);
         bsdf_normal_frame(b, hit.ns0, frame);
-        // Shading normals: a direction on the light side of a vertex must lie on the same
-        // side of the geometric and the shading surface, the camera side is free (the path
-        // tracer's rule; integrators/lighttrace.glsl). A light path's arrival is its light
-        // side, a camera path's sampled direction (below) is.
-        if (light_path && dot(-d, hit.ng) * dot(-d, frame.z) <= 0.0) break;
+        // the light side (light_side_valid): a light path's arrival, a camera path's
+        // sampled direction (below)
+        if (light_path && !light_side_valid(-d, hit.ng, frame.z)) break;
         Vertex v = vertex_from_hit(hit, frame, b, beta);
         v.pdf_fwd = solid_angle_to_area(pdf_sa, prev, v);
         if (!light_path && n == 1) record_aov(aov, hit);
@@ -191,10 +189,9 @@ Vertex light_point(int i) {
     return vertex_point(info_kind(g_light[i].info), g_light[i].p, g_light[i].ng, vec3(0.0));
 }
 
-// Whether the direction w (world, toward the light side) at camera-subpath vertex v lies on
-// the same side of its geometric and its shading surface (random_walk's rule).
-bool light_side_valid(Vertex v, vec3 w) {
-    return !vertex_on_surface(v) || dot(w, v.ng) * dot(w, v.ns) > 0.0;
+// light_side_valid at camera-subpath vertex v for w, its direction toward the light side.
+bool vertex_light_side_valid(Vertex v, vec3 w) {
+    return !vertex_on_surface(v) || light_side_valid(w, v.ng, v.ns);
 }
 
 bool segment_visible(Vertex a, Vertex b, uint ignore) {
@@ -233,7 +230,7 @@ vec3 strategy_light_sample(int t, inout SamplerState smp) {
     if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return vec3(0.0);
     bool infinite = light_is_infinite(l);
     vec3 q = pt.p + (infinite ? kInfiniteVertexDistance * u_params.scene_sphere.w : ls.dist) * ls.wi;
-    if (!light_side_valid(pt, ls.wi)) return vec3(0.0);
+    if (!vertex_light_side_valid(pt, ls.wi)) return vec3(0.0);
     Vertex pt_minus = camera_point(t - 2);
     float pdf_light, pdf_back;
     vec3 L = pt.beta * vertex_f(pt, pt_minus.p, q, false, pdf_light, pdf_back) * ls.Le / (choice.pmf * ls.pdf);
@@ -278,7 +275,7 @@ vec3 strategy_connect(int s, int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_min
     if (!vertex_connectible(qs)) return vec3(0.0);
     Vertex qs_minus = light_point(s - 2);
     vec3 d = pt.p - qs.p;
-    if (!light_side_valid(pt, -d)) return vec3(0.0);
+    if (!vertex_light_side_valid(pt, -d)) return vec3(0.0);
     float qs_to_pt, qs_to_minus, pt_to_qs, pt_to_minus;
     vec3 L = qs.beta * vertex_f(qs, qs_minus.p, pt.p, true, qs_to_pt, qs_to_minus) *
              vertex_f_bsdf(pt, pt_bsdf, pt_minus.p, qs.p, false, pt_to_qs, pt_to_minus) * pt.beta / dot(d, d);

@@ -53,11 +53,7 @@ void light_trace(inout SamplerState s) {
         Frame frame = shading_frame(hit);
         bsdf_normal_frame(b, hit.ns0, frame);
         vec3 wo = frame_to_local(frame, -d);
-        // Shading normals: a direction on the light side of a vertex must lie on the same
-        // side of the geometric and the shading surface, the camera side is free (the path
-        // tracer ends a sampled direction that is not, and takes any arriving camera ray;
-        // Mitsuba's normalmap the same). The light side here is the arrival.
-        if (dot(-d, hit.ng) * wo.z <= 0.0) break;
+        if (!light_side_valid(-d, hit.ng, frame.z)) break;      // the arrival: the light side
 
         // Connect the vertex to the lens
         if (!bsdf_is_delta(b)) {

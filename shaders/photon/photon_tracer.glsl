@@ -36,10 +36,7 @@ void photon_scatter(inout Photon ph, SurfaceHit hit, Bsdf b, float u_lobe, vec2 
     bsdf_normal_frame(b, hit.ns0, frame);
     vec3 wo = frame_to_local(frame, -ph.d);
     ph.alive = false;
-    // the light side (the arrival) on the same side of the geometric and the shading
-    // surface, the camera side (the sampled direction) free: the path tracer's rule
-    // (integrators/lighttrace.glsl); the deposits check the arrival too
-    if (dot(-ph.d, hit.ng) * wo.z <= 0.0) return;
+    if (!light_side_valid(-ph.d, hit.ng, frame.z)) return;   // the arrival: the light side
     BsdfSample bs = bsdf_sample(b, wo, u_lobe, u_dir, true);
     if (!bs.valid) return;
     vec3 wi = frame_from_local(frame, bs.wi);
