@@ -47,7 +47,7 @@ vec3 integrator_li(vec3 o, vec3 d, float t_max, float time, inout SamplerState s
         BsdfSample bs = bsdf_sample(b, wo, u_lobe.x, u_bsdf, false);
         if (!bs.valid) continue;
         vec3 wi = frame_from_local(frame, bs.wi);
-        if (dot(wi, hit.ng) * bs.wi.z <= 0.0) continue;
+        if (!light_side_valid(wi, hit.ng, frame.z)) continue;
         // a delta BSDF is sampled by its BSDF samples alone (no light sample can find it)
         float n = use_bsdf ? n_bsdf : float(kBsdfSamples);
         float n_l = delta ? 0.0 : n_light;

@@ -12,15 +12,6 @@
 #include "camera/camera.glsl"
 #include "camera/importance.glsl"
 
-// Shading normals in light transport, every integrator's rule: a direction w (world) on the
-// light side of a surface vertex must lie on the same side of the geometric surface (ng)
-// and the shading surface (ns); the camera side is free. The path tracer ends a sampled
-// direction that breaks it and takes any arriving camera ray, as Mitsuba's normalmap does;
-// a light path's light side is its arrival.
-bool light_side_valid(vec3 w, vec3 ng, vec3 ns) {
-    return dot(w, ng) * dot(w, ns) > 0.0;
-}
-
 // Veach's shading-normal correction of the adjoint BSDF (world directions, unit).
 float shading_normal_correction(vec3 wo, vec3 wi, vec3 ns, vec3 ng) {
     float denom = abs(dot(wo, ng) * dot(wi, ns));

@@ -79,7 +79,7 @@ bool path_continue(inout PathState st, SurfaceHit hit, Bsdf b, Frame frame, vec3
     if (!bs.valid) return false;
     vec3 wi = frame_from_local(frame, bs.wi);
     // a direction on the wrong side of the geometric surface leaks light: end the path
-    if (dot(wi, hit.ng) * bs.wi.z <= 0.0) return false;
+    if (!light_side_valid(wi, hit.ng, frame.z)) return false;
     st.beta *= bs.weight;
     if (kAovs && st.aov_open) st.aov_weight *= bs.weight;
     st.eta_product *= bs.eta;

@@ -13,6 +13,15 @@
 // Rays to lights stop this fraction short of the sampled point (pbrt's ShadowEpsilon).
 const float kShadowEpsilon = 1e-4;
 
+// Shading normals in light transport, every integrator's rule: a direction w (world) on the
+// light side of a surface vertex must lie on the same side of the geometric surface (ng)
+// and the shading surface (ns); the camera side is free. The path tracer ends a sampled
+// direction that breaks it, and its light samples take none, and it takes any arriving
+// camera ray, as Mitsuba's normalmap does; a light path's light side is its arrival.
+bool light_side_valid(vec3 w, vec3 ng, vec3 ns) {
+    return dot(w, ng) * dot(w, ns) > 0.0;
+}
+
 void record_aov(inout Aov aov, SurfaceHit hit) {
     if (!kAovs) return;
     aov.albedo = bsdf_albedo(bsdf_from_material(hit.material, hit.uv));
@@ -83,6 +92,7 @@ vec3 next_event_n(vec3 p, SurfaceHit hit, Bsdf b, Frame frame, vec3 wo, float ti
     LightData light = scene_light(choice.index);
     LightSample ls = sample_light(light, p, u_light);
     if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return vec3(0.0);
+    if (!light_side_valid(ls.wi, hit.ng, frame.z)) return vec3(0.0);
     vec3 wi = frame_to_local(frame, ls.wi);
     float pdf_bsdf;
     vec3 f = bsdf_eval_pdf(b, wo, wi, false, pdf_bsdf);
