@@ -12,3 +12,6 @@ const float kInfinity = uintBitsToFloat(0x7F800000u);
 const float kOneMinusEpsilon = 0.99999994039535522461;
 // Machine epsilon / 2 for float32 (pbrt's gamma bounds).
 const float kMachineEpsilon = 5.96046447753906250000e-8;
+// The growth of a box's far distance that keeps rounding from rejecting a box a ray
+// touches: 1 + 2 gamma(3) (Ize 2013, "Robust BVH Ray Traversal"), and a margin.
+const float kRobustFar = 1.0 + 2.0 * 3.0 * kMachineEpsilon / (1.0 - 3.0 * kMachineEpsilon) + 1e-7;

@@ -19,19 +19,22 @@ SlabRay make_slab_ray(vec3 o, vec3 d) {
     return SlabRay(o, inv_d, lessThan(inv_d, vec3(0.0)));
 }
 
+// The entry distances into four boxes from the distances to their near and far planes
+// per axis (components = boxes): per box, the entry t in [0, t_max] where the ray
+// overlaps the box, else +inf. The far distance is grown by kRobustFar so that
+// rounding never rejects a box the ray touches: rays aimed exactly at a vertex or edge
+// reach the triangle test (watertightness).
+vec4 slab_combine4(vec4 nx, vec4 fx, vec4 ny, vec4 fy, vec4 nz, vec4 fz, float t_max) {
+    vec4 tn = max(max(nx, ny), max(nz, vec4(0.0)));
+    vec4 tf = min(min(min(fx, fy), fz) * kRobustFar, vec4(t_max));
+    return mix(vec4(kInfinity), tn, lessThanEqual(tn, tf));
+}
+
 // Entry distances of the ray into four boxes, given the near- and far-plane
-// coordinates of the boxes per axis (components = children). Returns, per box,
-// the entry t in [0, t_max] where the ray overlaps the box, else +inf.
-// The far distance is scaled by 1 + 2 gamma(3) (Ize 2013, "Robust BVH Ray
-// Traversal") so that rounding never rejects a box the ray touches: rays aimed
-// exactly at a vertex or edge reach the triangle test (watertightness).
+// coordinates of the boxes per axis (components = children), as slab_combine4.
 vec4 slab_entry4(SlabRay r, vec4 near_x, vec4 far_x, vec4 near_y, vec4 far_y,
                  vec4 near_z, vec4 far_z, float t_max) {
-    const float kRobustFar = 1.0 + 2.0 * 3.0 * kMachineEpsilon / (1.0 - 3.0 * kMachineEpsilon) + 1e-7;
-    vec4 tn = max(max((near_x - r.o.x) * r.inv_d.x, (near_y - r.o.y) * r.inv_d.y),
-                  max((near_z - r.o.z) * r.inv_d.z, vec4(0.0)));
-    vec4 tf = min(min((far_x - r.o.x) * r.inv_d.x, (far_y - r.o.y) * r.inv_d.y),
-                  (far_z - r.o.z) * r.inv_d.z) * kRobustFar;
-    tf = min(tf, vec4(t_max));
-    return mix(vec4(kInfinity), tn, lessThanEqual(tn, tf));
+    return slab_combine4((near_x - r.o.x) * r.inv_d.x, (far_x - r.o.x) * r.inv_d.x,
+                         (near_y - r.o.y) * r.inv_d.y, (far_y - r.o.y) * r.inv_d.y,
+                         (near_z - r.o.z) * r.inv_d.z, (far_z - r.o.z) * r.inv_d.z, t_max);
 }

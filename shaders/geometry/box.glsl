@@ -8,7 +8,6 @@
 #include "common/constants.glsl"
 
 bool ray_meets_box(vec3 o, vec3 inv_d, vec3 lo, vec3 hi, float t_max) {
-    const float kRobustFar = 1.0 + 2.0 * 3.0 * kMachineEpsilon / (1.0 - 3.0 * kMachineEpsilon) + 1e-7;
     vec3 t0 = (lo - o) * inv_d;
     vec3 t1 = (hi - o) * inv_d;
     vec3 near = min(t0, t1), far = max(t0, t1);

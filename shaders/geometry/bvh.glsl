@@ -75,7 +75,6 @@ vec4 bvh_plane_bytes(uint w) {
 // exact reals p + q s that contain the child boxes (glrender/accel/quantize.py).
 vec4 bvh_node_entry(SlabRay r, uint node, float t_max, out uvec4 child) {
     const float kPlaneError = 5.0 * kMachineEpsilon;
-    const float kRobustFar = 1.0 + 2.0 * 3.0 * kMachineEpsilon / (1.0 - 3.0 * kMachineEpsilon) + 1e-7;
     int base = int(node) * kBvhTexelsPerNode;
     uvec4 head = texelFetch(u_bvh_nodes, base);
     child = texelFetch(u_bvh_nodes, base + 1);
@@ -94,9 +93,7 @@ vec4 bvh_node_entry(SlabRay r, uint node, float t_max, out uvec4 child) {
     vec4 fy = fma(bvh_plane_bytes(r.neg.y ? xy.z : xy.w), vec4(a.y), vec4(bf.y));
     vec4 nz = fma(bvh_plane_bytes(r.neg.z ? z.y : z.x), vec4(a.z), vec4(bn.z));
     vec4 fz = fma(bvh_plane_bytes(r.neg.z ? z.x : z.y), vec4(a.z), vec4(bf.z));
-    vec4 tn = max(max(nx, ny), max(nz, vec4(0.0)));
-    vec4 tf = min(min(min(fx, fy), fz) * kRobustFar, vec4(t_max));
-    return mix(vec4(kInfinity), tn, lessThanEqual(tn, tf));
+    return slab_combine4(nx, fx, ny, fy, nz, fz, t_max);
 }
 
 // Compare-exchange of (t, ref) pairs: afterwards ta <= tb.
