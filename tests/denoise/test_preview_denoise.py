@@ -75,14 +75,14 @@ def _noisy_views(counts: tuple[int, ...], shape: tuple[int, ...]) -> list[np.nda
     as the preview displays it, at each of ``counts`` spp of one accumulation; each
     scaled (nearest) to the window capture's ``shape`` where the window is larger."""
     scene = glrender.load(CORNELL)
-    renderer = Renderer(scene, settings_from_scene(scene))
     views = []
-    for spp in counts:
-        renderer.step(spp - renderer.spp_done)
-        view = tonemap(renderer.film().mean).astype(np.float64)
-        ys = np.arange(shape[0]) * view.shape[0] // shape[0]
-        xs = np.arange(shape[1]) * view.shape[1] // shape[1]
-        views.append(view[ys][:, xs])
+    with Renderer(scene, settings_from_scene(scene)) as renderer:
+        for spp in counts:
+            renderer.step(spp - renderer.spp_done)
+            view = tonemap(renderer.film().mean).astype(np.float64)
+            ys = np.arange(shape[0]) * view.shape[0] // shape[0]
+            xs = np.arange(shape[1]) * view.shape[1] // shape[1]
+            views.append(view[ys][:, xs])
     return views
 
 

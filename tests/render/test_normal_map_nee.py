@@ -27,10 +27,10 @@ TILT = 40.0
 SEEDS_A, SEEDS_B = (31, 32, 33, 34), (41, 42, 43, 44)
 SIZE = 24
 BLOCK = 8
-# the family of block tests in this file: two comparisons of every block, channel and
-# the image mean each
+# the family of block tests in this file: two comparisons (test02, test03), each of
+# every block and channel and of the image mean
 COMPARISONS = 2
-TESTS = COMPARISONS * (3 * (SIZE // BLOCK) ** 2 + 2)
+TESTS_PER_COMPARISON = 3 * (SIZE // BLOCK) ** 2 + 2
 
 
 def floor_scene(high: bool = True, low: bool = True, **integrator) -> m.Scene:
@@ -68,14 +68,14 @@ def test01_the_low_panel_alone_lights_nothing(gl_ctx, integrator, options):
 
 def agree(a: np.ndarray, b: np.ndarray) -> None:
     ref, ref_se = b.mean(axis=0), b.std(axis=0, ddof=1) / np.sqrt(len(b))
-    c = compare_images(a, ref, ref_se, block=BLOCK, extra_tests=TESTS - (3 * (SIZE // BLOCK) ** 2 + 2))
+    c = compare_images(a, ref, ref_se, block=BLOCK, extra_tests=(COMPARISONS - 1) * TESTS_PER_COMPARISON)
     print(c.summary())
     assert c.passed, c.summary() + " " + "; ".join(c.messages)
 
 
 def test02_direct_light_sampling_matches_bsdf_sampling(gl_ctx):
-    light = renders(floor_scene(kind="direct", strategy="light"), "direct", 256, SEEDS_A)
-    bsdf = renders(floor_scene(kind="direct", strategy="bsdf"), "direct", 1024, SEEDS_B)
+    light = renders(floor_scene(strategy="light"), "direct", 256, SEEDS_A)
+    bsdf = renders(floor_scene(strategy="bsdf"), "direct", 1024, SEEDS_B)
     assert bsdf.mean() > 0.03, bsdf.mean()       # the high panel lights the floor
     agree(light, bsdf)
 
