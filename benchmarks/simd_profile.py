@@ -11,12 +11,15 @@ the machine's load.
 
 ``--variant group`` profiles ``benchmarks/patches/group-tracing.patch`` instead (the
 work group packs its BVH rays into shared memory between barriers: fewer vector steps,
-but slower on llvmpipe, benchmarks/RESULTS.md "Path tracer SIMD profile"); ``--time N``
+but slower on llvmpipe, benchmarks/RESULTS.md "Path tracer SIMD profile");
+``--variant stepwise`` applies ``benchmarks/patches/stepwise-tracing.patch`` (closest-hit
+queries suspended by a subgroup vote so that finished lanes shade; no counters, so only
+``--time`` says anything; also slower on llvmpipe); ``--time N``
 also renders each scene N times alternately with the plain export and the variant, in
 fresh processes, and prints wall and CPU seconds.
 
     .venv/bin/python benchmarks/simd_profile.py [--scenes cornell-bunny,caustic] [--spp 8]
-                                                [--variant profile|group] [--time 3]
+                                                [--variant profile|group|stepwise] [--time 3]
 """
 from __future__ import annotations
 
@@ -34,7 +37,8 @@ from accumulation import CHILD as TIMED   # one timed render in a fresh process:
 
 ROOT = Path(__file__).resolve().parents[1]
 PATCHES = {"profile": ROOT / "benchmarks" / "patches" / "simd-profile.patch",
-           "group": ROOT / "benchmarks" / "patches" / "group-tracing.patch"}
+           "group": ROOT / "benchmarks" / "patches" / "group-tracing.patch",
+           "stepwise": ROOT / "benchmarks" / "patches" / "stepwise-tracing.patch"}
 
 COUNTS = """
 import importlib, json, sys
