@@ -55,7 +55,9 @@ def local_cluster(workers: int, *, threads: int | None = None, dashboard: bool =
             dashboard = False
     cluster = distributed.LocalCluster(
         n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-        dashboard_address="127.0.0.1:0" if dashboard else None,
+        # The scheduler's HTTP server (metrics, and the dashboard when asked for) binds
+        # a free port: a fixed one (Dask's 8787) warns when two renders run at once.
+        dashboard_address="127.0.0.1:0", scheduler_kwargs={"dashboard": dashboard},
         env={"LP_NUM_THREADS": str(lp)}, silence_logs=logging.CRITICAL)
     return cluster, distributed.Client(cluster)
 

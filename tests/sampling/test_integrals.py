@@ -28,8 +28,8 @@ def check(name, values, reference, record, zero_variance=False, detect=0.01):
     values = np.asarray(values, np.float64)
     mean, var = values.mean(), values.var(ddof=1)
     sigma = math.sqrt(var / len(values))
-    record(f"{name}_mean", mean)
-    record(f"{name}_variance", var)
+    record(f"{name}_mean", float(mean))
+    record(f"{name}_variance", float(var))
     print(f"{name}: {mean:.6f} vs {reference:.6f}, sigma {sigma:.2g}, variance {var:.3g}")
     if zero_variance:
         assert abs(mean - reference) <= Z * sigma + 1e-5 * abs(reference)
@@ -44,7 +44,7 @@ def report_ratio(name, var_uniform, var_importance, record):
     estimate is constant up to float32 rounding)."""
     zero = var_importance <= 1e-12 * var_uniform
     ratio = math.inf if zero else var_uniform / var_importance
-    record(f"{name}_variance_ratio", ratio)
+    record(f"{name}_variance_ratio", float(ratio))
     print(f"{name}: variance ratio uniform / importance = "
           + ("infinite (zero variance up to rounding)" if zero else f"{ratio:.4g}"))
     return ratio
