@@ -228,7 +228,7 @@ def embree_build_seconds(v, f):
 # -- glrender ----------------------------------------------------------------------------------
 class GlslTracer:
     def __init__(self, ctx, bvh):
-        from glrender.accel.gpu import GpuBvh
+        from glrender.gpu.bvh_upload import GpuBvh
         from glrender.gl.shaders import compile_compute
 
         self.ctx, self.gl = ctx, ctx.gl

@@ -38,7 +38,7 @@ import numpy as np
 sys.path.insert(0, sys.argv[3])
 from bvh import KERNEL
 from glrender.accel import build_bvh
-from glrender.accel.gpu import GpuBvh
+from glrender.gpu.bvh_upload import GpuBvh
 from glrender.gl.context import create_context
 from glrender.gl.shaders import compile_compute
 data = np.load(sys.argv[1])

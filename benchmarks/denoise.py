@@ -3,7 +3,7 @@ before and after, at 1, 4, 16 and 64 spp, on the Cornell box (Mitsuba 3's 49,152
 reference) and the textured Cornell box of tests/denoise (glrender's 4,096-spp reference).
 
 The denoised image is ``glrender render --denoise``'s: OIDN filters the beauty minus its
-emission AOV and the seen-emission pass (glrender.denoise.render_seen_emission) is added
+emission AOV and the seen-emission pass (glrender.render.emission_pass.render_seen_emission) is added
 back; "own emission" adds back the beauty's own emission AOV instead (no pass), for
 comparison. MSE is over the whole linear image and over the pixels whose footprint does
 not reach the light (tests/denoise/denoise_scenes.away_from_light: the light's pixels,
@@ -36,7 +36,8 @@ sys.path.insert(0, str(ROOT / "tests" / "denoise"))
 
 import glrender  # noqa: E402
 from denoise_scenes import REFS, away_from_light, cornell, reference, textured_cornell  # noqa: E402
-from glrender.denoise import Denoiser, aovs_are_clean, render_seen_emission  # noqa: E402
+from glrender.denoise import Denoiser, aovs_are_clean
+from glrender.render.emission_pass import render_seen_emission  # noqa: E402
 from glrender.render.renderer import Renderer, settings_from_scene  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "RESULTS.md"

@@ -17,8 +17,9 @@ The light's partly covered edge pixels have antialiasing noise only, but the fra
 of a pixel's camera samples that find the light, times a radiance 18x that of the lit
 surfaces in the Cornell box, is most of the noisy image's error at low sample counts
 (72% of its MSE at 4 spp, 48% at 16, seed 5). So the emission added back is rendered
-again on its own at :func:`emission_spp` samples per pixel (``emission_only``: camera
-rays followed through delta surfaces, no shading; :func:`render_seen_emission`); the
+again on its own at :func:`~glrender.render.emission_pass.emission_spp` samples per pixel
+(``emission_only``: camera rays followed through delta surfaces, no shading;
+:func:`~glrender.render.emission_pass.render_seen_emission`); the
 one taken with the beauty's own samples is what is subtracted, so the filtered part is
 exactly the beauty's reflected light.
 
@@ -48,53 +49,6 @@ _QUALITY_CODES = {"high": 6, "balanced": 5, "fast": 4}
 _DEVICE_TYPES = {"auto": 0, "cpu": 1}
 _DEVICE_NAMES = {1: "CPU", 2: "SYCL", 3: "CUDA", 4: "HIP", 5: "Metal"}
 _FLOAT3 = 3                          # OIDN_FORMAT_FLOAT3
-
-
-# the seen-emission pass: samples per pixel for a render of `spp`
-EMISSION_SPP_FACTOR = 4
-EMISSION_SPP_MIN = 64
-
-
-def emission_spp(spp: int) -> int:
-    """Samples per pixel of the seen-emission pass for a render of ``spp``."""
-    return max(EMISSION_SPP_MIN, EMISSION_SPP_FACTOR * int(spp))
-
-
-def emission_settings(settings):
-    """The :class:`~glrender.render.renderer.RenderSettings` of the seen-emission pass
-    for a render with ``settings``: the path tracer with ``emission_only`` (through delta
-    surfaces for the path tracer, the first hit for the direct, photon and BDPT
-    integrators, as their emission AOVs), same sampler, seed and emitter visibility, at :func:`emission_spp`.
-    None where the pass has nothing to add: integrators whose emission AOV is 0 (AO,
-    light tracing, SPPM) and clamped renders (the clamp scales the AOV with the sample)."""
-    from dataclasses import replace
-
-    integ = settings.integrator
-    if integ.kind not in ("path", "direct", "bdpt", "photon") or settings.clamp is not None:
-        return None
-    max_depth = integ.max_depth if integ.kind == "path" else 1
-    return replace(settings, integrator=replace(integ, kind="path", max_depth=max_depth),
-                   sampler=replace(settings.sampler, spp=emission_spp(settings.sampler.spp)),
-                   aovs=False, count_loops=False, debug_nonfinite=0, emission_only=True)
-
-
-def render_seen_emission(scene, settings, *, ctx=None, rows: tuple[int, int] | None = None,
-                         share=None):
-    """The emission the camera sees, as the :class:`~glrender.film.film.Film` of the
-    seen-emission pass for a render with ``settings`` (its ``mean``; the tile rows
-    ``rows`` only, as ``Renderer.reset(rows=...)``); None where :func:`emission_settings`
-    is None. ``share``: a renderer of the same scene whose device data (BVH, textures)
-    the pass reuses instead of building its own."""
-    from .render.renderer import Renderer
-
-    pass_settings = emission_settings(settings)
-    if pass_settings is None:
-        return None
-    with Renderer(scene, pass_settings, ctx=ctx, share=share) as r:
-        if rows is not None:
-            r.reset(rows=rows)
-        r.step(pass_settings.sampler.spp)
-        return r.film()
 
 
 def load_oidn():

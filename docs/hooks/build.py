@@ -99,7 +99,7 @@ def _option_rows(parser: argparse.ArgumentParser) -> list[str]:
 
 
 def cli_markdown() -> str:
-    from glrender.cli import build_parser
+    from glrender.commands.cli import build_parser
 
     os.environ["COLUMNS"] = "100"
     parser = build_parser()

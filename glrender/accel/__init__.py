@@ -1,6 +1,6 @@
 """Acceleration structures: a 4-wide BVH built in numpy for the GLSL traversal.
 
-``build_bvh`` (no GL) is the entry point; ``glrender.accel.gpu.GpuBvh`` uploads
+``build_bvh`` (no GL) is the entry point; ``glrender.gpu.bvh_upload.GpuBvh`` uploads
 the result as buffer textures.
 """
 from .bvh import Bvh, build_bvh

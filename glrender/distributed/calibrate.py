@@ -91,12 +91,10 @@ def device_name(job) -> str:
     return _context(job.device).renderer
 
 
-def unit_size(client, job) -> tuple[int, dict]:
+def unit_size(client, job, job_future) -> tuple[int, dict]:
     """The calibrated unit size for ``job`` on ``client``'s cluster and how it was found:
-    (size, {"unit_size", "source": "cache" | "calibrated", "key", "rate", "cache"})."""
-    from .client import job_future as submit_job
-
-    job_future = submit_job(client, job)
+    (size, {"unit_size", "source": "cache" | "calibrated", "key", "rate", "cache"}).
+    ``job_future``: the cluster's task holding the job (``client.job_future``)."""
     path = cache_path()
     entries = _read(path)
     name = client.submit(device_name, job_future, pure=False).result()

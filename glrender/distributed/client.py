@@ -199,7 +199,7 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
     if unit_size is None:
         from . import calibrate
 
-        largest, calibration = calibrate.unit_size(client, job)
+        largest, calibration = calibrate.unit_size(client, job, jobf)
     plan = make_plan(width, height, settings, unit_size, frame_list, largest)
     jid = job_id(job, plan)
     finals, unit_futures = {}, []

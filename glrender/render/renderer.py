@@ -302,7 +302,7 @@ class Renderer:
         """BVH over the static mesh triangles (world space) plus one tree per moving mesh
         (object space), and per-triangle shading data in the BVH's triangle order."""
         from ..accel import MotionInstance, build_bvh
-        from ..accel.gpu import GpuBvh
+        from ..gpu.bvh_upload import GpuBvh
         from ..gl.buffers import BufferTexture
 
         p = self.packed

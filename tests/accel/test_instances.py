@@ -5,7 +5,7 @@ import pytest
 from bvh_reference import NO_HIT, brute_force, icosphere, load_mesh, random_soup
 
 from glrender.accel import MotionInstance, build_bvh, flatten_instances
-from glrender.accel.gpu import GpuBvh
+from glrender.gpu.bvh_upload import GpuBvh
 from glrender.accel.instances import decompose, matrix_from_quaternion, motion_bounds
 from glrender.errors import SceneError, UsageError
 from glrender.testing.harness import run_glsl

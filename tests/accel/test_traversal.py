@@ -18,7 +18,7 @@ from bvh_reference import NO_HIT, brute_force, icosphere, load_mesh, random_soup
 
 from glrender.accel import build_bvh
 from glrender.accel import bvh as bvh_module
-from glrender.accel.gpu import TEXTURES, UNITS_RESERVED, GpuBvh
+from glrender.gpu.bvh_upload import TEXTURES, UNITS_RESERVED, GpuBvh
 from glrender.errors import UsageError
 from glrender.gl.shaders import packaged_root
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from cli_run import ROOT, glrender
-from glrender.cli import build_parser
+from glrender.commands.cli import build_parser
 
 OPTION = re.compile(r"(?<![\w-])(--[a-z][a-z-]*[a-z]|-[a-zA-Z])(?![\w-])")
 # what issue 8 asks `glrender render` for

@@ -5,7 +5,7 @@ The quality test renders at 4 and 16 spp with a fixed seed and asserts the issue
 factor over the whole linear image: the denoised image's MSE against the reference at
 least 3x below the noisy image's. The denoised image is what ``glrender render
 --denoise`` writes: OIDN filters the beauty minus its emission AOV, and the seen
-emission, rendered again by its own pass (glrender.denoise.render_seen_emission, 64 spp
+emission, rendered again by its own pass (glrender.render.emission_pass.render_seen_emission, 64 spp
 here), is added back. The light (18x brighter than any lit surface) and its partly
 covered edge pixels are most of the noisy image's MSE (about 70% at 4 spp, 50% at 16):
 filtered by OIDN they came back a few percent off (whole-image ratios 0.8 and 0.25 on
@@ -24,7 +24,8 @@ import numpy as np
 import pytest
 
 import glrender
-from glrender.denoise import Denoiser, aovs_are_clean, render_seen_emission
+from glrender.denoise import Denoiser, aovs_are_clean
+from glrender.render.emission_pass import render_seen_emission
 from glrender.render.renderer import settings_from_scene
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "cli"))
@@ -119,7 +120,7 @@ def test04_cli_writes_the_denoised_image_beside_the_unbiased_one(gl_ctx, tmp_pat
 
 
 def test05_without_pyoidn_one_line_naming_the_extra(tmp_path, monkeypatch, capsys):
-    from glrender.cli import main
+    from glrender.commands.cli import main
 
     monkeypatch.setitem(sys.modules, "pyoidn", None)      # import pyoidn raises ImportError
     rc = main(["render", str(CORNELL), "-o", str(tmp_path / "out.exr"), "--denoise"])

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import glrender
-from glrender.denoise import EMISSION_SPP_MIN, emission_settings, emission_spp
+from glrender.render.emission_pass import EMISSION_SPP_MIN, emission_settings, emission_spp
 from glrender.render.renderer import settings_from_scene
 from glrender.scene import model as m
 

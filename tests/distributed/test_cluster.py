@@ -124,7 +124,7 @@ def test05_stop_checkpoint_resume(gl_ctx, cluster, larger, tmp_path):
     """A render stopped after some units (as Ctrl-C stops it) keeps its finished bands;
     saved to a checkpoint and given back, the render runs only the rest, and the image is
     bitwise the uninterrupted one."""
-    from glrender.distributed.command import _load_checkpoint, _save_checkpoint
+    from glrender.commands.cluster import _load_checkpoint, _save_checkpoint
 
     _, client = cluster
     settings = settings_from_scene(larger, spp=64, seed=9)

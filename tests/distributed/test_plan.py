@@ -130,7 +130,7 @@ def test07_default_unit_size():
 
 
 def test08_distributed_checkpoints_keep_sums_and_refuse_other_versions(tmp_path, monkeypatch):
-    from glrender.distributed import command
+    from glrender.commands import cluster as command
     from glrender.errors import UsageError
 
     part = _partial(np.arange(24, dtype=np.float32).reshape(2, 4, 3), 0)

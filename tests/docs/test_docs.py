@@ -64,7 +64,7 @@ def _commands(parser: argparse.ArgumentParser):
 
 @pytest.mark.slow
 def test_cli_reference_covers_every_option(site):
-    from glrender.cli import build_parser
+    from glrender.commands.cli import build_parser
 
     text = (site / "cli.html").read_text()
     for name, parser in _commands(build_parser()):

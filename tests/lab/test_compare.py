@@ -46,7 +46,7 @@ def test02_block_mean():
 def test03_command_writes_json_markdown_and_heat_maps(images, tmp_path, capsys):
     from PIL import Image
 
-    from glrender.cli import main
+    from glrender.commands.cli import main
 
     _, p = images
     out = tmp_path / "cmp"
@@ -60,7 +60,7 @@ def test03_command_writes_json_markdown_and_heat_maps(images, tmp_path, capsys):
 
 
 def test04_stats_files_and_errors(images, tmp_path, capsys):
-    from glrender.cli import main
+    from glrender.commands.cli import main
 
     _, p = images
     stats = tmp_path / "a.json"

@@ -23,7 +23,7 @@ pytestmark = pytest.mark.slow     # the quick lab run takes about a minute on tw
 
 @pytest.fixture(scope="module")
 def lab(tmp_path_factory, gl_ctx):
-    from glrender.cli import main
+    from glrender.commands.cli import main
 
     out = tmp_path_factory.mktemp("lab")
     assert main(["lab", "--quick", "--quiet", "--seed", "0", "--out", str(out)]) == 0
@@ -252,7 +252,7 @@ def test09b_the_survey_measures_every_candidate_on_every_scene(lab):
 
 
 def test10_unknown_experiment_is_a_one_line_error(tmp_path, capsys):
-    from glrender.cli import main
+    from glrender.commands.cli import main
 
     assert main(["lab", "nonsense", "--quick", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err

@@ -85,7 +85,7 @@ COUNT_PACKS = """
 import importlib
 import sys
 
-from glrender.cli import main
+from glrender.commands.cli import main
 
 renderer_module = importlib.import_module("glrender.render.renderer")
 

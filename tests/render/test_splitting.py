@@ -112,7 +112,7 @@ def test05_bad_settings_name_the_field(gl_ctx):
     (["--light-samples", "99"], "--light-samples 99: expected an integer in 1..16"),
     (["--rr-depth", "0"], "--rr-depth 0: expected a number of path segments >= 1")])
 def test06_bad_options_are_one_line_errors(tmp_path, capsys, args, message):
-    from glrender.cli import main
+    from glrender.commands.cli import main
 
     scene = ROOT / "scenes" / "cornell-box" / "scene.toml"
     assert main(["render", str(scene), "-o", str(tmp_path / "x.png"), *args]) == 2

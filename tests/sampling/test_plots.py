@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from glrender.cli import main
+from glrender.commands.cli import main
 from glrender.sampling.catalog import CATALOG
 from glrender.sampling.plots import STRATA, jittered_grid
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .. import model as m
-from .meshes import read_mesh
+from .mesh_files import read_mesh
 
 
 def load_mesh_scene(path, **params) -> m.Scene:

@@ -4,7 +4,6 @@ triangles dropped (with a count in a warning), vertex normals when the file has 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -106,44 +105,6 @@ def _per_vertex(values, count: int, width: int, what: str, source) -> np.ndarray
     if len(arr) != count:
         raise SceneError(f"{source}: {len(arr)} {what} for {count} vertices")
     return np.where(np.isfinite(arr), arr, 0.0)
-
-
-def read_mesh(path, files=None, referrer=None) -> MeshData:
-    """One mesh file as a single mesh (every object and group of an OBJ together)."""
-    path = Path(path)
-    ext = path.suffix.lower()
-    if ext == ".obj":
-        from .obj import read_obj
-
-        return read_obj(path).merged()
-    if ext == ".ply":
-        from .ply import read_ply
-
-        return read_ply(path)
-    if ext == ".serialized":
-        raise SceneError(f"{path}: Mitsuba's .serialized meshes are not supported "
-                         f"(convert the mesh to PLY or OBJ)")
-    return _read_trimesh(path)
-
-
-def load_mesh(path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]:
-    """(vertices, triangles, vertex normals, uvs or None) of one mesh file."""
-    mesh = read_mesh(path)
-    return mesh.vertices, mesh.triangles, mesh.normals, mesh.uvs
-
-
-def _read_trimesh(path: Path) -> MeshData:
-    import trimesh
-
-    try:
-        loaded = trimesh.load(str(path), force="mesh", process=False, maintain_order=True)
-    except Exception as exc:  # trimesh raises many types for malformed files
-        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise SceneError(f"{path}: cannot read mesh ({first})") from None
-    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
-        raise SceneError(f"{path}: no triangles found")
-    return finish_mesh(MeshData(np.asarray(loaded.vertices, np.float64),
-                                np.asarray(loaded.faces, np.int64)), path)
 
 
 DISK_SEGMENTS = 32

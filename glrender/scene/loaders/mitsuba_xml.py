@@ -595,7 +595,7 @@ class _Builder:
                         face_normals=self.prop(node, "face_normals", "bool", False),
                         name=node.id or f"{t} (line {node.line})")
         if t in ("obj", "ply"):
-            from .meshes import read_mesh
+            from .mesh_files import read_mesh
 
             path = self.r.files.resolve(self.prop(node, "filename", "string", ""), node.file, node.line,
                                         "mesh file", tuple(self.r.search))

@@ -394,7 +394,7 @@ def _shape(ctx, i: int, t, materials: dict[str, int], scene: m.Scene) -> list[m.
         shape.radius = ctx.number(t.get("radius", 1.0), f"{key}.radius", 1e-9)
     if kind == "mesh":
         path = ctx.file(t.get("file"), f"{key}.file")
-        from .meshes import read_mesh
+        from .mesh_files import read_mesh
 
         mesh = read_mesh(path)
         shape.vertices, shape.triangles, shape.normals, shape.uvs = \

@@ -5,7 +5,7 @@ included), printed as one line on stderr with exit code 2; ``--debug`` adds the
 traceback. SIGINT and SIGTERM during a render stop it after the current dispatch,
 write what was rendered and a checkpoint, and exit with 130 and 143; elsewhere they
 stop at once with the same codes. The render command itself lives in
-:mod:`glrender.render.command`.
+:mod:`glrender.commands.render`.
 """
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ import signal
 import sys
 import warnings
 
-from .errors import GlrenderError
+from ..errors import GlrenderError
 
 
 class Interrupted(KeyboardInterrupt):
@@ -78,8 +78,8 @@ class _Parser(argparse.ArgumentParser):
 
 # -- glrender info --------------------------------------------------------------------------
 def cmd_info(args) -> int:
-    from .gl import egl
-    from .gl.context import create_context
+    from ..gl import egl
+    from ..gl.context import create_context
 
     devices = [{"index": d.index, "kind": d.kind, "drm_file": d.drm_file,
                 "extensions": list(d.extensions)} for d in egl.list_devices()]
@@ -113,8 +113,8 @@ def cmd_info(args) -> int:
 def cmd_sampling(args) -> int:
     from pathlib import Path
 
-    from .errors import UsageError
-    from .sampling.plots import write_sampling_plots
+    from ..errors import UsageError
+    from ..sampling.plots import write_sampling_plots
 
     if args.samples < 1000:
         raise UsageError(f"--samples {args.samples}: the chi-square tests need at least 1000")
@@ -125,20 +125,20 @@ def cmd_sampling(args) -> int:
 
 # -- glrender lab / compare (glrender/lab/) ---------------------------------------------------
 def cmd_lab(args) -> int:
-    from .lab.command import run_lab_command
+    from .lab import run_lab_command
 
     return run_lab_command(args)
 
 
 def cmd_compare(args) -> int:
-    from .lab.compare import run_compare_command
+    from .compare import run_compare_command
 
     return run_compare_command(args)
 
 
 # -- glrender render ------------------------------------------------------------------------
 def cmd_render(args) -> int:
-    from .render.command import run_render
+    from .render import run_render
 
     return run_render(args, args.signals)
 
@@ -181,10 +181,10 @@ def _add_device(parser: argparse.ArgumentParser) -> None:
 
 
 def _add_render(sub) -> None:
-    from .film.tonemap import TONE_CURVES
-    from .render.command import AOV_NAMES
-    from .render.params import STRATEGIES
-    from .scene.model import INTEGRATORS, SAMPLER_KINDS
+    from ..film.tonemap import TONE_CURVES
+    from .options import AOV_NAMES
+    from ..render.params import STRATEGIES
+    from ..scene.model import INTEGRATORS, SAMPLER_KINDS
 
     p = sub.add_parser("render", help="render a scene file to an image",
                        description=RENDER_DESCRIPTION, epilog=RENDER_EPILOG,
@@ -227,7 +227,7 @@ def _add_render(sub) -> None:
                    help="path tracer: light samples (shadow rays) at every vertex (default 1)")
     g.add_argument("--split", type=int, default=None, metavar="N",
                    help="path tracer: BSDF branches at the first vertex (default 1)")
-    from .photon.command import add_arguments as add_photon_arguments
+    from .photon_options import add_arguments as add_photon_arguments
 
     add_photon_arguments(p)
     g = p.add_argument_group("scene")
@@ -297,7 +297,7 @@ def _add_render(sub) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import __version__
+    from .. import __version__
 
     parser = _Parser(
         prog="glrender",
@@ -329,10 +329,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="chi-square samples per warp (default 10^6)")
     p.set_defaults(func=cmd_sampling)
 
-    from .lab.command import add_lab_parsers   # glrender lab, glrender compare (glrender/lab/)
+    from .lab import add_lab_parsers   # glrender lab, glrender compare (glrender/lab/)
     add_lab_parsers(sub, cmd_lab, cmd_compare)
 
-    from .preview.command import add_preview_parser   # glrender preview (glrender/preview/)
+    from .preview import add_preview_parser   # glrender preview (glrender/preview/)
     add_preview_parser(sub)
     return parser
 

@@ -6,7 +6,7 @@ import math
 from pathlib import Path
 
 from ..errors import UsageError
-from .keys import help_text
+from ..preview.keys import help_text
 
 DESCRIPTION = """\
 Open SCENE in a window and watch it converge: every frame adds the samples that fit
@@ -32,7 +32,7 @@ def add_preview_parser(sub) -> None:
     from ..film.tonemap import TONE_CURVES
     from ..render.params import STRATEGIES
     from ..scene.model import INTEGRATORS, SAMPLER_KINDS
-    from .display import VIEWS
+    from ..preview.display import VIEWS
 
     p = sub.add_parser("preview", help="open a scene in a window and steer it while it renders",
                        description=DESCRIPTION, epilog=epilog(),
@@ -120,14 +120,14 @@ def run_preview(args) -> int:
     """Run ``glrender preview`` with parsed ``args``; returns the exit code."""
     from .. import load
     from ..gl.context import create_window_context
-    from ..render.command import _check_scene_file, parse_defines
-    from .app import PreviewApp, PreviewOptions
-    from .display import DisplaySettings
+    from .options import check_scene_file, parse_defines
+    from ..preview.app import PreviewApp, PreviewOptions
+    from ..preview.display import DisplaySettings
 
     _check(args)
     params = parse_defines(args.define)
     scene_path = Path(args.scene)
-    _check_scene_file(scene_path)
+    check_scene_file(scene_path)
     screenshots = _folder(args.screenshot_dir, "--screenshot-dir", create=True)
     record = _folder(args.record, "--record", create=True) if args.record else None
     # the window first: without a display this fails before the scene is loaded
@@ -158,7 +158,7 @@ def run_preview(args) -> int:
 
 def _window_size(glfw, image: tuple[int, int]) -> tuple[int, int]:
     """The window's first size for an image, within the primary monitor."""
-    from .app import window_size_for
+    from ..preview.app import window_size_for
 
     monitor = glfw.get_primary_monitor()
     mode = glfw.get_video_mode(monitor) if monitor else None

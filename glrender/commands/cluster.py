@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UsageError
-from .merge import Partial
+from ..distributed.merge import Partial
 
 CHECKPOINT_FORMAT = "glrender-distributed-checkpoint"
 CHECKPOINT_VERSION = 2    # 2: exact fixed-point sums per band (1: float32 means and M2)
@@ -148,17 +148,18 @@ class _UnitsBar:
 
 def run_distributed(args, signals) -> int:
     from .. import __version__
-    from ..render.command import (FIRST_HIT_AOVS, _check_options, _check_scene_file,
-                                  _write_outputs, _write_stats, parse_aovs, parse_defines)
+    from .options import (FIRST_HIT_AOVS, check_options, check_scene_file, parse_aovs,
+                          parse_defines)
+    from .outputs import write_outputs, write_stats
     from ..render.renderer import settings_from_scene
     from ..scene.animation import frame_range
-    from . import client as cl
-    from . import source as src
-    from .plan import MIN_UNIT_SIZE
+    from ..distributed import client as cl
+    from ..distributed import source as src
+    from ..distributed.plan import MIN_UNIT_SIZE
 
     say = (lambda *a: None) if args.quiet else (lambda text: print(text, file=sys.stderr))
     t_start = time.perf_counter()
-    _check_options(args)
+    check_options(args)
     for key, flag in UNSUPPORTED:
         if getattr(args, key, None) is not None:
             raise UsageError(f"{flag} is not available with --workers/--scheduler/--frames "
@@ -179,7 +180,7 @@ def run_distributed(args, signals) -> int:
     params = parse_defines(args.define)
     aov_names = parse_aovs(args.aov)
     scene_path = Path(args.scene)
-    _check_scene_file(scene_path)
+    check_scene_file(scene_path)
     scene, source = src.from_file(scene_path, params, args.scene_on_workers)
     frames = [None] if args.frames is None else frame_range(scene, args.frames)
     outputs = _outputs(args, frames, args.output)
@@ -195,7 +196,7 @@ def run_distributed(args, signals) -> int:
                                    light_samples=args.light_samples, split=args.split,
                                    strategy=args.strategy,
                                    aovs=any(n in FIRST_HIT_AOVS for n in aov_names))
-    from ..photon.command import photon_settings
+    from .photon_options import photon_settings
 
     settings, photon = photon_settings(args, settings)
     cl.check_integrator(settings, photon)
@@ -221,9 +222,9 @@ def run_distributed(args, signals) -> int:
                 ("es" if args.workers > 1 else "")
     try:
         if unit_size is None:
-            from . import calibrate
+            from ..distributed import calibrate
 
-            largest, calibration = calibrate.unit_size(client, job)
+            largest, calibration = calibrate.unit_size(client, job, cl.job_future(client, job))
             unit_from = calibration["source"]
             unit_size = cl.make_plan(width, height, settings, None, frames, largest).unit_size
             say(f"glrender: unit size {unit_size} pixel-samples ("
@@ -271,12 +272,12 @@ def run_distributed(args, signals) -> int:
         return 128 + signals.received
     written = []
     for frame in frames:
-        written += _write_outputs(result.films[frame], outputs[frame], aov_names, args)
+        written += write_outputs(result.films[frame], outputs[frame], aov_names, args)
     if args.checkpoint or args.resume:
         _save_checkpoint(ckpt_path, meta, result.bands)
     rate = plan.pixel_samples / result.seconds if result.seconds > 0 else None
     if args.stats:
-        _write_stats(Path(args.stats), {
+        write_stats(Path(args.stats), {
             "glrender": __version__, "scene": str(scene_path), "params": params,
             "outputs": written, "cluster": where, "workers": n_workers, "plan": plan.record(),
             "unit_size": unit_size, "unit_size_from": unit_from, "calibration": calibration,

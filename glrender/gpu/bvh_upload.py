@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from ..errors import UsageError
 from ..gl.buffers import BufferTexture
-from .bvh import MAX_DEPTH, Bvh
+from ..accel.bvh import MAX_DEPTH, Bvh
 
 UNIT_NODES = 0
 UNIT_TRIANGLES = 1

@@ -6,8 +6,8 @@ from dataclasses import replace
 from typing import Any
 
 from ..errors import UsageError
-from .photon import PhotonSettings
-from .sppm import SppmSettings
+from ..photon.photon import PhotonSettings
+from ..photon.sppm import SppmSettings
 
 SPPM_OPTIONS = ("iterations", "initial_radius", "alpha")
 PHOTON_OPTIONS = ("caustic_photons", "radius", "knn", "final_gather")

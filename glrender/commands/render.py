@@ -5,9 +5,6 @@ folder, scene file, option values, memory), so a mistake costs no render time.
 """
 from __future__ import annotations
 
-import json
-import math
-import os
 import signal
 import sys
 import time
@@ -17,127 +14,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import DeviceError, SceneError, UsageError
-from ..scene.model import SPLIT_LIMIT, parse_rr
-
-AOV_NAMES = ("albedo", "normal", "depth", "emission", "variance", "radius", "photons")   # the last two: photon, sppm
-FIRST_HIT_AOVS = ("albedo", "normal", "depth", "emission")
-# sample indices are 32-bit on the device: the open-ended target of a time budget
-SPP_LIMIT = 1 << 31
-# the options a checkpoint remembers; --resume takes those not given again
-RESUMABLE = ("spp", "seed", "sampler", "integrator", "strategy", "max_depth", "width", "height",
-             "clamp", "crop", "strategy_images", "strategy_depth", "rr", "rr_depth",
-             "light_samples", "split")
-
-
-def parse_defines(items: list[str]) -> dict[str, str]:
-    """``-D key=value`` pairs -> {key: value} (values stay strings; the loader types them)."""
-    params = {}
-    for item in items:
-        key, sep, value = item.partition("=")
-        key = key.strip()
-        if not sep or not key.isidentifier():
-            raise UsageError(f"-D {item}: expected KEY=VALUE with KEY a name (letters, digits, _)")
-        params[key] = value
-    return params
-
-
-def parse_aovs(text: str | None) -> list[str]:
-    if text is None:
-        return []
-    names = [n.strip() for n in text.split(",") if n.strip()]
-    unknown = [n for n in names if n not in AOV_NAMES]
-    if unknown or not names:
-        raise UsageError(f"--aov {text}: unknown AOV {', '.join(unknown) or '(none)'} "
-                         f"(choose from {','.join(AOV_NAMES)})")
-    return list(dict.fromkeys(names))
-
-
-def _check_options(args) -> None:
-    def need(name, value, ok, what):
-        if value is not None and not ok(value):
-            raise UsageError(f"{name} {value}: expected {what}")
-
-    need("--spp", args.spp, lambda v: 1 <= v < SPP_LIMIT, "a positive number of samples per pixel")
-    need("--time", args.time, lambda v: math.isfinite(v) and v > 0, "a positive number of seconds")
-    need("--checkpoint-every", args.checkpoint_every, lambda v: math.isfinite(v) and v > 0,
-         "a positive number of seconds")
-    need("--width", args.width, lambda v: 1 <= v <= 65536, "pixels in 1..65536")
-    need("--height", args.height, lambda v: 1 <= v <= 65536, "pixels in 1..65536")
-    need("--threads", args.threads, lambda v: v >= 1, "a positive number of threads")
-    need("--exposure", args.exposure, math.isfinite, "a finite number of stops")
-    need("--seed", args.seed, lambda v: 0 <= v < 1 << 32, "an integer in 0..2^32-1")
-    need("--max-depth", args.max_depth, lambda v: v == -1 or v >= 1,
-         "-1 (unbounded) or a number of path segments >= 1")
-    need("--rr-depth", args.rr_depth, lambda v: 1 <= v <= 1 << 20, "a number of path segments >= 1")
-    for name, value in (("--light-samples", args.light_samples), ("--split", args.split)):
-        need(name, value, lambda v: 1 <= v <= SPLIT_LIMIT, f"an integer in 1..{SPLIT_LIMIT}")
-    if args.rr is not None:
-        try:
-            parse_rr(args.rr)
-        except SceneError as exc:
-            want = str(exc).split("expected ", 1)[1].rsplit(", got", 1)[0]
-            raise UsageError(f"--rr {args.rr}: expected {want}") from None
-    need("--clamp", args.clamp, lambda v: math.isfinite(v) and v > 0,
-         "a positive number (the largest RGB component a sample keeps)")
-    need("--noise-threshold", args.noise_threshold, lambda v: 0 < v < 1,
-         "a relative error in (0, 1), e.g. 0.02 for 2%")
-    if args.crop is not None:
-        parse_crop(args.crop)
-
-
-def parse_crop(text, width: int | None = None, height: int | None = None) -> list[int]:
-    """``X0,Y0,X1,Y1`` (or the list a checkpoint saved) -> [x0, y0, x1, y1] (pixels, x1 and
-    y1 excluded), inside the film when its size is given."""
-    if isinstance(text, (list, tuple)):
-        text = ",".join(map(str, text))
-    parts = [p.strip() for p in str(text).split(",")]
-    if len(parts) != 4 or not all(p.lstrip("-").isdigit() for p in parts):
-        raise UsageError(f"--crop {text}: expected X0,Y0,X1,Y1 in whole pixels")
-    x0, y0, x1, y1 = map(int, parts)
-    if not (0 <= x0 < x1 and 0 <= y0 < y1):
-        raise UsageError(f"--crop {text}: expected 0 <= X0 < X1 and 0 <= Y0 < Y1")
-    if width is not None and height is not None and (x1 > width or y1 > height):
-        raise UsageError(f"--crop {text}: outside the {width}x{height} film (X1 <= {width}, "
-                         f"Y1 <= {height})")
-    return [x0, y0, x1, y1]
-
-
-def _check_scene_file(path: Path) -> None:
-    if path.is_dir():
-        hint = f" (e.g. {path / 'scene.toml'})" if (path / "scene.toml").is_file() else ""
-        raise UsageError(f"{path}: is a folder; give the scene file inside it{hint}")
-    if not path.exists():
-        raise UsageError(f"{path}: no such scene file (check the path)")
-    if not os.access(path, os.R_OK):
-        raise UsageError(f"{path}: cannot read the scene file (permission denied)")
-
-
-def _available_memory() -> int | None:
-    try:
-        with open("/proc/meminfo") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except OSError:
-        pass
-    return None
-
-
-def _check_memory(width: int, height: int, aovs: bool, on_host_device: bool) -> None:
-    """Refuse images whose buffers cannot fit, before allocating them."""
-    pixels = width * height
-    from .renderer import AOV_BYTES, SQUARE_BYTES, SUM_BYTES
-
-    accumulation = SUM_BYTES + SQUARE_BYTES
-    device = pixels * (accumulation + (AOV_BYTES if aovs else 0)) * 2   # and the undo copy
-    host = pixels * (accumulation + 76 + 24)               # read-back, Film arrays, encoding
-    need = host + (device if on_host_device else 0)
-    have = _available_memory()
-    if have is not None and need > have:
-        raise UsageError(f"a {width}x{height} image needs about {need / 2**30:.1f} GiB of memory "
-                         f"for its buffers, more than the {have / 2**30:.1f} GiB available: render "
-                         f"fewer pixels (--width/--height){' or without --aov' if aovs else ''}")
+from ..errors import DeviceError, UsageError
+from .options import (AOV_NAMES, FIRST_HIT_AOVS, RESUMABLE, SPP_LIMIT, check_memory, check_options,
+                      check_scene_file, parse_aovs, parse_crop, parse_defines)
+from .outputs import mean_relative_stderr_of, write_outputs, write_stats
 
 
 class _Timer(dict):
@@ -150,49 +30,13 @@ class _Timer(dict):
             self[name] = self.get(name, 0.0) + time.perf_counter() - t0
 
 
-def _aov_sidecar(output: Path, name: str) -> Path:
-    ext = ".npy" if output.suffix.lower() == ".npy" else ".pfm"
-    return output.with_name(f"{output.stem}.{name}{ext}")
-
-
-def denoised_path(output: Path) -> Path:
-    """Where --denoise writes the denoised image: OUT.denoised.EXT beside OUT.EXT."""
-    return output.with_name(f"{output.stem}.denoised{output.suffix}")
-
-
-def _write_outputs(film, output: Path, aov_names: list[str], args,
-                   denoised: np.ndarray | None = None) -> list[str]:
-    from ..film.io import write_image
-
-    written = [str(output)]
-    if output.suffix.lower() == ".exr":
-        layers = {name: film.aov(name) for name in aov_names if name != "variance"}
-        layers["variance"] = film.variance
-        if denoised is not None:
-            layers["denoised"] = denoised
-        write_image(output, film.mean, aovs=layers, half=args.half)
-        if denoised is not None:
-            write_image(denoised_path(output), denoised, half=args.half)
-            written.append(str(denoised_path(output)))
-        return written
-    write_image(output, film.mean, exposure=args.exposure, curve=args.tonemap, srgb=args.srgb)
-    if denoised is not None:
-        write_image(denoised_path(output), denoised, exposure=args.exposure, curve=args.tonemap,
-                    srgb=args.srgb)
-        written.append(str(denoised_path(output)))
-    for name in aov_names:
-        side = _aov_sidecar(output, name)
-        write_image(side, film.aov(name))
-        written.append(str(side))
-    return written
-
-
 def _denoise(film, scene, settings, ctx, crop, say, share=None) -> tuple[np.ndarray, dict]:
     """The film's mean denoised (--denoise), and what the statistics record about it: the
     seen emission kept out of the filter and rendered again by its own pass (at the
     film's samples per pixel, which a time budget or a resume may change)."""
-    from ..denoise import Denoiser, aovs_are_clean, render_seen_emission
-    from .noise import crop_band, crop_rows
+    from ..denoise import Denoiser, aovs_are_clean
+    from ..render.emission_pass import render_seen_emission
+    from ..render.noise import crop_band, crop_rows
 
     clean = aovs_are_clean(scene)
     t0 = time.perf_counter()
@@ -218,25 +62,10 @@ def _denoise(film, scene, settings, ctx, crop, say, share=None) -> tuple[np.ndar
     return image, info
 
 
-def _mean_relative_stderr(film) -> float | None:
-    from .noise import mean_relative_stderr
-
-    return mean_relative_stderr(film)
-
-
-def _write_stats(path: Path, stats: dict) -> None:
-    from ..film.io import atomic_write
-
-    def write(tmp: Path) -> None:
-        tmp.write_text(json.dumps(stats, indent=2) + "\n")
-
-    atomic_write(path, write)
-
-
 def _strategy_depth(options: dict, scene) -> int:
     """--strategy-images' path length (0 without it): --strategy-depth, else 5 or the max
     depth if smaller."""
-    from .strategies import DEFAULT_DEPTH
+    from ..render.strategies import DEFAULT_DEPTH
 
     depth = options.get("strategy_depth")
     folder = options.get("strategy_images")
@@ -259,19 +88,19 @@ def _strategy_depth(options: dict, scene) -> int:
 
 def run_render(args, signals) -> int:
     """Run ``glrender render`` with parsed ``args``; ``signals`` is the command's
-    :class:`~glrender.cli.StopSignals`. Returns the exit code."""
+    :class:`~glrender.commands.cli.StopSignals`. Returns the exit code."""
     import moderngl
 
     from .. import __version__, load
     from ..film.io import check_folder, check_output
     from ..gl.context import create_context
-    from .checkpoint import check_resumable, load_checkpoint, save_checkpoint
-    from .job import RenderJob
-    from .progress import ProgressBar
-    from .noise import crop_band, crop_rows
-    from .renderer import SPLATTING, Renderer, settings_from_scene
+    from ..render.checkpoint import check_resumable, load_checkpoint, save_checkpoint
+    from ..render.job import RenderJob
+    from ..render.progress import ProgressBar
+    from ..render.noise import crop_band, crop_rows
+    from ..render.renderer import SPLATTING, Renderer, settings_from_scene
 
-    from ..distributed.command import run_distributed, uses_cluster
+    from .cluster import run_distributed, uses_cluster
 
     if uses_cluster(args):          # --workers, --scheduler, --frames: on a Dask cluster
         if getattr(args, "strategy_images", None):
@@ -283,7 +112,7 @@ def run_render(args, signals) -> int:
     t_start = time.perf_counter()
 
     # -- options, files, checkpoint: everything checked before any work --------------------
-    _check_options(args)
+    check_options(args)
     if getattr(args, "denoise", False):
         from ..denoise import load_oidn
 
@@ -292,7 +121,7 @@ def run_render(args, signals) -> int:
     aov_names = parse_aovs(args.aov)
     output = check_output(args.output)
     scene_path = Path(args.scene)
-    _check_scene_file(scene_path)
+    check_scene_file(scene_path)
     ckpt_path = Path(args.checkpoint) if args.checkpoint else Path(str(output) + ".ckpt")
     for path, what in ((ckpt_path, "checkpoint"), (args.stats, "statistics")):
         if path is not None:
@@ -301,7 +130,7 @@ def run_render(args, signals) -> int:
                 raise UsageError(f"{path}: is a folder, expected a file name for the {what}")
     keep_checkpoint = bool(args.checkpoint or args.checkpoint_every or args.resume)
     ckpt = load_checkpoint(ckpt_path) if args.resume else None
-    from ..photon.command import OPTIONS as PHOTON_OPTIONS
+    from .photon_options import OPTIONS as PHOTON_OPTIONS
 
     resumable = RESUMABLE + PHOTON_OPTIONS
     options = {k: getattr(args, k) for k in resumable if getattr(args, k, None) is not None}
@@ -329,7 +158,7 @@ def run_render(args, signals) -> int:
                                    strategy=options.get("strategy"), aovs=first_hit,
                                    clamp=options.get("clamp"),
                                    strategy_depth=_strategy_depth(options, scene))
-    from ..photon.command import photon_settings
+    from .photon_options import photon_settings
 
     for name in PHOTON_OPTIONS:       # a checkpoint's photon options, unless given again
         if getattr(args, name, None) is None and name in options:
@@ -347,7 +176,7 @@ def run_render(args, signals) -> int:
         except DeviceError as exc:
             raise DeviceError(f"{exc}; `glrender info` lists the devices (choose with --device "
                               f"or $GLRENDER_DEVICE)") from exc
-    _check_memory(width, height, first_hit, ctx.is_llvmpipe)
+    check_memory(width, height, first_hit, ctx.is_llvmpipe)
     crop = parse_crop(options["crop"], width, height) if options.get("crop") else None
     if crop is not None:
         options["crop"] = crop
@@ -356,7 +185,7 @@ def run_render(args, signals) -> int:
                              f"integrator (its light paths reach every pixel of the film)")
     noise_plan = pilot = None
     if args.noise_threshold is not None and ckpt is None:
-        from .noise import run_pilot
+        from ..render.noise import run_pilot
 
         # the render shares the pilot's scene data (packed arrays, BVH, textures)
         noise_plan, pilot = run_pilot(scene, settings, args.noise_threshold, ctx=ctx,
@@ -449,9 +278,9 @@ def run_render(args, signals) -> int:
             with timer("denoise"):
                 denoised, denoise_info = _denoise(film, scene, settings, ctx, crop, say, share=renderer)
         with timer("write"):
-            written = _write_outputs(film, output, aov_names, args, denoised)
+            written = write_outputs(film, output, aov_names, args, denoised)
             if settings.strategy_depth:
-                from . import strategies
+                from ..render import strategies
 
                 written += strategies.write(Path(options["strategy_images"]),
                                             renderer.strategy_images(), settings.strategy_depth,
@@ -495,7 +324,7 @@ def run_render(args, signals) -> int:
             "planned_spp": noise_plan.spp, "predicted_error": noise_plan.predicted_error()},
         "samples_per_second": rate,
         "nonfinite_samples": film.nonfinite_total,
-        "mean_relative_stderr": _mean_relative_stderr(film),
+        "mean_relative_stderr": mean_relative_stderr_of(film),
         "stderr_is_upper_bound": settings.sampler.kind != "independent",
         "mean": [float(v) for v in film.mean.reshape(-1, 3).mean(0)],
     }
@@ -503,7 +332,7 @@ def run_render(args, signals) -> int:
         stats["photon"] = renderer.photon_stats()
         stats["biased"] = True
     if args.stats:
-        _write_stats(Path(args.stats), stats)
+        write_stats(Path(args.stats), stats)
     renderer.release()
 
     # -- summary -----------------------------------------------------------------------------

@@ -14,7 +14,7 @@ ratios to a baseline), then writes DIR/report.md, DIR/results.json and PNG figur
 
 
 def add_lab_parsers(sub, cmd_lab, cmd_compare) -> None:
-    from . import EXPERIMENTS
+    from ..lab import EXPERIMENTS
 
     p = sub.add_parser("lab", help="measure variance-reduction techniques; write a report with plots",
                        description=LAB_DESCRIPTION,
@@ -57,7 +57,7 @@ def add_lab_parsers(sub, cmd_lab, cmd_compare) -> None:
 
 
 def run_lab_command(args) -> int:
-    from . import run
+    from ..lab import run
     from ..gl.context import default_context
 
     def progress(name):
