@@ -10,7 +10,9 @@ from typing import Callable
 
 from .errors import UsageError
 from .film import Film
-from .render.renderer import Renderer, settings_from_scene
+from . import integrators
+from .drivers import create_driver
+from .render.renderer import settings_from_scene
 from .scene import load
 from .scene.model import Scene
 
@@ -29,6 +31,7 @@ def render(scene: Scene | str | os.PathLike[str], spp: int | None = None, *,
            sampler: str | None = None, max_depth: int | None = None,
            strategy: str | None = None, aovs: bool = False,
            device: str | int | None = None,
+           integrator_options: object = None,
            progress: bool | ProgressCallback = True,
            callback: Callable[[int, int], None] | None = None,
            **options: object) -> Film:
@@ -41,7 +44,9 @@ def render(scene: Scene | str | os.PathLike[str], spp: int | None = None, *,
         time: a budget in seconds of rendering (loading, building and compiling not
             counted): rendering stops before the pass that would end past it (the first
             pass always completes, so the image has samples).
-        integrator: ``"path"``, ``"direct"`` or ``"ao"`` (default: the scene's).
+        integrator: a name from :func:`glrender.integrators.names` (``"path"``,
+            ``"direct"``, ``"ao"``, ``"lighttrace"``, ``"bdpt"``, ``"photon"``, ``"sppm"``;
+            default: the scene's). SPPM's ``spp`` is its number of iterations.
         seed: the sampler's seed; the same scene, seed and spp give the same image, bitwise,
             on the same device.
         sampler: ``"independent"``, ``"stratified"`` or ``"sobol"``.
@@ -52,6 +57,9 @@ def render(scene: Scene | str | os.PathLike[str], spp: int | None = None, *,
         aovs: also record first-hit albedo, normal (world space), depth (metres along
             the ray) and the emission the camera sees, read with :meth:`Film.aov`.
         device: ``"auto"``, ``"cpu"`` (llvmpipe), ``"gpu"`` or an EGL device index.
+        integrator_options: the photon integrators' own settings, a
+            :class:`glrender.photon.PhotonSettings` or :class:`glrender.photon.SppmSettings`
+            (None: their defaults).
         progress: True: a progress bar on standard error when it is a terminal; False:
             nothing; a callable: ``progress(spp_done, seconds)`` after every pass.
         callback: ``callback(spp_done, spp_target)`` after every pass.
@@ -89,9 +97,12 @@ def render(scene: Scene | str | os.PathLike[str], spp: int | None = None, *,
     settings = settings_from_scene(scene, integrator=integrator, spp=spp, seed=seed,
                                    sampler=sampler, max_depth=max_depth, strategy=strategy,
                                    aovs=aovs, **options)  # type: ignore[arg-type]
-    target = settings.sampler.spp if spp is not None or time is None else _SPP_LIMIT
+    open_ended = integrators.get(settings.integrator.kind).open_ended
+    target = settings.sampler.spp if spp is not None or time is None or not open_ended \
+        else _SPP_LIMIT
     t_setup = _time.perf_counter()
-    with Renderer(scene, settings, device=device) as renderer:
+    renderer = create_driver(scene, settings, integrator_options, device=device)
+    try:
         bar = None
         if progress is True and sys.stderr is not None and sys.stderr.isatty():
             from .render.progress import ProgressBar
@@ -127,5 +138,8 @@ def render(scene: Scene | str | os.PathLike[str], spp: int | None = None, *,
             "samples_per_second": samples / result.render_seconds if result.render_seconds > 0
             else None,
             "nonfinite_samples": film.nonfinite_total,
+            **renderer.stats(),
         }
         return film
+    finally:
+        renderer.release()

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import integrators
 from ..errors import DeviceError, UsageError
 from .options import (AOV_NAMES, FIRST_HIT_AOVS, RESUMABLE, SPP_LIMIT, check_memory, check_options,
                       check_scene_file, parse_aovs, parse_crop, parse_defines)
@@ -98,7 +99,8 @@ def run_render(args, signals) -> int:
     from ..render.job import RenderJob
     from ..render.progress import ProgressBar
     from ..render.noise import crop_band, crop_rows
-    from ..render.renderer import SPLATTING, Renderer, settings_from_scene
+    from ..drivers import create_driver
+    from ..render.renderer import settings_from_scene
 
     from .cluster import run_distributed, uses_cluster
 
@@ -164,8 +166,8 @@ def run_render(args, signals) -> int:
         if getattr(args, name, None) is None and name in options:
             setattr(args, name, options[name])
     settings, photon = photon_settings(args, settings)   # --integrator sppm: iterations as spp
-    sppm = photon if settings.integrator.kind == "sppm" else None
-    if "spp" in options or args.time is None or sppm is not None:
+    spec = integrators.get(settings.integrator.kind)
+    if "spp" in options or args.time is None or not spec.open_ended:
         target = settings.sampler.spp
     else:
         target = SPP_LIMIT
@@ -180,7 +182,7 @@ def run_render(args, signals) -> int:
     crop = parse_crop(options["crop"], width, height) if options.get("crop") else None
     if crop is not None:
         options["crop"] = crop
-        if settings.integrator.kind in SPLATTING:
+        if spec.splatting:
             raise UsageError(f"--crop: not available with the {settings.integrator.kind} "
                              f"integrator (its light paths reach every pixel of the film)")
     noise_plan = pilot = None
@@ -195,16 +197,7 @@ def run_render(args, signals) -> int:
         options["spp"] = target = noise_plan.spp
         settings = replace(settings, sampler=replace(settings.sampler, spp=noise_plan.spp))
     try:
-        if sppm is not None:
-            from ..photon import SppmRenderer
-
-            renderer = SppmRenderer(scene, settings, sppm, ctx=ctx)
-        elif photon is not None:
-            from ..photon import PhotonRenderer
-
-            renderer = PhotonRenderer(scene, settings, photon, ctx=ctx, share=pilot)
-        else:
-            renderer = Renderer(scene, settings, ctx=ctx, share=pilot)
+        renderer = create_driver(scene, settings, photon, ctx=ctx, share=pilot)
     except moderngl.Error as exc:
         raise UsageError(f"cannot allocate the device buffers of a {width}x{height} image "
                          f"({str(exc).strip()}): render fewer pixels (--width/--height)") from exc
@@ -328,9 +321,7 @@ def run_render(args, signals) -> int:
         "stderr_is_upper_bound": settings.sampler.kind != "independent",
         "mean": [float(v) for v in film.mean.reshape(-1, 3).mean(0)],
     }
-    if hasattr(renderer, "photon_stats"):     # photon, sppm: maps, radii, lookups, memory
-        stats["photon"] = renderer.photon_stats()
-        stats["biased"] = True
+    stats.update(renderer.stats())         # photon, sppm: maps, radii, lookups, memory
     if args.stats:
         write_stats(Path(args.stats), stats)
     renderer.release()

@@ -18,6 +18,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .. import integrators
 from ..errors import UsageError
 from .merge import FrameImage
 from .plan import NOMINAL_UNIT_SIZE, Plan, default_unit_size
@@ -105,10 +106,11 @@ class Result:
 
 
 def check_integrator(settings, photon=None) -> None:
-    if settings.integrator.kind == "sppm":
-        raise UsageError("--integrator sppm does not run on a cluster yet (its iterations "
-                         "depend on each other): render it in one process")
-    if settings.integrator.kind == "photon" and getattr(photon, "photon_view", False):
+    kind = settings.integrator.kind
+    if not integrators.get(kind).distributed:
+        raise UsageError(f"--integrator {kind} does not run on a cluster yet (its iterations "
+                         f"depend on each other): render it in one process")
+    if getattr(photon, "photon_view", False):
         raise UsageError("--aov photons does not run on a cluster (every worker traces the "
                          "maps and would draw the view again): render it in one process")
 
@@ -118,15 +120,13 @@ def make_plan(width: int, height: int, settings, unit_size: int | None, frames,
     """The plan of a render (unit_size None: plan.default_unit_size, with ``largest`` the
     calibrated size). Integrators that splat onto the whole film get whole-frame bands;
     SPPM's renders do not split (the photon integrator's do: each worker traces the maps)."""
-    from ..render.renderer import SPLATTING
-
     check_integrator(settings)
     kind = settings.integrator.kind
     spp = settings.sampler.spp
     if unit_size is None:
         unit_size = default_unit_size(width, height, spp, len(frames),
                                       largest or NOMINAL_UNIT_SIZE)
-    return Plan(width, height, spp, unit_size, tuple(frames), whole_frame=kind in SPLATTING)
+    return Plan(width, height, spp, unit_size, tuple(frames), whole_frame=integrators.get(kind).splatting)
 
 
 def job_hash(job: Job) -> str:

@@ -17,6 +17,7 @@ import time
 from collections import OrderedDict
 from dataclasses import dataclass, replace
 
+from .. import integrators
 from .merge import Partial, from_state, merge
 
 RENDERERS_PER_THREAD = 2
@@ -53,7 +54,7 @@ def _context(device):
 
 
 def _renderer(job: Job, frame):
-    from ..render.renderer import Renderer
+    from ..drivers import create_driver
     from ..scene.animation import scene_at_frame
     from .source import load_source
 
@@ -69,14 +70,9 @@ def _renderer(job: Job, frame):
         scene = scene_at_frame(scene, frame)
     if (scene.film.width, scene.film.height) != (job.width, job.height):
         scene = replace(scene, film=replace(scene.film, width=job.width, height=job.height))
-    if job.settings.integrator.kind == "photon":
-        # every worker traces the same maps from the seed (sorted into one order), so each
-        # renders its pixels as one process would
-        from ..photon import PhotonRenderer
-
-        renderer = PhotonRenderer(scene, job.settings, job.photon, ctx=_context(job.device))
-    else:
-        renderer = Renderer(scene, job.settings, ctx=_context(job.device))
+    # photon mapping: every worker traces the same maps from the seed (sorted into one
+    # order), so each renders its pixels as one process would
+    renderer = create_driver(scene, job.settings, job.photon, ctx=_context(job.device))
     cache[key] = renderer
     while len(cache) > RENDERERS_PER_THREAD:
         cache.popitem(last=False)[1].release()
@@ -92,10 +88,8 @@ def render_unit(job: Job, unit) -> Partial:
     r.step(stop - start)
     state = r.state()
     seconds = time.perf_counter() - t0
-    from ..render.renderer import SPLATTING
-
     return from_state(state, r.width * r.band_height, job.settings.aovs, unit.samples, seconds,
-                      splat=job.settings.integrator.kind in SPLATTING)
+                      splat=integrators.get(job.settings.integrator.kind).splatting)
 
 
 def hold(job: Job) -> Job:

@@ -111,7 +111,7 @@ class PhotonRenderer(Renderer):
     """A scene on the device rendered by photon mapping: :class:`Renderer` with the
     photon integrator's camera kernel and the two photon maps, traced at construction."""
 
-    integrator_files = {"photon": "integrators/photon.glsl"}
+    driver = "photon"
 
     def __init__(self, scene: Any, settings: Any = None, photon: PhotonSettings | None = None, *,
                  ctx: Any = None, device: Any = None, **overrides: Any) -> None:
@@ -348,6 +348,11 @@ class PhotonRenderer(Renderer):
             first = 8 * self.rows[0]
             film.aovs["photons"] = view[first:first + self.band_height].astype(np.float32)
         return film
+
+    def stats(self) -> dict[str, Any]:
+        """``--stats`` entries: the photon maps, radii, lookups and memory (``photon``); a
+        photon estimate is biased (consistent only)."""
+        return {"photon": self.photon_stats(), "biased": True}
 
     def photon_stats(self) -> dict[str, Any]:
         """What --stats reports of the photon maps: photons emitted and stored per map,

@@ -559,6 +559,11 @@ class SppmRenderer:
         """The slices of pixel rows an iteration runs (:meth:`slices`; --stats counts them)."""
         return self.slices()
 
+    def stats(self) -> dict[str, Any]:
+        """``--stats`` entries: the photon maps, radii, lookups and memory (``photon``); a
+        photon estimate is biased (consistent only)."""
+        return {"photon": self.photon_stats(), "biased": True}
+
     def photon_stats(self) -> dict[str, Any]:
         """What --stats reports of SPPM: photons per iteration, alpha, kernel, the radii
         now (min, mean, max), the gathers' candidate counts and memory."""

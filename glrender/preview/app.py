@@ -20,15 +20,26 @@ import numpy as np
 
 from ..film.tonemap import TONE_CURVES
 from ..render.params import STRATEGIES
-from ..render.renderer import Renderer, camera_tangents, settings_from_scene
+from .. import integrators
+from ..drivers import create_driver
+from ..photon import PhotonSettings
+from ..render.driver import RenderDriver
+from ..render.renderer import camera_tangents, settings_from_scene
 from ..scene import model as m
 from .camera import CameraController
 from .display import VIEWS, Display, DisplaySettings, fit_viewport
 from .keys import bindings, help_text
 from .progressive import Progressive, SppmProgressive
 
-INTEGRATOR_ORDER = m.INTEGRATORS   # sppm: its own driver (SppmProgressive), iteration by iteration
+INTEGRATOR_ORDER = m.INTEGRATORS
 PREVIEW_PHOTONS = 1 << 17       # the photon integrator's global and caustic maps in the preview
+# per driver (glrender.integrators): how the preview accumulates (SPPM iteration by iteration,
+# one camera sample each, without AOVs) and the integrator's own options in the preview
+PREVIEW_DRIVERS = {
+    "kernel": (Progressive, True, lambda: None),
+    "photon": (Progressive, True, lambda: PhotonSettings(photons=PREVIEW_PHOTONS)),
+    "sppm": (SppmProgressive, False, lambda: None),
+}
 STRATEGY_ORDER = tuple(STRATEGIES)
 DEPTH_STEPS_MAX = 16            # ] past this goes to unbounded (-1)
 EXPOSURE_STEP = 0.5             # stops per key press
@@ -109,7 +120,7 @@ class PreviewApp:
         self._frames = 0
         self._totals = {"render": 0.0, "display": 0.0}   # seconds, for the summary
         self._recorded = 0
-        self.renderer: Renderer | None = None
+        self.renderer: RenderDriver | None = None
         self.progressive: Progressive | None = None
         self.denoise = False         # the N key: show the denoised color view
         self._denoised = None        # its DenoisedView (glrender/preview/denoised.py)
@@ -124,13 +135,13 @@ class PreviewApp:
 
     # -- renderer --------------------------------------------------------------------------
     def settings_label(self) -> str:
-        if self.integrator == "ao":
-            return "ao"
-        if self.integrator == "direct":
-            return f"direct, {self.strategy}"
-        if self.integrator in ("sppm", "photon"):      # next-event estimation by light sampling
-            return f"{self.integrator}, depth {depth_label(self.max_depth)}"
-        return f"{self.integrator}, {self.strategy}, depth {depth_label(self.max_depth)}"
+        spec = integrators.get(self.integrator)
+        parts = [self.integrator]
+        if spec.uses_strategy:
+            parts.append(self.strategy)
+        if spec.uses_depth:
+            parts.append(f"depth {depth_label(self.max_depth)}")
+        return ", ".join(parts)
 
     def _build(self) -> None:
         """A renderer (new kernel) for the current integrator, strategy and depth."""
@@ -146,20 +157,10 @@ class PreviewApp:
         if old is not None:
             self.display.hold(old, self.view)   # on screen until the new kernel's samples land
             old.release()
-        if self.integrator == "photon":    # a Renderer whose photon maps are traced first
-            from ..photon import PhotonRenderer, PhotonSettings
-
-            self.renderer = PhotonRenderer(self.scene, settings, PhotonSettings(photons=PREVIEW_PHOTONS),
-                                           ctx=self.ctx)
-            self.progressive = Progressive(self.renderer, self.options.spp)
-        elif self.integrator == "sppm":    # iterations (one camera sample each) as spp
-            from ..photon import SppmRenderer
-
-            self.renderer = SppmRenderer(self.scene, replace(settings, aovs=False), ctx=self.ctx)
-            self.progressive = SppmProgressive(self.renderer, self.options.spp)
-        else:
-            self.renderer = Renderer(self.scene, settings, ctx=self.ctx)
-            self.progressive = Progressive(self.renderer, self.options.spp)
+        progressive, aovs, options = PREVIEW_DRIVERS[integrators.get(self.integrator).driver]
+        self.renderer = create_driver(self.scene, replace(settings, aovs=aovs), options(),
+                                      ctx=self.ctx)
+        self.progressive = progressive(self.renderer, self.options.spp)
         self._generation += 1
         seconds = time.perf_counter() - t0
         self._compile_note = f" - built in {seconds:.2f} s"

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from .. import integrators
 from .renderer import Renderer
 
 # the seen-emission pass: samples per pixel for a render of `spp`
@@ -25,7 +26,7 @@ def emission_settings(settings):
     None where the pass has nothing to add: integrators whose emission AOV is 0 (AO,
     light tracing, SPPM) and clamped renders (the clamp scales the AOV with the sample)."""
     integ = settings.integrator
-    if integ.kind not in ("path", "direct", "bdpt", "photon") or settings.clamp is not None:
+    if not integrators.get(integ.kind).emission_aov or settings.clamp is not None:
         return None
     max_depth = integ.max_depth if integ.kind == "path" else 1
     return replace(settings, integrator=replace(integ, kind="path", max_depth=max_depth),

@@ -19,6 +19,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from .. import integrators
 from ..errors import UsageError
 from ..gl import shaders
 from ..gl.context import Context, current, default_context
@@ -31,11 +32,6 @@ from . import accum, strategies
 from .params import shader_defines
 
 TILE = 8
-INTEGRATOR_FILES = {"path": "integrators/path.glsl", "direct": "integrators/direct.glsl",
-                    "ao": "integrators/ao.glsl", "lighttrace": "integrators/lighttrace.glsl",
-                    "bdpt": "integrators/bdpt.glsl"}
-# integrators that splat light-path contributions onto the whole film (integrators/splat.glsl)
-SPLATTING = ("lighttrace", "bdpt")
 SPLAT_SCALE = 65536.0   # kSplatScale: fixed-point units per unit of splatted value
 BDPT_DEPTH_CAP = 16     # kBdptDepthCap: bdpt's longest path (integrators/bdpt_vertex.glsl)
 # bytes per pixel of the accumulation (glrender/render/accum.py): 128-bit sums of r, g, b
@@ -166,7 +162,8 @@ class Renderer:
     again (they stay on the device until the last renderer using them is released).
     """
 
-    integrator_files = INTEGRATOR_FILES   # the render kernels' integrators (kind: file)
+    #: the driver name (glrender.integrators) of the integrators this class runs
+    driver = "kernel"
 
     def __init__(self, scene: m.Scene, settings: RenderSettings | None = None, *,
                  ctx: Context | None = None, device: str | int | None = None,
@@ -216,6 +213,11 @@ class Renderer:
         # ("build": pack_scene, the BVH build and the uploads) and compiling the kernel
         # ("compile": llvmpipe's JIT at the first dispatch included)
         self.timings = {"pack": pack, "build": t1 - t_pack, "compile": time.perf_counter() - t1}
+
+    @property
+    def splatting(self) -> bool:
+        """Whether the integrator splats light paths onto the whole film."""
+        return integrators.get(self.settings.integrator.kind).splatting
 
     @property
     def texture_bytes(self) -> int:
@@ -355,12 +357,12 @@ class Renderer:
         s = self.settings
         integ = s.integrator
         p = self.packed
-        files = self.integrator_files
-        if integ.kind not in files:
-            driver = "PhotonRenderer" if integ.kind == "photon" else "SppmRenderer"
-            raise UsageError(f"integrator {integ.kind!r} has its own driver, not a render kernel: "
-                             f"use glrender.photon.{driver} (or glrender render --integrator "
-                             f"{integ.kind}); Renderer takes {', '.join(files)}")
+        spec = integrators.get(integ.kind)
+        if spec.driver != self.driver or spec.glsl is None:
+            raise UsageError(f"integrator {integ.kind!r} has its own driver, not "
+                             f"{type(self).__name__}: use glrender.drivers.create_driver (or "
+                             f"glrender render --integrator {integ.kind}); {type(self).__name__} "
+                             f"takes {', '.join(integrators.running_on(self.driver))}")
         geometry = codegen.generate(p, has_bvh=p.has_bvh, lights=self.lights_final)
         library = shaders.ShaderLibrary().with_generated({codegen.GENERATED_PATH: geometry})
         self.defines = shader_defines(
@@ -380,10 +382,10 @@ class Renderer:
         if s.strategy_depth:
             self._check_strategy_images()
             self.defines["GLRENDER_STRATEGY_DEPTH"] = s.strategy_depth
-        self._source_fingerprint = (geometry, sorted(self.defines.items()), files[integ.kind])
+        self._source_fingerprint = (geometry, sorted(self.defines.items()), spec.glsl)
         self.program: Any = shaders.compile_compute(
             self.ctx, "kernels/render.comp.glsl", defines=self.defines,
-            slots={"integrator": files[integ.kind],
+            slots={"integrator": spec.glsl,
                    "scene": codegen.GENERATED_PATH},
             library=library)
         if s.samples_per_pass is not None:
@@ -428,6 +430,10 @@ class Renderer:
         words = np.frombuffer(self._strategies.read(), np.uint32)
         return strategies.read(words, self.settings.strategy_depth, self.width, self.height,
                                self.spp_done, SPLAT_SCALE)
+
+    def stats(self) -> dict[str, Any]:
+        """The integrator's own ``--stats`` entries: none for the render kernel's."""
+        return {}
 
     def fingerprint(self) -> str:
         """A hash of everything that decides the value of each sample: the kernel's source
@@ -545,7 +551,7 @@ class Renderer:
         # splats land anywhere on the film: the whole image, two words per pixel and channel
         if getattr(self, "_splat", None) is not None:
             self._splat.release()
-        splats = self.settings.integrator.kind in SPLATTING
+        splats = self.splatting
         self._splat: Any = self.gl.buffer(reserve=24 * self.width * self.height if splats else 16)
         if getattr(self, "_strategies", None) is not None:
             self._strategies.release()
@@ -707,7 +713,7 @@ class Renderer:
         when enabled, a whole-image splat image for light tracing and BDPT, and the copy that
         undoes a stopped pass."""
         per = sum(bpp for _, bpp, _ in self._slice_bytes_per_pixel())
-        if self.settings.integrator.kind in SPLATTING:
+        if self.splatting:
             per += 24
         if self.settings.strategy_depth:
             per += strategies.buffer_bytes(self.settings.strategy_depth, 1, 1)
@@ -790,7 +796,7 @@ class Renderer:
         aovs = {}
         if aov_means is not None:
             aovs = accum.aov_images(aov_means, h, self.width)
-        if self.settings.integrator.kind in SPLATTING:
+        if self.splatting:
             first = TILE * self.rows[0]
             mean += self.splat_image()[first:first + h]
         debug = None
@@ -819,7 +825,7 @@ class Renderer:
         of every pixel accumulated (the band's, since ``reset``'s start). ``film()`` adds it
         to the camera-side mean; its variance is not in the film's M2 (error bars of
         splatted images come from independent renders)."""
-        if self.settings.integrator.kind not in SPLATTING:
+        if not self.splatting:
             return np.zeros((self.height, self.width, 3), np.float32)
         sums = accum.fixed_sums(np.frombuffer(self._splat.read(), np.uint32))
         paths = max(self.spp_done - self.spp_start, 1) * self.width * self.band_height

@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import SceneError
+from ..integrators import names as integrator_names
 
 RGB = tuple[float, float, float]
 
@@ -352,7 +353,7 @@ class Film:
         return {"box": 0.5, "tent": 1.0, "gaussian": 4.0 * self.gaussian_stddev, "mitchell": 2.0}[self.filter]
 
 
-INTEGRATORS = ("path", "direct", "ao", "lighttrace", "bdpt", "sppm", "photon")
+INTEGRATORS = integrator_names()   # glrender/integrators.py: the one table of integrators
 STRATEGIES = ("light", "bsdf", "mis-balance", "mis-power")
 SPLIT_LIMIT = 16   # light samples per vertex and first-vertex branches of the path tracer
 
