@@ -43,7 +43,5 @@ def create_driver(scene: Any, settings: RenderSettings, options: Any = None, *,
     if options is not None and not isinstance(options, options_cls):
         raise UsageError(f"integrator {kind!r}: its options are a {options_cls.__name__}, "
                          f"got {type(options).__name__}")
-    if share is not None and cls is SppmRenderer:
-        share = None        # SPPM builds its own scene data (an inner renderer)
     kwargs = {"share": share} if share is not None else {}
     return cls(scene, settings, options, ctx=ctx, device=device, **kwargs)

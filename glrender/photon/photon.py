@@ -187,7 +187,7 @@ class PhotonRenderer(Renderer):
         """Bytes the tracing kernel's storage block may hold: the device's
         GL_MAX_SHADER_STORAGE_BLOCK_SIZE (tests lower it so that small maps are traced
         in pieces)."""
-        return self._binding_limit()
+        return self.binding_limit()
 
     def _texel_limit(self) -> int:
         """Texels one buffer texture may hold: GL_MAX_TEXTURE_BUFFER_SIZE."""
@@ -215,9 +215,9 @@ class PhotonRenderer(Renderer):
         most = self.trace_photons()
         total = self.photons[which]
         capacity = min(most, 4 * total if which == 0 else total)
-        prm = self._param_block(0, 0)
-        self._bind()
-        self._params.write(prm.tobytes())
+        prm = self.param_block(0, 0)
+        self.bind()
+        self.write_params(prm)
         self._view.bind_to_storage_buffer(scene_layout.SSBO_SPLAT)
         block = self._block.copy()
         max_depth = self.settings.integrator.max_depth
@@ -259,7 +259,7 @@ class PhotonRenderer(Renderer):
         finally:
             if buf is not None:
                 buf.release()
-        self._bind()
+        self.bind()
         return np.concatenate(chunks) if chunks else np.zeros((0, 12), np.float32)
 
     @staticmethod
@@ -305,8 +305,8 @@ class PhotonRenderer(Renderer):
         self._map_params.write(self._block.tobytes())
         self._counters.clear()
 
-    def _bind(self) -> None:
-        super()._bind()
+    def bind(self) -> None:
+        super().bind()
         self._counters.bind_to_storage_buffer(pl.SSBO_MAP_COUNTERS)
         for tex, unit in zip((*self._maps, *self._cells), (pl.TEX_GLOBAL_MAP, pl.TEX_CAUSTIC_MAP,
                                                            pl.TEX_GLOBAL_CELLS, pl.TEX_CAUSTIC_CELLS)):

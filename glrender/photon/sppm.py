@@ -107,14 +107,14 @@ class SppmRenderer:
     def __init__(self, scene: m.Scene, settings: RenderSettings | None = None,
                  sppm: SppmSettings | None = None, *, ctx: Context | None = None,
                  device: str | int | None = None, record_emission: bool = False,
-                 photon_view: bool = False, **overrides: Any) -> None:
+                 photon_view: bool = False, share: Any = None, **overrides: Any) -> None:
         self.sppm = sppm or SppmSettings()
         settings = settings or settings_from_scene(scene, **overrides)
         # the inner renderer packs, uploads and compiles the scene (its own kernel, unused
         # here, is ambient occlusion's: the quickest to compile)
         inner = replace(settings, integrator=replace(settings.integrator, kind="ao"))
         t0 = time.perf_counter()
-        self.base = Renderer(scene, inner, ctx=ctx, device=device)
+        self.base = Renderer(scene, inner, ctx=ctx, device=device, share=share)
         self.scene, self.settings = scene, settings
         self.ctx, self.gl = self.base.ctx, self.base.gl
         self.width, self.height = self.base.width, self.base.height
@@ -163,19 +163,19 @@ class SppmRenderer:
     def _warm_up(self) -> None:
         """llvmpipe compiles a kernel at its first dispatch: run one empty work group of
         each now, so that setup time is not charged to the first iteration."""
-        prm = self.base._param_block(0, 0)
+        prm = self.base.param_block(0, 0)
         prm["image"][:2] = 0                      # every camera invocation returns at once
         self._bind()
-        self.base._params.write(prm.tobytes())
+        self.base.write_params(prm)
         self._photon_params.write(self._photon_block(0).tobytes())   # no photons
         self.camera_kernel.run(group_x=1, group_y=1)
         self.photon_kernel.run(group_x=1)
         self.gl.finish()
 
-    def _binding_limit(self) -> int:
+    def binding_limit(self) -> int:
         """Bytes one storage-block binding may hold on this device (the inner renderer's
         figure; tests lower it here)."""
-        return self.base._binding_limit()
+        return self.base.binding_limit()
 
     def slices(self) -> list[tuple[int, int]]:
         """The image's pixel rows in slices (first row, rows) whose visible points fit one
@@ -184,10 +184,10 @@ class SppmRenderer:
         photons (the same numbers) deposit into each slice's visible points, so the image
         is the one-slice image up to the order of the float sums."""
         per_row = pl.WIDEST_PER_PIXEL * self.width
-        rows = self._binding_limit() // per_row
+        rows = self.binding_limit() // per_row
         if rows < 1:
             raise UsageError(f"sppm: a {self.width}-pixel-wide image does not fit this device's "
-                             f"storage buffers ({self._binding_limit()} bytes a binding): render "
+                             f"storage buffers ({self.binding_limit()} bytes a binding): render "
                              f"fewer columns")
         top = TILE * self.rows[0]
         end = top + self.band_height
@@ -196,10 +196,10 @@ class SppmRenderer:
     def _allocate(self) -> None:
         gl = self.gl
         n = max(rows for _, rows in self.slices()) * self.width    # pixels of the largest slice
-        if self.photon_view and 24 * self.width * self.height > self._binding_limit():
+        if self.photon_view and 24 * self.width * self.height > self.binding_limit():
             raise UsageError(f"sppm: the photons AOV of a {self.width}x{self.height} image needs "
                              f"{24 * self.width * self.height >> 20} MiB, above the device's "
-                             f"{self._binding_limit() >> 20} MiB storage buffers: leave it out or "
+                             f"{self.binding_limit() >> 20} MiB storage buffers: leave it out or "
                              f"render fewer pixels")
         self._vp_position = gl.buffer(reserve=16 * n)
         self._vp_shading = gl.buffer(reserve=32 * n)
@@ -264,7 +264,7 @@ class SppmRenderer:
 
     # -- rendering ---------------------------------------------------------------------------
     def _bind(self) -> None:
-        self.base._bind()
+        self.base.bind()
         for binding, buf in ((pl.SSBO_VP_POSITION, self._vp_position), (pl.SSBO_VP_SHADING, self._vp_shading),
                              (pl.SSBO_VP_EXTRA, self._vp_extra), (pl.SSBO_VP_RADIANCE, self._vp_radiance),
                              (pl.SSBO_RADIUS2, self._radius2), (pl.SSBO_GRID, self._grid),
@@ -287,9 +287,9 @@ class SppmRenderer:
         """Runs the camera pass of ``iteration`` over the pixel rows ``rows`` (first, count;
         one of :meth:`slices`): the slice's visible points' positions (N, 4: xyz and camera
         segments, 0 for none) and the camera paths' radiance (N, 3)."""
-        prm = self.base._param_block(iteration, 1)
+        prm = self.base.param_block(iteration, 1)
         self._bind()
-        self.base._params.write(prm.tobytes())
+        self.base.write_params(prm)
         photon = self._photon_block(iteration)
         photon["estimate"][1:3] = rows
         self._photon_params.write(photon.tobytes())
@@ -305,7 +305,7 @@ class SppmRenderer:
         each within one storage-block binding: the points split in halves (in pixel
         order) until each half's grid fits. Always at least one grid (it may be empty:
         the photons still draw the photon-map view)."""
-        limit = self._binding_limit()
+        limit = self.binding_limit()
 
         def split(points: np.ndarray) -> list[Any]:
             grid = build_grid(position[points, :3], self.radius[first + points], points.astype(np.uint32))
@@ -547,7 +547,7 @@ class SppmRenderer:
         silent ~65,535 cap."""
         if not self.settings.count_loops:
             return 0
-        return int(np.frombuffer(self.base._debug.read(), np.uint32).max())
+        return int(self.base.debug_counters().max())
 
     def device_bytes_per_pixel(self) -> int:
         """Device bytes per pixel: SPPM's visible points, radii and deposits (the grid adds
@@ -584,13 +584,20 @@ class SppmRenderer:
         self._own = []
         self.base.release()
 
-    def __getattr__(self, name: str) -> Any:
-        # what SPPM does not define itself (scene statistics such as texture bytes) is
-        # the inner renderer's
-        base = self.__dict__.get("base")
-        if base is None or name.startswith("__"):
-            raise AttributeError(name)
-        return getattr(base, name)
+    @property
+    def device_scene(self) -> Any:
+        """The scene's device data (the inner renderer's; None once released)."""
+        return self.base.device_scene
+
+    def bind_film(self) -> None:
+        """Bind the inner renderer's accumulation, where the preview loads SPPM's estimate
+        (Renderer.load_accumulation), for the display to read."""
+        self.base.bind_film()
+
+    @property
+    def texture_bytes(self) -> int:
+        """Bytes of the scene's texture atlas pages on the device."""
+        return self.base.texture_bytes
 
     def __enter__(self) -> "SppmRenderer":
         return self

@@ -129,7 +129,7 @@ class PreviewApp:
         self._drawn_denoised = None  # the Denoised image the window shows now (None: the accumulation)
         self.display = Display(ctx)
         self._build()
-        center, radius = self.renderer.packed.sphere_bounds
+        center, radius = self.renderer.device_scene.packed.sphere_bounds
         self.controller = CameraController(scene.camera, center, radius)
         self._install_callbacks()
 

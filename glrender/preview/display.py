@@ -21,7 +21,6 @@ import numpy as np
 from ..errors import UsageError
 from ..film.tonemap import TONE_CURVES
 from ..gl import shaders
-from ..gpu import layout
 
 VIEWS = ("color", "albedo", "normal", "variance")   # kView* in preview.frag.glsl, in order
 SOURCE_ACCUMULATION, SOURCE_TEXTURE = 0, 1         # kSource* in preview.frag.glsl
@@ -106,9 +105,7 @@ class Display:
                 self._frame.release()
             self._frame = _Target(gl, size)
         gl.memory_barrier(moderngl.SHADER_STORAGE_BARRIER_BIT)  # the kernel's writes, visible here
-        renderer._sums.bind_to_storage_buffer(layout.SSBO_ACCUM_SUM)
-        renderer._squares.bind_to_storage_buffer(layout.SSBO_ACCUM_SQ)
-        renderer._aov.bind_to_storage_buffer(layout.SSBO_AOV)
+        renderer.bind_film()
         self._set("u_view", VIEWS.index(settings.view))
         self._set("u_curve", TONE_CURVES.index(settings.curve))
         self._set("u_scale", float(2.0 ** settings.exposure))

@@ -71,7 +71,7 @@ class Progressive:
         if k <= 0:
             return False
         self.pass_samples, self.next_tile = k, 0
-        self._params = r._param_block(r.spp_done, k)
+        self._params = r.param_block(r.spp_done, k)
         return True
 
     def _dispatch(self, count: int) -> None:
@@ -79,9 +79,9 @@ class Progressive:
         r, prm = self.renderer, self._params
         first = (self.origin + self.next_tile) % self.tiles
         count = min(count, self.tiles - first)
-        r._bind()
+        r.bind()
         prm["dispatch"][0], prm["dispatch"][1] = first, count
-        r._params.write(prm.tobytes())
+        r.write_params(prm)
         t0 = time.perf_counter()
         r.program.run(group_x=count)
         r.gl.finish()
@@ -159,8 +159,7 @@ class SppmProgressive:
             radiance = r.radiance().reshape(n, 3).astype(np.float64)
             sums[:, :3] = accum.fixed(radiance * r.iterations)
             sums[:, 3, 0] = r.iterations
-        r.base._sums.write(sums.tobytes())
-        r.base._squares.write(np.zeros((n, 3, 4), np.uint32).tobytes())
+        r.base.load_accumulation(sums, np.zeros((n, 3, 4), np.uint32))
 
     def _step(self) -> None:
         """One piece of work (SppmRenderer.iteration_piece): a slice's camera pass and its

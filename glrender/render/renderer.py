@@ -23,8 +23,9 @@ from .. import integrators
 from ..errors import UsageError
 from ..gl import shaders
 from ..gl.context import Context, current, default_context
-from ..gpu import codegen, envmap, layout
-from ..gpu.pack import PackedScene, pack_scene
+from ..gpu import codegen, layout
+from ..gpu.device_scene import DeviceScene
+from ..gpu.pack import PackedScene
 from ..sampling.sequences import strata_columns
 from ..scene import model as m
 from ..film import Film
@@ -121,38 +122,6 @@ def camera_tangents(camera: m.Camera, width: int, height: int) -> tuple[float, f
     return t * width / diag, t * height / diag
 
 
-class SceneData:
-    """What of a scene the device holds independent of the render settings: the packed
-    arrays, the BVH and per-triangle data, the surface textures and the environment image;
-    shared by the renderers of one scene on one context and freed with the last of them."""
-
-    def __init__(self, packed: PackedScene) -> None:
-        self.packed = packed
-        self.users = 1
-        self.uploaded = False
-        self.bvh: Any = None
-        self.mesh_textures: list[Any] = []
-        self.surface_textures: list[Any] = []
-        self.texture_bytes = 0      # the atlas pages (RGBA16F) on the device
-        self.env_texture: Any = None
-        self.buffers: list[Any] = []
-
-    def acquire(self) -> SceneData:
-        self.users += 1
-        return self
-
-    def release(self) -> None:
-        self.users -= 1
-        if self.users == 0:
-            for buf in self.buffers:
-                buf.release()
-            for _, tex in self.mesh_textures:
-                tex.release()
-            if self.bvh is not None:
-                self.bvh.release()
-            self.buffers, self.mesh_textures, self.bvh = [], [], None
-
-
 class Renderer:
     """A scene on the device, ready to accumulate samples progressively.
 
@@ -184,18 +153,19 @@ class Renderer:
         self.ctx.make_current()
         self.gl = self.ctx.gl
         # what depends on the scene alone (the packed arrays, the BVH, the triangle data,
-        # textures, the environment image) is made once and shared by renderers of other
+        # textures, the environment image) is made once and shared by the drivers of other
         # settings on the same context (share=: the noise pilot, the seen-emission pass)
         t_pack = time.perf_counter()
-        self._scene_data: SceneData | None
+        self.device_scene: DeviceScene | None
         if share is None:
-            self._scene_data = SceneData(pack_scene(scene))
-        elif share._scene_data is None:
+            self.device_scene = DeviceScene(self.ctx, scene)
+            pack = self.device_scene.timings["pack"]
+        elif share.device_scene is None:
             raise UsageError("Renderer(share=...): the renderer shared from was released")
         else:
-            self._scene_data = share._scene_data.acquire()
-        self.packed: PackedScene = self._scene_data.packed
-        pack = time.perf_counter() - t_pack      # about 0 where the scene data is shared
+            self.device_scene = share.device_scene.acquire()
+            pack = time.perf_counter() - t_pack      # about 0: the scene data is shared
+        self.packed: PackedScene = self.device_scene.packed
         self.width, self.height = scene.film.width, scene.film.height
         self.tiles_x = -(-self.width // TILE)
         self.tiles_y = -(-self.height // TILE)
@@ -222,131 +192,23 @@ class Renderer:
     @property
     def texture_bytes(self) -> int:
         """Bytes of the scene's texture atlas pages (RGBA16F) on the device."""
-        return self._scene_data.texture_bytes if self._scene_data is not None else 0
+        return self.device_scene.texture_bytes if self.device_scene is not None else 0
 
     # -- setup -------------------------------------------------------------------------------
     def _upload(self) -> None:
-        gl = self.gl
-        p = self.packed
+        """The settings' light table (selection pmf, alias table, spherical-rectangle flags,
+        distributions), the materials and the parameter block; the scene's own data is
+        the device scene's."""
+        assert self.device_scene is not None, "the renderer was released"
         integ = self.settings.integrator
-        lights = p.lights.copy()
-        n_lights = len(lights)
-        from ..sampling.distributions import DistributionPacker
-
-        packer = DistributionPacker()
-        weights = p.light_weights
-        if n_lights:
-            if integ.light_selection == "power" and weights.sum() > 0:
-                pmf = weights / weights.sum()
-                if n_lights > 1:
-                    packer.add_alias_table(weights)
-            else:
-                pmf = np.full(n_lights, 1.0 / n_lights)
-            lights["params"][:, 3] = pmf
-            if integ.area_sampling == "solid-angle":
-                # rectangles (orthogonal edges) can use Urena et al.'s spherical rectangles
-                dots = np.einsum("ij,ij->i", lights["e1"][:, :3], lights["e2"][:, :3])
-                norms = np.linalg.norm(lights["e1"][:, :3], axis=1) * np.linalg.norm(lights["e2"][:, :3], axis=1)
-                rect = (lights["info"][:, 0] == layout.LIGHT_KINDS["parallelogram"]) & \
-                    (np.abs(dots) <= 1e-5 * np.maximum(norms, 1e-30))
-                lights["info"][rect, 1] |= 2
-        if p.env_image is not None:
-            self._upload_envmap(lights, packer)
-        self.lights_final = lights
-        dist = packer.array() if packer.array().size else np.zeros(4, np.float32)
-        self._materials = self._buffer(p.materials.tobytes())
-        self._lights = self._buffer(lights.tobytes() if n_lights else layout.zeros(layout.LIGHT).tobytes())
-        self._dist = self._buffer(np.ascontiguousarray(dist, np.float32).tobytes())
-        self._params = gl.buffer(reserve=layout.RENDER_PARAMS.itemsize)
-        self.n_lights = n_lights
-        data = self._scene_data
-        assert data is not None, "the renderer was released"
-        if not data.uploaded:
-            if p.has_bvh:
-                self._upload_mesh()
-            self._upload_textures()
-            data.uploaded = True
-
-    def _upload_envmap(self, lights: np.ndarray, packer: Any) -> None:
-        """The environment image as a float texture (bilinear, wrapping in u) and its
-        importance distribution (glrender/gpu/envmap.py: per texel, or per block of
-        texels for a map larger than the table's limit)."""
-        image = self.packed.env_image
-        assert image is not None
-        h, w = image.shape[:2]
-        envmap.check_texture_size(image, self.gl.info["GL_MAX_TEXTURE_SIZE"], self.scene.source)
-        env = self.packed.environment - 1
-        lights[env]["info"][3] = packer.add_distribution_2d(envmap.importance_weights(image))
-        data = self._scene_data
-        assert data is not None, "the renderer was released"
-        if data.env_texture is None:
-            tex = self.gl.texture((w, h), 3, np.ascontiguousarray(image, np.float32).tobytes(), dtype="f4")
-            tex.filter = (self.gl.LINEAR, self.gl.LINEAR)
-            tex.repeat_x, tex.repeat_y = True, False
-            data.env_texture = tex
-            data.buffers.append(tex)
-
-    def _upload_textures(self) -> None:
-        """The materials' textures: image layers (unit 8) and records (unit 9), bound with
-        the other scene data in _bind; scenes without textures bind nothing."""
-        from ..gpu import textures
-
-        data = self._scene_data
-        assert data is not None, "the renderer was released"
-        if len(self.packed.textures):
-            array, records = textures.upload(self.ctx, self.packed.textures)
-            data.texture_bytes = array.width * array.height * array.layers * 8
-            data.buffers += [array, records]
-            data.surface_textures = [(layout.TEX_TEXTURES, array.use),
-                                     (layout.TEX_TEXTURE_RECORDS, records.bind)]
-
-    def _upload_mesh(self) -> None:
-        """BVH over the static mesh triangles (world space) plus one tree per moving mesh
-        (object space), and per-triangle shading data in the BVH's triangle order."""
-        from ..accel import MotionInstance, build_bvh
-        from ..gpu.bvh_upload import GpuBvh
-        from ..gl.buffers import BufferTexture
-
-        p = self.packed
-        if p.mesh is not None:
-            positions, normals, uvs, material, light = p.mesh
-        else:  # only moving meshes
-            positions, normals = np.zeros((0, 3, 3)), np.zeros((0, 3, 3))
-            uvs, material, light = np.zeros((0, 3, 2)), np.zeros(0, np.uint32), np.zeros(0, np.uint32)
-        motion = [MotionInstance(mm.positions.reshape(-1, 3), np.arange(3 * len(mm.positions)).reshape(-1, 3),
-                                 mm.world_from_object_open, mm.world_from_object_close)
-                  for mm in p.moving_meshes]
-        tri = positions.reshape(-1, 3)
-        bvh = build_bvh(tri.astype(np.float32), np.arange(len(tri)).reshape(-1, 3), motion=motion)
-        # shading data of every BVH triangle id: the static ones, then each moving mesh's block
-        parts = [(normals, uvs, material, light, bvh.prim_order)]
-        for mm, mbvh in zip(p.moving_meshes, bvh.motion):
-            k = len(mm.positions)
-            parts.append((mm.normals, mm.uvs, np.full(k, mm.material, np.uint32), np.zeros(k, np.uint32),
-                          mbvh.bvh.prim_order))
-        # each part gathered into its rows of the float32 texel arrays (np.take: 2-3x faster
-        # than indexing with an index array); uv texels hold u0 v0 u1 v1 | u2 v2 0 0
-        total = sum(len(o) for *_, o in parts)
-        n4 = np.zeros((total, 3, 4), np.float32)
-        uv4 = np.zeros((total, 2, 4), np.float32)
-        info = np.zeros((total, 4), np.uint32)
-        row = 0
-        for n, u, mt, li, o in parts:
-            rows = slice(row, row + len(o))
-            n4[rows, :, :3] = np.take(n, o, axis=0)
-            # one uv triple for every triangle (a mesh without uvs) is broadcast: no gather
-            uv4.reshape(total, 8)[rows, :6] = np.reshape(u[0], 6) if u.strides[0] == 0 and len(o) \
-                else np.take(u, o, axis=0).reshape(len(o), 6)
-            info[rows, 0], info[rows, 1] = np.take(mt, o), np.take(li, o)
-            row += len(o)
-        data = self._scene_data
-        assert data is not None, "the renderer was released"
-        data.bvh = GpuBvh(self.ctx, bvh)
-        data.mesh_textures = [
-            (layout.TEX_TRI_NORMALS, BufferTexture(self.ctx, n4, "rgba32f", "triangle normals")),
-            (layout.TEX_TRI_UVS, BufferTexture(self.ctx, uv4, "rgba32f", "triangle uvs")),
-            (layout.TEX_TRI_INFO, BufferTexture(self.ctx, info, "rgba32ui", "triangle info")),
-        ]
+        table = self.device_scene.light_table(integ.light_selection, integ.area_sampling)
+        self.lights_final = table.lights
+        self.n_lights = len(table.lights)
+        self._materials = self._buffer(self.packed.materials.tobytes())
+        self._lights = self._buffer(table.lights.tobytes() if self.n_lights
+                                    else layout.zeros(layout.LIGHT).tobytes())
+        self._dist = self._buffer(table.distributions.tobytes())
+        self._params = self.gl.buffer(reserve=layout.RENDER_PARAMS.itemsize)
 
     def _buffer(self, data: bytes) -> Any:
         buf = self.gl.buffer(data if len(data) else b"\0" * 16)
@@ -412,7 +274,7 @@ class Renderer:
                              f"not {s.integrator.kind}")
         strategies.check_depth(s.strategy_depth, s.integrator.max_depth, BDPT_DEPTH_CAP)
         need, limit = strategies.buffer_bytes(s.strategy_depth, self.width, self.height), \
-            self._binding_limit()
+            self.binding_limit()
         if need > limit:
             raise UsageError(f"strategy images of depth {s.strategy_depth} at {self.width}x"
                              f"{self.height} need {need / 2**20:.0f} MiB, more than this device's "
@@ -451,7 +313,7 @@ class Renderer:
         if self.packed.env_image is not None:
             h.update(np.ascontiguousarray(self.packed.env_image).tobytes())
         h.update(self.packed.textures.fingerprint())
-        prm = self._param_block(0, 0)
+        prm = self.param_block(0, 0)
         prm["image"][3], prm["counts"][3] = self.tiles_y, 0   # a band renders the same samples
         if self.settings.sampler.kind != "stratified":
             prm["samples"][2:] = 0   # the total spp decides the strata only: other samplers
@@ -509,9 +371,9 @@ class Renderer:
     def _warm_up(self) -> None:
         """llvmpipe compiles a kernel at its first dispatch (seconds for a cold cache):
         run one empty work group now, so setup time is not charged to the render."""
-        prm = self._param_block(0, 0)
-        self._bind()
-        self._params.write(prm.tobytes())  # dispatch.y = 0: every invocation returns at once
+        prm = self.param_block(0, 0)
+        self.bind()
+        self.write_params(prm)  # dispatch.y = 0: every invocation returns at once
         self.program.run(group_x=1)
         self.gl.finish()
 
@@ -581,7 +443,10 @@ class Renderer:
         self.release()
 
     # -- rendering ---------------------------------------------------------------------------
-    def _param_block(self, first_sample: int, samples: int) -> Any:
+    def param_block(self, first_sample: int, samples: int) -> Any:
+        """The parameter block (layout.RENDER_PARAMS) of a pass rendering samples
+        [first_sample, first_sample + samples); the dispatch's tiles are set per dispatch
+        (``dispatch.xy``) before :meth:`write_params`."""
         scene, s = self.scene, self.settings
         cam, film = scene.camera, scene.film
         prm = np.zeros(1, layout.RENDER_PARAMS)[0]
@@ -608,7 +473,14 @@ class Renderer:
         prm["misc"][2] = s.clamp if s.clamp is not None else 0.0
         return prm
 
-    def _bind(self) -> None:
+    def write_params(self, prm: Any) -> None:
+        """Upload a parameter block (from :meth:`param_block`) for the next dispatch."""
+        self._params.write(prm.tobytes())
+
+    def bind(self) -> None:
+        """Bind the scene, the settings' light table, the accumulation and the parameter
+        block to their slots: what a kernel of this scene reads (the render kernel, and the
+        photon kernels that compile against the same defines)."""
         self._sums.bind_to_storage_buffer(layout.SSBO_ACCUM_SUM)
         self._squares.bind_to_storage_buffer(layout.SSBO_ACCUM_SQ)
         self._materials.bind_to_storage_buffer(layout.SSBO_MATERIALS)
@@ -620,16 +492,23 @@ class Renderer:
         if self.settings.strategy_depth:
             self._strategies.bind_to_storage_buffer(strategies.SSBO_STRATEGY_IMAGES)
         self._params.bind_to_uniform_block(layout.UBO_PARAMS)
-        data = self._scene_data
-        assert data is not None, "the renderer was released"
-        if data.env_texture is not None:
-            data.env_texture.use(layout.TEX_ENVMAP)
-        for unit, bind in data.surface_textures:
-            bind(unit)
-        if data.bvh is not None:
-            data.bvh.bind()
-            for unit, tex in data.mesh_textures:
-                tex.bind(unit)
+        assert self.device_scene is not None, "the renderer was released"
+        self.device_scene.bind()
+
+    def bind_film(self) -> None:
+        """Bind the accumulation alone (sums, squares, AOVs) to its slots, for a pass that
+        reads it (the preview's display)."""
+        self._sums.bind_to_storage_buffer(layout.SSBO_ACCUM_SUM)
+        self._squares.bind_to_storage_buffer(layout.SSBO_ACCUM_SQ)
+        self._aov.bind_to_storage_buffer(layout.SSBO_AOV)
+
+    @current
+    def load_accumulation(self, sums: np.ndarray, squares: np.ndarray) -> None:
+        """Replace the accumulation's sums and sums of squares (glrender.render.accum words)
+        with an estimate made elsewhere, to show it through the same display path (SPPM's
+        preview)."""
+        self._sums.write(np.ascontiguousarray(sums, np.uint32).tobytes())
+        self._squares.write(np.ascontiguousarray(squares, np.uint32).tobytes())
 
     def _run_pass(self, first_sample: int, samples: int,
                   should_stop: Callable[[], bool] | None = None) -> bool:
@@ -638,10 +517,10 @@ class Renderer:
         ``should_stop()`` is asked between dispatches; when it answers True the tiles done
         so far are undone (from a copy taken before the pass) and the pass returns False,
         so the accumulation always holds whole passes."""
-        prm = self._param_block(first_sample, samples)
+        prm = self.param_block(first_sample, samples)
         total = self.tiles_x * self.rows[1]
         done = 0
-        self._bind()
+        self.bind()
         slices = self._slices()
         for first_row, n_rows in slices:
             if len(slices) > 1:
@@ -661,10 +540,10 @@ class Renderer:
                         self._take_snapshot()
                     elif done > 0 and should_stop():
                         self._restore_snapshot()
-                        self._bind()
+                        self.bind()
                         return False
                 prm["dispatch"][0], prm["dispatch"][1] = start, count
-                self._params.write(prm.tobytes())
+                self.write_params(prm)
                 t0 = time.perf_counter()
                 self.program.run(group_x=count)
                 self.gl.finish()
@@ -674,7 +553,7 @@ class Renderer:
                 start += count
                 done += count
         if len(slices) > 1:
-            self._bind()
+            self.bind()
         return True
 
     def _slice_bytes_per_pixel(self) -> list[tuple[Any, int, int]]:
@@ -692,7 +571,7 @@ class Renderer:
         per-pixel buffer fits one storage-buffer binding (llvmpipe: 128 MiB, so a film of
         more than 2.1M pixels, or 0.84M with AOVs, takes several), each starting at an
         offset the device can bind."""
-        limit = self._binding_limit()
+        limit = self.binding_limit()
         widest = max(bpp for _, bpp, _ in self._slice_bytes_per_pixel())
         row_bytes = TILE * self.width * widest
         first, count = self.rows
@@ -719,7 +598,8 @@ class Renderer:
             per += strategies.buffer_bytes(self.settings.strategy_depth, 1, 1)
         return 2 * per
 
-    def _binding_limit(self) -> int:
+    def binding_limit(self) -> int:
+        """Bytes one storage-buffer binding may hold on this device."""
         return int(self.gl.info["GL_MAX_SHADER_STORAGE_BLOCK_SIZE"])
 
     def _ssbo_alignment(self) -> int:
@@ -801,7 +681,7 @@ class Renderer:
             mean += self.splat_image()[first:first + h]
         debug = None
         if self.settings.count_loops:
-            debug = np.frombuffer(self._debug.read(), np.uint32).reshape(h, self.width).copy()
+            debug = self.debug_counters()
         return Film(mean=mean, m2=m2.reshape(h, self.width, 3), count=count.reshape(h, self.width),
                     nonfinite=dropped.reshape(h, self.width), spp=self.spp_done, aovs=aovs,
                     loop_counts=debug, sampler=self.settings.sampler.kind)
@@ -811,12 +691,19 @@ class Renderer:
         return np.frombuffer(buf.read(), np.uint32)
 
     @current
+    def debug_counters(self) -> np.ndarray:
+        """The per-pixel debug counter of the band (settings with count_loops: the most loop
+        iterations an invocation ran; count_rays: the rays traced), uint32 (H, W)."""
+        h = self.band_height
+        return np.frombuffer(self._debug.read(), np.uint32)[:h * self.width].reshape(h, self.width).copy()
+
+    @current
     def rays(self) -> int:
         """Rays traced since the last reset (camera, continuation and shadow rays, summed
         over the pixels; path integrator, settings with count_rays=True)."""
         if not self.settings.count_rays:
             raise UsageError("Renderer.rays: render with count_rays=True to count rays")
-        return int(np.frombuffer(self._debug.read(), np.uint32).astype(np.int64).sum())
+        return int(self.debug_counters().astype(np.int64).sum())
 
     @current
     def splat_image(self) -> np.ndarray:
@@ -840,6 +727,6 @@ class Renderer:
             buf.release()
         self._release_snapshot()
         self._buffers = []
-        data, self._scene_data = self._scene_data, None
+        data, self.device_scene = self.device_scene, None
         if data is not None:
             data.release()

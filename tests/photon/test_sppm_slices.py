@@ -64,7 +64,7 @@ def test01_slices_render_the_one_slice_image(gl_ctx, whole, monkeypatch, limit, 
         grids.append([g.cells.nbytes for g in out])
         return out
 
-    monkeypatch.setattr(SppmRenderer, "_binding_limit", lambda self: limit)
+    monkeypatch.setattr(SppmRenderer, "binding_limit", lambda self: limit)
     monkeypatch.setattr(SppmRenderer, "_grids", spy)
     view = limit >= 24 * W * H
     radiance, radius, n, photons, counters, got = render(gl_ctx, photon_view=view)
@@ -83,7 +83,7 @@ def test01_slices_render_the_one_slice_image(gl_ctx, whole, monkeypatch, limit, 
 
 def test02_photon_view_beyond_one_binding_is_refused(gl_ctx, monkeypatch):
     """The photon-map view is one whole-image buffer: past one binding, a one-line error."""
-    monkeypatch.setattr(SppmRenderer, "_binding_limit", lambda self: 24 * W * H - 1)
+    monkeypatch.setattr(SppmRenderer, "binding_limit", lambda self: 24 * W * H - 1)
     with pytest.raises(UsageError, match=r"photons AOV of a 40x40 image needs .* leave it out"):
         SppmRenderer(cornell(), sppm=SETTINGS, ctx=gl_ctx, seed=7, photon_view=True)
 
@@ -92,7 +92,7 @@ def test03_stopped_iteration_changes_nothing(gl_ctx, monkeypatch):
     """An iteration stopped between its pieces (here in its second slice) is dropped:
     the state is as before it, and the next iteration is the one an unstopped render
     runs first."""
-    monkeypatch.setattr(SppmRenderer, "_binding_limit", lambda self: 32 * W * 13)
+    monkeypatch.setattr(SppmRenderer, "binding_limit", lambda self: 32 * W * 13)
     r = SppmRenderer(cornell(), sppm=SETTINGS, ctx=gl_ctx, seed=7)
     try:
         asked = []
@@ -123,7 +123,7 @@ def test04_a_band_of_rows_renders_the_whole_image_s_pixels(gl_ctx, whole, monkey
     its radiance to float summation order, its photon-map view bitwise."""
     radiance0, radius0, n0, view0, _, _ = whole
     if limit is not None:
-        monkeypatch.setattr(SppmRenderer, "_binding_limit", lambda self: limit)
+        monkeypatch.setattr(SppmRenderer, "binding_limit", lambda self: limit)
     r = SppmRenderer(cornell(), sppm=SETTINGS, ctx=gl_ctx, seed=7, photon_view=limit is None)
     try:
         r.reset(rows=(1, 3))

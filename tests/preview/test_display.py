@@ -13,10 +13,24 @@ import numpy as np
 import pytest
 
 from glrender.film.tonemap import TONE_CURVES, tonemap
+from glrender.gpu import layout
 from glrender.preview.display import VIEWS, Display, DisplaySettings, fit_viewport
 from glrender.render import accum
 
 W, H = 61, 37     # odd sizes: rows and columns cannot be swapped unnoticed
+
+
+class _Film(SimpleNamespace):
+    """A stand-in for a renderer's accumulation: what the display reads of a renderer."""
+
+    def bind_film(self) -> None:
+        self.sums.bind_to_storage_buffer(layout.SSBO_ACCUM_SUM)
+        self.squares.bind_to_storage_buffer(layout.SSBO_ACCUM_SQ)
+        self.aov.bind_to_storage_buffer(layout.SSBO_AOV)
+
+    def release(self) -> None:
+        for buf in (self.sums, self.squares, self.aov):
+            buf.release()
 
 
 def _words(values: np.ndarray) -> np.ndarray:
@@ -57,9 +71,9 @@ def _accumulation(gl_ctx, seed=0):
     aov_sums = _words(np.concatenate([aov[:, 0, :3], aov[:, 1, :3], aov[:, 1, 3:], aov[:, 2, :3]],
                                      axis=1).astype(np.float64) * count)
     gl = gl_ctx.gl
-    source = SimpleNamespace(width=W, height=H, settings=SimpleNamespace(aovs=True),
-                             _sums=gl.buffer(sums.tobytes()), _squares=gl.buffer(squares.tobytes()),
-                             _aov=gl.buffer(aov_sums.tobytes()))
+    source = _Film(width=W, height=H, settings=SimpleNamespace(aovs=True),
+                   sums=gl.buffer(sums.tobytes()), squares=gl.buffer(squares.tobytes()),
+                   aov=gl.buffer(aov_sums.tobytes()))
     arrays = SimpleNamespace(mean=mean.reshape(H, W, 4), m2=m2.reshape(H, W, 4),
                              aov=aov.reshape(H, W, 3, 4))
     return source, arrays
@@ -83,8 +97,7 @@ def _expected(arrays, settings: DisplaySettings) -> np.ndarray:
 def accumulation(gl_ctx):
     source, arrays = _accumulation(gl_ctx)
     yield source, arrays
-    for buf in (source._sums, source._squares, source._aov):
-        buf.release()
+    source.release()
 
 
 @pytest.fixture(scope="module")
@@ -160,9 +173,9 @@ def test05_held_image_fills_pixels_without_samples(gl_ctx, accumulation):
     rows = (np.arange(H * W) // W) % 2 == 0     # every other row has samples: one grey value
     restarted[rows, :3] = _words(np.full(3, 0.25))
     restarted[rows, 3, 0] = 1
-    empty = SimpleNamespace(width=W, height=H, settings=SimpleNamespace(aovs=False),
-                            _sums=gl.buffer(restarted.tobytes()),
-                            _squares=gl.buffer(reserve=W * H * 48), _aov=gl.buffer(reserve=16))
+    empty = _Film(width=W, height=H, settings=SimpleNamespace(aovs=False),
+                  sums=gl.buffer(restarted.tobytes()),
+                  squares=gl.buffer(reserve=W * H * 48), aov=gl.buffer(reserve=16))
     try:
         shown = d.image(source, DisplaySettings())
         d.hold(source, DisplaySettings())
@@ -173,5 +186,4 @@ def test05_held_image_fills_pixels_without_samples(gl_ctx, accumulation):
         np.testing.assert_array_equal(d.image(empty, DisplaySettings()), img)
     finally:
         d.release()
-        for buf in (empty._sums, empty._squares, empty._aov):
-            buf.release()
+        empty.release()

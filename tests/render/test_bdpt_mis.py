@@ -113,8 +113,8 @@ def weight_sums(gl_ctx, scene, heuristic, n=1 << 14):
     kernel = shaders.compile_compute(gl_ctx, source=KERNEL, name="<bdpt mis test>", defines=defines,
                                      slots={"scene": codegen.GENERATED_PATH}, library=library)
     out = gl_ctx.gl.buffer(reserve=16 * n)
-    r._bind()
-    r._params.write(r._param_block(0, 1).tobytes())
+    r.bind()
+    r.write_params(r.param_block(0, 1))
     out.bind_to_storage_buffer(8)
     kernel.run(group_x=n // 64)
     res = np.frombuffer(out.read(), np.float32).reshape(n, 4).astype(np.float64)

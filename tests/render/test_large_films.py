@@ -31,7 +31,7 @@ def test01_slices_equal_one_binding(gl_ctx, monkeypatch, aovs, count_loops):
         expected = whole.film()
     # a binding of 2 tile rows of the widest buffer: 3 slices
     widest = AOV_BYTES if aovs else SUM_BYTES
-    monkeypatch.setattr(Renderer, "_binding_limit", lambda self: 2 * 8 * 52 * widest)
+    monkeypatch.setattr(Renderer, "binding_limit", lambda self: 2 * 8 * 52 * widest)
     with Renderer(scene, settings, ctx=gl_ctx) as sliced:
         slices = sliced._slices()
         assert len(slices) == 3 and sum(n for _, n in slices) == 6
@@ -50,7 +50,7 @@ def test01_slices_equal_one_binding(gl_ctx, monkeypatch, aovs, count_loops):
 def test02_stopped_pass_is_undone_across_slices(gl_ctx, monkeypatch):
     scene = cornell(40, 40)
     settings = settings_from_scene(scene, spp=8, seed=1, samples_per_pass=4, time_target=1e-9)
-    monkeypatch.setattr(Renderer, "_binding_limit", lambda self: 2 * 8 * 40 * SUM_BYTES)
+    monkeypatch.setattr(Renderer, "binding_limit", lambda self: 2 * 8 * 40 * SUM_BYTES)
     with Renderer(scene, settings, ctx=gl_ctx) as r:
         assert len(r._slices()) == 3
         r.step(4)

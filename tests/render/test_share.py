@@ -1,7 +1,9 @@
-"""Renderers of one scene with different settings share its device data (Renderer(share=...)):
-the packed arrays, the BVH and triangle data, textures and the environment image are made once,
-the images are the bits a renderer of its own makes, and the data lives until the last
-renderer using it is released. The command line's noise pilot and seen-emission pass use it."""
+"""Drivers of one scene with different settings share its device scene (Renderer(share=...),
+glrender.drivers.create_driver(share=...); glrender/gpu/device_scene.py): the packed arrays,
+the BVH and triangle data, textures and the environment image are made once, the images are
+the bits a driver of its own makes, and the data lives until the last driver using it is
+released. The command line's noise pilot and seen-emission pass use it, and photon mapping
+and SPPM share it like the render kernel's integrators."""
 from __future__ import annotations
 
 import sys
@@ -87,7 +89,7 @@ import sys
 
 from glrender.commands.cli import main
 
-renderer_module = importlib.import_module("glrender.render.renderer")
+renderer_module = importlib.import_module("glrender.gpu.device_scene")
 
 count = [0]
 pack = renderer_module.pack_scene
@@ -123,3 +125,27 @@ def test03_cli_pilot_and_seen_emission_share_one_packing(tmp_path):
     assert (tmp_path / "out.exr").is_file()
     # the pilot, the render and (with --denoise) the seen-emission pass: one packed scene
     assert r.stdout.split()[-3:] == ["1", "rc", "0"], r.stdout
+
+
+@pytest.mark.parametrize("integrator", ["photon", "sppm"])
+def test04_photon_drivers_share_the_device_scene(gl_ctx, builds, integrator):
+    from glrender.drivers import create_driver
+
+    scene = small_textured()
+    settings = settings_from_scene(scene, spp=2, seed=3, integrator=integrator)
+    with create_driver(scene, settings, ctx=gl_ctx) as own:
+        own.step(2)
+        expected = own.film()
+    first = builds[0]
+    with Renderer(scene, settings_from_scene(scene, spp=1), ctx=gl_ctx) as base:
+        shared = create_driver(scene, settings, ctx=gl_ctx, share=base)
+        assert builds[0] == first + 1, f"{integrator} built its own BVH"
+        assert shared.device_scene is base.device_scene
+    shared.step(2)
+    got = shared.film()
+    shared.release()
+    assert base.device_scene is None and shared.device_scene is None
+    if integrator == "photon":
+        np.testing.assert_array_equal(got.mean, expected.mean)
+    else:   # SPPM deposits with float atomics: the same photons, sums in any order
+        np.testing.assert_allclose(got.mean, expected.mean, rtol=1e-5, atol=1e-7)

@@ -4,7 +4,7 @@ import time
 from pathlib import Path
 
 import glrender
-from glrender.render import renderer as renderer_module
+from glrender.gpu import device_scene as renderer_module
 
 ROOT = Path(__file__).resolve().parents[2]
 DELAY = 0.3
