@@ -4,14 +4,13 @@ from __future__ import annotations
 
 import inspect
 import os
-import sys
 import time as _time
 from typing import Callable
 
+from .drivers import create_driver
 from .errors import UsageError
 from .film import Film
-from . import integrators
-from .drivers import create_driver
+from .render.job import Job, JobOptions, Timings
 from .render.renderer import settings_from_scene
 from .scene import load
 from .scene.model import Scene
@@ -19,8 +18,6 @@ from .scene.model import Scene
 #: ``progress(spp_done, seconds)``: called after every pass of :func:`render`.
 ProgressCallback = Callable[[int, float], None]
 
-# sample indices are 32-bit on the device: the open-ended target of a time budget
-_SPP_LIMIT = 1 << 31
 # the further keyword options render() passes to settings_from_scene
 _SETTINGS_OPTIONS = set(inspect.signature(settings_from_scene).parameters) - {
     "scene", "integrator", "spp", "seed", "sampler", "max_depth", "strategy", "aovs"}
@@ -68,8 +65,9 @@ def render(scene: Scene | str | os.PathLike[str], spp: int | None = None, *,
             ``hide_emitters``, ...).
 
     Returns:
-        The image and its per-pixel statistics; ``film.stats`` holds the timings
-        (seconds), sample rate (samples/s), passes and why the render stopped.
+        The image and its per-pixel statistics; ``film.stats`` holds what ``glrender render
+        --stats`` records: the device, the settings, the timings (seconds by phase), the
+        sample rate (samples/s), the passes and why the render stopped.
 
     Raises:
         SceneError: the scene file or scene is invalid.
@@ -77,69 +75,37 @@ def render(scene: Scene | str | os.PathLike[str], spp: int | None = None, *,
         DeviceError: no OpenGL device could be opened.
         ShaderError: the kernel did not compile.
     """
-    from .render.job import RenderJob
-
     t_start = _time.perf_counter()
     if time is not None and not (isinstance(time, (int, float)) and time > 0 and time < float("inf")):
         raise UsageError(f"time: expected a positive number of seconds, got {time!r}")
     if spp is not None and (not isinstance(spp, int) or isinstance(spp, bool) or spp < 1):
         raise UsageError(f"spp: expected a positive integer, got {spp!r}")
+    timings = Timings()
     if not isinstance(scene, Scene):
         if not isinstance(scene, (str, os.PathLike)):
             raise UsageError(f"render: expected a Scene or a scene file path, got "
                              f"{type(scene).__name__}")
-        scene = load(scene)
+        with timings("load"):
+            scene = load(scene)
     scene.validate()
     unknown = sorted(set(options) - _SETTINGS_OPTIONS)
     if unknown:
         raise UsageError(f"render: unknown option {', '.join(unknown)} (expected "
                          f"{', '.join(sorted(_SETTINGS_OPTIONS))})")
-    settings = settings_from_scene(scene, integrator=integrator, spp=spp, seed=seed,
-                                   sampler=sampler, max_depth=max_depth, strategy=strategy,
-                                   aovs=aovs, **options)  # type: ignore[arg-type]
-    open_ended = integrators.get(settings.integrator.kind).open_ended
-    target = settings.sampler.spp if spp is not None or time is None or not open_ended \
-        else _SPP_LIMIT
-    t_setup = _time.perf_counter()
-    renderer = create_driver(scene, settings, integrator_options, device=device)
-    try:
-        bar = None
-        if progress is True and sys.stderr is not None and sys.stderr.isatty():
-            from .render.progress import ProgressBar
 
-            bar = ProgressBar(sys.stderr, pixels=renderer.width * renderer.height, spp_start=0,
-                              spp_target=None if target == _SPP_LIMIT else target, seconds=time)
+    def after_pass(done: int, seconds: float) -> None:
+        if callable(progress):
+            progress(done, seconds)
+        if callback is not None:
+            callback(done, job.target)      # the job below, made before its first pass
 
-        def after_pass(done: int, seconds: float) -> None:
-            if bar is not None:
-                bar.update(done, seconds)
-            elif callable(progress):
-                progress(done, seconds)
-            if callback is not None:
-                callback(done, target)
-
-        job = RenderJob(renderer, target, seconds=time, progress=after_pass)
-        try:
-            result = job.run()
-        finally:
-            if bar is not None:
-                bar.close()
-        film = renderer.film()
-        samples = film.spp * renderer.width * renderer.height
-        film.stats = {
-            "device": renderer.ctx.renderer,
-            "integrator": settings.integrator.kind, "sampler": settings.sampler.kind,
-            "seed": settings.sampler.seed, "spp": film.spp,
-            "spp_target": None if target == _SPP_LIMIT else target,
-            "time_budget": time, "stopped": result.stopped, "passes": result.passes,
-            "seconds": {"setup": t_setup - t_start, **renderer.timings,
-                        "render": result.render_seconds,
-                        "total": _time.perf_counter() - t_start},
-            "samples_per_second": samples / result.render_seconds if result.render_seconds > 0
-            else None,
-            "nonfinite_samples": film.nonfinite_total,
-            **renderer.stats(),
-        }
-        return film
-    finally:
-        renderer.release()
+    settings = dict(sampler=sampler, max_depth=max_depth, strategy=strategy, aovs=aovs,
+                    **options)
+    with Job(scene, JobOptions(integrator=integrator, spp=spp, seed=seed, settings=settings,
+                               integrator_options=integrator_options, seconds=time,
+                               device=device, progress_bar=progress is True,
+                               on_pass=after_pass, timings=timings, started=t_start),
+             create_driver) as job:
+        outcome = job.run()
+    outcome.film.stats = outcome.stats or {}
+    return outcome.film

@@ -151,7 +151,8 @@ def run_distributed(args, signals) -> int:
     from .options import (FIRST_HIT_AOVS, check_options, check_scene_file, parse_aovs,
                           parse_defines)
     from .outputs import write_outputs, write_stats
-    from ..render.renderer import settings_from_scene
+    from .photon_options import photon_options
+    from ..render.job import JobOptions, job_settings
     from ..scene.animation import frame_range
     from ..distributed import client as cl
     from ..distributed import source as src
@@ -190,15 +191,13 @@ def run_distributed(args, signals) -> int:
         args.workers = 1
     scene = replace(scene, film=scene.film.resized(args.width, args.height))
     width, height = scene.film.width, scene.film.height
-    settings = settings_from_scene(scene, integrator=args.integrator, spp=args.spp, seed=args.seed,
-                                   sampler=args.sampler, max_depth=args.max_depth,
-                                   rr=args.rr, rr_depth=args.rr_depth,
-                                   light_samples=args.light_samples, split=args.split,
-                                   strategy=args.strategy,
-                                   aovs=any(n in FIRST_HIT_AOVS for n in aov_names))
-    from .photon_options import photon_settings
-
-    settings, photon = photon_settings(args, settings)
+    iterations, photon = photon_options(args, args.integrator or scene.integrator.kind)
+    settings = job_settings(scene, JobOptions(
+        integrator=args.integrator, spp=args.spp if iterations is None else iterations,
+        seed=args.seed, settings=dict(sampler=args.sampler, max_depth=args.max_depth, rr=args.rr,
+                                      rr_depth=args.rr_depth, light_samples=args.light_samples,
+                                      split=args.split, strategy=args.strategy,
+                                      aovs=any(n in FIRST_HIT_AOVS for n in aov_names))))
     cl.check_integrator(settings, photon)
     job = cl.Job(source, settings, width, height, args.device,
                  photon if settings.integrator.kind == "photon" else None)

@@ -45,12 +45,6 @@ def write_outputs(film, output: Path, aov_names: list[str], args,
     return written
 
 
-def mean_relative_stderr_of(film) -> float | None:
-    from ..render.noise import mean_relative_stderr
-
-    return mean_relative_stderr(film)
-
-
 def write_stats(path: Path, stats: dict) -> None:
     from ..film.io import atomic_write
 

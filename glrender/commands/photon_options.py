@@ -2,7 +2,6 @@
 ``--integrator sppm``)."""
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Any
 
 from ..errors import UsageError
@@ -50,19 +49,18 @@ def _flag(name: str) -> str:
     return "--" + name.replace("_", "-")
 
 
-def photon_settings(args: Any, settings: Any) -> tuple[Any, SppmSettings | PhotonSettings | None]:
-    """The render settings (sppm: iterations as the sample count) and the photon
-    integrators' own settings for ``args``; their options with another integrator are
-    refused."""
+def photon_options(args: Any, kind: str) -> tuple[int | None, SppmSettings | PhotonSettings | None]:
+    """For the ``kind`` integrator: the iterations that stand for its samples per pixel
+    (sppm's --iterations; None: as --spp or the scene's) and the photon integrators' own
+    settings from ``args`` (None for the others, whose photon options are refused)."""
     given = [name for name in OPTIONS if getattr(args, name, None) is not None]
     aovs = [n.strip() for n in (getattr(args, "aov", None) or "").split(",") if n.strip() in AOVS]
-    kind = settings.integrator.kind
     if kind not in ("sppm", "photon"):
         if given:
             raise UsageError(f"{_flag(given[0])}: only with --integrator sppm or photon")
         if aovs:
             raise UsageError(f"--aov {aovs[0]}: only with --integrator sppm or photon")
-        return settings, None
+        return None, None
     other = PHOTON_OPTIONS if kind == "sppm" else SPPM_OPTIONS
     for name in given:
         if name in other:
@@ -85,17 +83,15 @@ def photon_settings(args: Any, settings: Any) -> tuple[Any, SppmSettings | Photo
         if knn is not None and not 1 <= knn <= 64:
             raise UsageError(f"--knn {knn}: expected an integer in [1, 64]")
         kw = {} if photons is None else {"photons": photons}
-        return settings, PhotonSettings(caustic_photons=caustic, radius=radius, knn=knn,
-                                        kernel=getattr(args, "kernel", None) or "uniform",
-                                        final_gather=bool(getattr(args, "final_gather", None)),
-                                        photon_view="photons" in aovs, **kw)
+        return None, PhotonSettings(caustic_photons=caustic, radius=radius, knn=knn,
+                                    kernel=getattr(args, "kernel", None) or "uniform",
+                                    final_gather=bool(getattr(args, "final_gather", None)),
+                                    photon_view="photons" in aovs, **kw)
     iterations = getattr(args, "iterations", None)
-    if iterations is not None:
-        if iterations < 1:
-            raise UsageError(f"--iterations {iterations}: expected a positive number of iterations")
-        settings = replace(settings, sampler=replace(settings.sampler, spp=iterations))
+    if iterations is not None and iterations < 1:
+        raise UsageError(f"--iterations {iterations}: expected a positive number of iterations")
     sppm = SppmSettings(photons_per_iteration=getattr(args, "photons_per_iteration", None),
                         initial_radius=getattr(args, "initial_radius", None),
                         alpha=0.7 if getattr(args, "alpha", None) is None else args.alpha,
                         photon_view="photons" in aovs, kernel=getattr(args, "kernel", None) or "uniform")
-    return settings, sppm
+    return iterations, sppm

@@ -167,7 +167,7 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
     traces the same photon maps from the seed, so the image is the one process's.
     """
     distributed = _dask()
-    from ..render.renderer import settings_from_scene
+    from ..render.job import JobOptions, job_settings
     from . import source as src
 
     if source is not None:        # a SceneSource of `scene` (a Scene) made by the caller
@@ -177,7 +177,7 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
     else:
         scene_obj, source = scene, src.from_scene(scene)
     if settings is None:
-        settings = settings_from_scene(scene_obj, spp=spp)
+        settings = job_settings(scene_obj, JobOptions(spp=spp))
     width = scene_obj.film.width if width is None else int(width)
     height = scene_obj.film.height if height is None else int(height)
     frame_list = (None,) if frames is None else tuple(int(f) for f in frames)

@@ -55,6 +55,7 @@ def _context(device):
 
 def _renderer(job: Job, frame):
     from ..drivers import create_driver
+    from ..render.job import make_driver
     from ..scene.animation import scene_at_frame
     from .source import load_source
 
@@ -72,7 +73,8 @@ def _renderer(job: Job, frame):
         scene = replace(scene, film=replace(scene.film, width=job.width, height=job.height))
     # photon mapping: every worker traces the same maps from the seed (sorted into one
     # order), so each renders its pixels as one process would
-    renderer = create_driver(scene, job.settings, job.photon, ctx=_context(job.device))
+    renderer = make_driver(scene, job.settings, create_driver, job.photon,
+                           ctx=_context(job.device))
     cache[key] = renderer
     while len(cache) > RENDERERS_PER_THREAD:
         cache.popitem(last=False)[1].release()

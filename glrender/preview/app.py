@@ -24,7 +24,8 @@ from .. import integrators
 from ..drivers import create_driver
 from ..photon import PhotonSettings
 from ..render.driver import RenderDriver
-from ..render.renderer import camera_tangents, settings_from_scene
+from ..render.job import JobOptions, job_settings, make_driver
+from ..render.renderer import camera_tangents
 from ..scene import model as m
 from .camera import CameraController
 from .display import VIEWS, Display, DisplaySettings, fit_viewport
@@ -149,17 +150,17 @@ class PreviewApp:
                         force=True)
         self.glfw.poll_events()
         t0 = time.perf_counter()
-        settings = settings_from_scene(
-            self.scene, integrator=self.integrator, strategy=self.strategy,
-            max_depth=self.max_depth, sampler=self.options.sampler, seed=self.options.seed,
-            aovs=True, time_target=self.options.frame_budget)
+        progressive, aovs, options = PREVIEW_DRIVERS[integrators.get(self.integrator).driver]
+        settings = job_settings(self.scene, JobOptions(
+            integrator=self.integrator, seed=self.options.seed,
+            settings=dict(strategy=self.strategy, max_depth=self.max_depth,
+                          sampler=self.options.sampler, aovs=aovs,
+                          time_target=self.options.frame_budget)))
         old = self.renderer
         if old is not None:
             self.display.hold(old, self.view)   # on screen until the new kernel's samples land
             old.release()
-        progressive, aovs, options = PREVIEW_DRIVERS[integrators.get(self.integrator).driver]
-        self.renderer = create_driver(self.scene, replace(settings, aovs=aovs), options(),
-                                      ctx=self.ctx)
+        self.renderer = make_driver(self.scene, settings, create_driver, options(), ctx=self.ctx)
         self.progressive = progressive(self.renderer, self.options.spp)
         self._generation += 1
         seconds = time.perf_counter() - t0

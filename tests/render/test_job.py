@@ -1,0 +1,141 @@
+"""The job runner (glrender/render/job.py): settings -> driver -> passes -> checkpoints -> stats,
+on a small Cornell box."""
+from __future__ import annotations
+
+import warnings
+from dataclasses import replace
+from pathlib import Path
+
+import moderngl
+import numpy as np
+import pytest
+
+import glrender
+from glrender.drivers import create_driver
+from glrender.errors import UsageError
+from glrender.render.checkpoint import load_checkpoint
+from glrender.render.job import PHASES, Job, JobOptions, job_settings, make_driver
+from glrender.render.renderer import Renderer, settings_from_scene
+
+CORNELL = Path(__file__).resolve().parents[2] / "scenes" / "cornell-box" / "scene.toml"
+PASS = {"samples_per_pass": 4}      # four passes to 16 spp
+
+
+@pytest.fixture(scope="module")
+def scene():
+    scene = glrender.load(CORNELL)
+    scene.film = replace(scene.film, width=16, height=12)
+    return scene
+
+
+def run(scene, **options):
+    with Job(scene, JobOptions(**options), create_driver) as job:
+        return job.run()
+
+
+def assert_same_accumulation(a, b):
+    np.testing.assert_array_equal(a.mean, b.mean)
+    np.testing.assert_array_equal(a.m2, b.m2)
+    np.testing.assert_array_equal(a.count, b.count)
+
+
+def test01_runs_to_the_sample_target(scene, gl_ctx):
+    """The job's image is a Renderer's stepped to the same spp, bitwise; on_pass follows it."""
+    seen = []
+    outcome = run(scene, spp=16, seed=5, settings=PASS, ctx=gl_ctx,
+                  on_pass=lambda spp, seconds: seen.append(spp))
+    assert outcome.stopped == "complete" and outcome.film.spp == 16
+    assert outcome.run.passes == 4 and seen == [4, 8, 12, 16]
+    assert outcome.checkpoint is None and outcome.samples_per_second > 0
+    with Renderer(scene, settings_from_scene(scene, spp=16, seed=5), ctx=gl_ctx) as r:
+        r.step(16)
+        assert_same_accumulation(outcome.film, r.film())
+
+
+def test02_checkpoint_then_resume_equals_one_run(scene, gl_ctx, tmp_path):
+    """A stop after the first pass writes a checkpoint of it; the resumed job ends bitwise
+    where the uninterrupted one does."""
+    whole = run(scene, spp=16, seed=5, settings=PASS, ctx=gl_ctx).film
+    path, passes = tmp_path / "job.ckpt", []
+    stopped = run(scene, spp=16, seed=5, settings=PASS, ctx=gl_ctx, checkpoint=path,
+                  stop=lambda: bool(passes), stopped_by=lambda: "test",
+                  on_pass=lambda spp, seconds: passes.append(spp))
+    assert stopped.stopped == "interrupted" and stopped.film.spp == 4
+    assert stopped.checkpoint == str(path) and stopped.stats["signal"] == "test"
+    ckpt = load_checkpoint(path)
+    assert ckpt.spp_done == 4 and ckpt.meta["spp_target"] == 16
+    assert ckpt.meta["device"] == gl_ctx.renderer
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")      # the same device: no warning
+        resumed = run(scene, spp=16, seed=5, settings=PASS, ctx=gl_ctx, resume=ckpt)
+    assert resumed.stats["resumed_from_spp"] == 4 and resumed.stats["spp_this_run"] == 12
+    assert_same_accumulation(resumed.film, whole)
+    with pytest.raises(UsageError, match="other settings"):
+        run(scene, spp=16, seed=6, settings=PASS, ctx=gl_ctx, resume=ckpt)
+
+
+def test03_stats(scene, gl_ctx):
+    """The statistics open with the caller's entries, hold the timings of every phase, the
+    samples and their rate, take the outputs' entries in their places and end with the
+    driver's own."""
+    def outputs(film):
+        assert film.spp == 8
+        return {"outputs": ["a.exr"], "denoise": {"seconds": 0.0}}
+
+    with Job(scene, JobOptions(spp=8, seed=1, ctx=gl_ctx, info={"glrender": "x"}),
+             create_driver) as job:
+        outcome = job.run(outputs)
+    stats = outcome.stats
+    keys = list(stats)
+    assert keys[:3] == ["glrender", "outputs", "checkpoint"] and stats["outputs"] == ["a.exr"]
+    assert keys.index("denoise") == keys.index("seconds") + 1
+    assert list(stats["seconds"]) == list(PHASES)
+    assert stats["seconds"]["render"] > 0 and stats["seconds"]["total"] >= stats["seconds"]["render"]
+    assert stats["spp"] == 8 and stats["spp_target"] == 8 and stats["stopped"] == "complete"
+    assert stats["samples_per_second"] == outcome.samples_per_second > 0
+    assert stats["width"] == 16 and stats["height"] == 12 and stats["signal"] is None
+    assert stats["device"]["GL_RENDERER"] == gl_ctx.renderer
+    assert run(scene, spp=1, ctx=gl_ctx, stats=False).stats is None
+
+
+def test04_time_budget_without_spp_is_open_ended(scene, gl_ctx):
+    outcome = run(scene, seconds=0.2, ctx=gl_ctx)
+    assert outcome.stopped == "time" and outcome.film.spp > 0
+    assert outcome.stats["spp_target"] is None and outcome.stats["time_budget"] == 0.2
+    capped = run(scene, spp=2, seconds=30.0, ctx=gl_ctx)
+    assert capped.stopped == "complete" and capped.film.spp == 2
+
+
+def test05_settings_and_driver(scene, gl_ctx):
+    """The options override the scene's settings; the driver comes from the factory given,
+    and a device that cannot allocate the image's buffers is a UsageError."""
+    settings = job_settings(scene, JobOptions(integrator="direct", spp=3, seed=9,
+                                              settings={"max_depth": 2}))
+    assert (settings.integrator.kind, settings.sampler.spp, settings.sampler.seed,
+            settings.integrator.max_depth) == ("direct", 3, 9, 2)
+    made = []
+
+    def factory(*args, **kwargs):
+        made.append(args[1].integrator.kind)
+        return create_driver(*args, **kwargs)
+
+    with Job(scene, JobOptions(integrator="ao", spp=1, ctx=gl_ctx), factory) as job:
+        assert job.run().film.spp == 1
+    assert made == ["ao"]
+
+    def no_memory(*args, **kwargs):
+        raise moderngl.Error("out of memory")
+
+    with pytest.raises(UsageError, match="cannot allocate the device buffers of a 16x12 image"):
+        make_driver(scene, settings, no_memory, ctx=gl_ctx)
+
+
+def test06_crop(scene, gl_ctx):
+    """A crop renders its tile rows and keeps its pixels; light paths that splat onto the
+    whole film cannot be cropped."""
+    whole = run(scene, spp=4, seed=2, ctx=gl_ctx).film
+    part = run(scene, spp=4, seed=2, ctx=gl_ctx, crop=[3, 2, 11, 9])
+    assert part.film.shape == (7, 8) and part.stats["crop"] == [3, 2, 11, 9]
+    np.testing.assert_array_equal(part.film.mean, whole.mean[2:9, 3:11])
+    with pytest.raises(UsageError, match="not available with the lighttrace integrator"):
+        run(scene, integrator="lighttrace", spp=1, ctx=gl_ctx, crop=[0, 0, 8, 8])
