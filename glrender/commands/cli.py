@@ -219,8 +219,9 @@ def _add_render(sub) -> None:
                    help="path segments: 1 = emitters seen directly, 2 = direct light, "
                         "-1 = unbounded")
     g.add_argument("--rr", default=None, metavar="throughput|fixed:Q|off",
-                   help="path tracer's Russian roulette: survive with min(throughput, 0.95) "
-                        "(default), with a fixed probability Q, or never")
+                   help="Russian roulette of path, lighttrace and bdpt: survive with "
+                        "min(throughput, 0.95) (default), with a fixed probability Q, or never "
+                        "(off at --max-depth -1: bdpt stops at 16 segments, the others at 256)")
     g.add_argument("--rr-depth", type=int, default=None, metavar="K",
                    help="path segments before Russian roulette starts (default: the scene's, 5)")
     g.add_argument("--light-samples", type=int, default=None, metavar="N",

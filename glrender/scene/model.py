@@ -359,9 +359,9 @@ SPLIT_LIMIT = 16   # light samples per vertex and first-vertex branches of the p
 
 
 def parse_rr(rule: str) -> tuple[str, float]:
-    """The path tracer's Russian roulette rule -> (kind, survival probability): ``throughput``
-    (survive with min(max(beta) eta^2, 0.95), Mitsuba's), ``fixed:<q>`` (survive with q in
-    (0, 1]) or ``off`` (no roulette)."""
+    """The Russian roulette rule of path, lighttrace and bdpt (integrators/roulette.glsl) ->
+    (kind, survival probability): ``throughput`` (survive with min(max(beta) eta^2, 0.95),
+    Mitsuba's), ``fixed:<q>`` (survive with q in (0, 1]) or ``off`` (no roulette)."""
     text = str(rule).strip()
     if text in ("throughput", "off"):
         return text, 1.0
@@ -389,7 +389,7 @@ class Integrator:
     kind: str = "path"
     max_depth: int = -1
     rr_depth: int = 5
-    rr: str = "throughput"             # throughput | fixed:<q> | off (path tracer)
+    rr: str = "throughput"             # throughput | fixed:<q> | off (path, lighttrace, bdpt)
     light_samples: int = 1             # path tracer: light samples per vertex
     split: int = 1                     # path tracer: BSDF branches at the first vertex
     strategy: str = "mis-power"        # direct lighting / NEE weighting

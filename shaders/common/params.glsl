@@ -30,8 +30,9 @@ const uint kLightKinds = uint(GLRENDER_LIGHT_KINDS);
 // seen directly, 2 = direct lighting; a negative value means unbounded.
 const int kMaxDepth = GLRENDER_MAX_DEPTH;
 const int kRrDepth = GLRENDER_RR_DEPTH;
-// Russian roulette from depth kRrDepth (path.glsl): survive with q = min(max(beta) eta^2,
-// 0.95) (throughput), with the fixed q = kRrSurvival, or never stop (off).
+// Russian roulette from depth kRrDepth (integrators/roulette.glsl: path, bdpt, lighttrace):
+// survive with q = min(max(beta) eta^2, 0.95) (throughput), with the fixed q = kRrSurvival,
+// or never stop (off).
 const int kRrThroughput = 0;
 const int kRrFixed = 1;
 const int kRrOff = 2;

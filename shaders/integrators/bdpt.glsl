@@ -10,12 +10,14 @@
 // weighted by bdpt_mis_weight (balance or power heuristic, kStrategy); kernels built
 // for strategy images also keep each one's own image (integrators/strategy_images.glsl).
 // max_depth counts the segments of a path (s + t - 1), at most kBdptDepthCap (the
-// vertex storage bounds the subpaths; Russian roulette may end them sooner). Lights
-// at infinity (directional, constant and image environments) start light subpaths on a
-// disk of the scene's bounding radius facing their direction, and a camera subpath that
-// leaves the scene ends on a vertex at infinity (bdpt_vertex.glsl, kVertexInfinite).
+// vertex storage bounds the subpaths, with --rr off too; Russian roulette may end them
+// sooner). Lights at infinity (directional, constant and image environments) start light
+// subpaths on a disk of the scene's bounding radius facing their direction, and a camera
+// subpath that leaves the scene ends on a vertex at infinity (bdpt_vertex.glsl,
+// kVertexInfinite).
 // The emission AOV is the s = 0, t = 2 term: the emitter the camera ray finds.
 #include "integrators/integrator_common.glsl"
+#include "integrators/roulette.glsl"
 #include "integrators/shading.glsl"
 #include "integrators/pixel.glsl"
 #include "integrators/light_path.glsl"
@@ -61,10 +63,11 @@ Vertex vertex_from_hit(SurfaceHit hit, Frame frame, Bsdf b, vec3 beta) {
 
 // Extends a subpath from path[n - 1] along (o, d) until it leaves the scene, reaches
 // max_vertices vertices, or a sample or Russian roulette ends it; radiance (camera) or
-// importance (light, adjoint) transport. Russian roulette from kRrDepth vertices on, on
-// the product of BSDF weights (times eta^2 for radiance, as the path tracer): it
-// scales beta by 1 / q and leaves the MIS densities alone (any weights that sum to 1
-// over the strategies keep the estimator unbiased). Returns the vertex count.
+// importance (light, adjoint) transport. Russian roulette from kRrDepth vertices on by
+// the rule kRrRule (integrators/roulette.glsl; the throughput rule on the product of BSDF
+// weights, times eta^2 for radiance, as the path tracer): it scales beta by 1 / q and
+// leaves the MIS densities alone (any weights that sum to 1 over the strategies keep the
+// estimator unbiased). Returns the vertex count.
 int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, float pdf_sa,
                 int max_vertices, inout SamplerState s, inout Aov aov) {
     vec3 throughput = vec3(1.0);
@@ -130,8 +133,8 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
         if (light_path) { STORE_AT(g_light, n - 2, prev); } else { STORE_AT(g_camera, n - 2, prev); }
         prev = v;
         if (stop) break;
-        if (n >= kRrDepth) {
-            float q = min(max_component(throughput) * (light_path ? 1.0 : eta_product * eta_product), 0.95);
+        if (roulette_applies(n)) {
+            float q = roulette_survival(max_component(throughput) * (light_path ? 1.0 : eta_product * eta_product));
             if (!(u_rr < q)) break;
             beta /= q;
             throughput /= q;

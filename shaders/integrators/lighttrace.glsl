@@ -8,10 +8,12 @@
 // Every camera sample of every pixel traces one light path; the camera-side image gets
 // a zero for it (keeping its sample counts) and the splats, divided by the number of
 // light paths, make the image (Renderer.film). max_depth counts the segments of the
-// whole path, the one to the lens included; Russian roulette on the adjoint BSDF
-// throughput from kRrDepth segments on (importance needs no eta^2 rescaling).
+// whole path, the one to the lens included; Russian roulette from kRrDepth segments on by
+// the rule kRrRule (integrators/roulette.glsl; the throughput rule on the adjoint BSDF
+// throughput: importance needs no eta^2 rescaling).
 // The emission AOV stays 0 (lights seen directly arrive as splats, s = 1).
 #include "integrators/integrator_common.glsl"
+#include "integrators/roulette.glsl"
 #include "integrators/shading.glsl"
 #include "integrators/pixel.glsl"
 #include "integrators/light_path.glsl"
@@ -77,8 +79,8 @@ void light_trace(inout SamplerState s) {
         beta_bsdf *= weight;
 
         // Possibly terminate the path with Russian roulette
-        if (segments + 1 >= kRrDepth) {
-            float q = min(max_component(beta_bsdf), 0.95);
+        if (roulette_applies(segments + 1)) {
+            float q = roulette_survival(max_component(beta_bsdf));
             if (!(u_rr < q)) break;
             beta /= q;
             beta_bsdf /= q;

@@ -5,9 +5,8 @@
 // is weighted against the light-sampling pdf (Veach 1997, ch. 9; the heuristic is
 // kStrategy: mis-power, the default as in Mitsuba, or mis-balance; `light` counts only
 // light samples and `bsdf` only BSDF hits). Depth counts segments as in Mitsuba.
-// Russian roulette from depth kRrDepth on (kRrRule): survive with q = min(max(beta) eta^2,
-// 0.95) (throughput: Mitsuba's rule; eta^2 keeps paths alive inside refractive media), or
-// with a fixed q = kRrSurvival, and divide by q; or never (off).
+// Russian roulette from depth kRrDepth on, by the rule kRrRule (integrators/roulette.glsl;
+// throughput by default: survive with q = min(max(beta) eta^2, 0.95), Mitsuba's rule).
 // Splitting: kLightSamples light samples at every vertex (each weighted 1/n, and MIS
 // counts them: Veach's heuristic with n_light = n), and kSplit BSDF branches at the
 // camera ray's hit (the first vertex, when it is not specular), each carrying 1/kSplit
@@ -25,6 +24,7 @@
 // lane one segment per iteration and starts a lane's next sample as soon as its path
 // ends; each sample still sees exactly the numbers and operations it would alone.
 #include "integrators/integrator_common.glsl"
+#include "integrators/roulette.glsl"
 #include "integrators/shading.glsl"
 #include "integrators/pixel.glsl"
 
@@ -88,10 +88,8 @@ bool path_continue(inout PathState st, SurfaceHit hit, Bsdf b, Frame frame, vec3
     st.prev_p = hit.p;
 
     // Possibly terminate the path with Russian roulette
-    if (kRrRule != kRrOff && depth + 1 >= kRrDepth) {
-        float q = kRrRule == kRrFixed
-                ? kRrSurvival
-                : min(max_component(st.beta) * st.eta_product * st.eta_product, 0.95);
+    if (roulette_applies(depth + 1)) {
+        float q = roulette_survival(max_component(st.beta) * st.eta_product * st.eta_product);
         if (!(u_rr < q)) return false;
         st.beta /= q;
     }
