@@ -13,9 +13,11 @@ load), and the image hash of each (equal hashes: the same image bitwise).
         [--size 64] [--spp 48] [--rounds 3]
 
 ``--define NAME`` compares this tree's bdpt with the same kernel compiled with the shader
-define NAME (e.g. BDPT_INDEXED_STORES) instead of another commit: one process per scene
+define NAME (one of params.glsl's switches) instead of another commit: one process per scene
 renders both (and the path tracer) alternately, 24 samples per pixel at a time, which
-takes the machine's load out of the comparison better than fresh processes do.
+takes the machine's load out of the comparison better than fresh processes do. Variants
+that are not switches live in ``benchmarks/patches/`` (``bdpt-indexed-stores.patch``: the
+plain indexed vertex stores); commit one on a branch and pass it as ``--base``.
 """
 from __future__ import annotations
 

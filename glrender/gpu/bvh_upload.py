@@ -1,23 +1,22 @@
 """Upload a :class:`~glrender.accel.bvh.Bvh` as the buffer textures the GLSL traversal reads.
 
-Texture units 0-3 belong to geometry; ``shaders/geometry/bvh_layout.glsl``
-declares them and nothing else does (a test checks the units below against it).
+Texture units 0-3 belong to geometry (:mod:`glrender.gpu.bindings` ``TEX_BVH_*``);
+``shaders/geometry/bvh_layout.glsl`` declares them and nothing else does (a test checks the
+units below against it).
 """
 from __future__ import annotations
 
 from ..errors import UsageError
 from ..gl.buffers import BufferTexture
 from ..accel.bvh import MAX_DEPTH, Bvh
+from . import bindings
 
-UNIT_NODES = 0
-UNIT_TRIANGLES = 1
-UNIT_INSTANCES = 2
-UNITS_RESERVED = range(4)  # units 0-3 belong to geometry
+UNITS_RESERVED = range(bindings.TEX_BVH_NODES, bindings.TEX_GEOMETRY_RESERVED + 1)
 # name in Bvh.pack() -> (texture unit, buffer texture format, GLSL sampler name)
 TEXTURES = {
-    "nodes": (UNIT_NODES, "rgba32ui", "u_bvh_nodes"),
-    "triangles": (UNIT_TRIANGLES, "rgba32f", "u_bvh_triangles"),
-    "instances": (UNIT_INSTANCES, "rgba32f", "u_bvh_instances"),
+    "nodes": (bindings.TEX_BVH_NODES, "rgba32ui", "u_bvh_nodes"),
+    "triangles": (bindings.TEX_BVH_TRIANGLES, "rgba32f", "u_bvh_triangles"),
+    "instances": (bindings.TEX_BVH_INSTANCES, "rgba32f", "u_bvh_instances"),
 }
 
 

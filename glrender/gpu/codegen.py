@@ -57,35 +57,35 @@ def _dpdu(q) -> np.ndarray:
 
 
 def has_normal_maps(packed: PackedScene) -> bool:
-    """Whether a material has a normal map (MaterialData.params.w: its texture + 1)."""
-    return bool(len(packed.materials) and (packed.materials["params"][:, 3] > 0).any())
+    """Whether a material has a normal map (MaterialData.normal_map: its texture + 1)."""
+    return bool(len(packed.materials) and (packed.materials["normal_map"] > 0).any())
 
 
 def has_normal_shadowing(packed: PackedScene) -> bool:
     """Whether a normal-mapped material asks for the shadowing term (MATERIAL_FLAG_NORMAL_SHADOWING
     in MaterialData.info.y); the renderer then compiles with GLRENDER_NORMAL_SHADOWING."""
-    from . import layout
+    from . import bindings
 
     return bool(len(packed.materials) and
-                (packed.materials["info"][:, 1] & layout.MATERIAL_FLAG_NORMAL_SHADOWING).any())
+                (packed.materials["info"][:, 1] & bindings.MATERIAL_FLAG_NORMAL_SHADOWING).any())
 
 
 def has_alpha_cutouts(packed: PackedScene) -> bool:
-    """Whether a material has an opacity texture (MaterialData.color0.w: its texture + 1);
+    """Whether a material has an opacity texture (MaterialData.opacity_texture: its texture + 1);
     the renderer then compiles with GLRENDER_ALPHA_CUTOUTS, and BVH traversal asks
     bvh_alpha_pass below about each triangle hit."""
-    return bool(len(packed.materials) and (packed.materials["color0"][:, 3] > 0).any())
+    return bool(len(packed.materials) and (packed.materials["opacity_texture"] > 0).any())
 
 
 _ALPHA_PASS = [
     "bool bvh_alpha_pass(uint tri, vec2 bary) {",
     "    MaterialHeader m = scene_material(texelFetch(u_tri_info, int(tri)).x);",
-    "    uint tex = uint(m.color0.w);",
+    "    uint tex = uint(m.opacity_texture);",
     "    if (tex == 0u) return true;",
     "    vec4 uv01 = texelFetch(u_tri_uvs, 2 * int(tri));",
     "    vec2 uv2 = texelFetch(u_tri_uvs, 2 * int(tri) + 1).xy;",
     "    vec2 uv = (1.0 - bary.x - bary.y) * uv01.xy + bary.x * uv01.zw + bary.y * uv2;",
-    "    return opacity_at(tex - 1u, uv) >= m.color1.w;",
+    "    return opacity_at(tex - 1u, uv) >= m.alpha_cutoff;",
     "}",
     "",
 ]
@@ -123,11 +123,24 @@ def _planar_args(q) -> str:
             f"{_v3(dual_a)}, {_v3(dual_b)}")
 
 
+def _struct_fields(records) -> tuple[str, ...]:
+    """The fields of a MaterialData or LightData record that its GLSL header struct holds,
+    in order: every one but the roughplastic table."""
+    return tuple(name for name in records.dtype.names if name != "table")
+
+
 def _struct_literal(struct: str, rec, fields) -> str:
-    """A GLSL constructor call for one numpy record: vec4 fields, then the uvec4 info."""
-    vecs = [f"vec4({', '.join(_f(x) for x in rec[name])})" for name in fields]
-    info = f"uvec4({', '.join(f'{int(x)}u' for x in rec['info'])})"
-    return f"{struct}({', '.join(vecs + [info])})"
+    """A GLSL constructor call for one numpy record: float and vecN fields, the uvec4 info."""
+    args = []
+    for name in fields:
+        value = rec[name]
+        if name == "info":
+            args.append(f"uvec4({', '.join(f'{int(x)}u' for x in value)})")
+        elif np.ndim(value) == 0:
+            args.append(_f(value))
+        else:
+            args.append(f"vec{len(value)}({', '.join(_f(x) for x in value)})")
+    return f"{struct}({', '.join(args)})"
 
 
 def _record_accessor(struct: str, name: str, records, fields, limit: int, fallback: str) -> list[str]:
@@ -146,15 +159,14 @@ def _record_accessor(struct: str, name: str, records, fields, limit: int, fallba
 
 def generate_lights(lights) -> list[str]:
     """``LightData scene_light(uint index)``: constants for a few lights, else the SSBO."""
-    return _record_accessor("LightData", "scene_light", lights, ("p", "e1", "e2", "n", "radiance", "params"),
+    return _record_accessor("LightData", "scene_light", lights, _struct_fields(lights),
                             MAX_CONSTANT_LIGHTS, "lights[index]")
 
 
 def generate_materials(materials) -> list[str]:
     """``MaterialHeader scene_material(uint index)``: constants for a few materials."""
-    fields = ("color0", "color1", "color2", "params")
-    fallback = ("MaterialHeader(materials[index].color0, materials[index].color1, "
-                "materials[index].color2, materials[index].params, materials[index].info)")
+    fields = _struct_fields(materials)
+    fallback = f"MaterialHeader({', '.join(f'materials[index].{name}' for name in fields)})"
     return _record_accessor("MaterialHeader", "scene_material", materials, fields,
                             MAX_CONSTANT_MATERIALS, fallback)
 

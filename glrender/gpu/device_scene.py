@@ -21,14 +21,14 @@ from typing import Any
 import numpy as np
 
 from ..scene import model as m
-from . import envmap, layout
+from . import bindings, envmap, layout
 from .pack import PackedScene, pack_scene
 
 
 @dataclass(frozen=True)
 class LightTable:
-    """The lights as one render's settings sample them: ``lights`` (layout.LIGHT records,
-    the selection probability in ``params.w``) and ``distributions`` (float32: the alias
+    """The lights as one render's settings sample them: ``lights`` (layout.LIGHT records
+    with their ``selection_pmf``) and ``distributions`` (float32: the alias
     table of the selection by power and the environment's 2-D distribution, packed by
     :class:`~glrender.sampling.distributions.DistributionPacker`)."""
 
@@ -104,7 +104,7 @@ class DeviceScene:
         """The light records and distributions under the settings' light selection
         (``power``: proportional to ``packed.light_weights`` through an alias table, else
         uniform) and area sampling (``solid-angle``: rectangles are sampled as spherical
-        rectangles, Urena et al. 2013, flag bit 2 of ``info.y``)."""
+        rectangles, Urena et al. 2013: ``bindings.LIGHT_FLAG_RECTANGLE`` in ``info.y``)."""
         from ..sampling.distributions import DistributionPacker
 
         p = self.packed
@@ -119,7 +119,7 @@ class DeviceScene:
                     packer.add_alias_table(weights)
             else:
                 pmf = np.full(n_lights, 1.0 / n_lights)
-            lights["params"][:, 3] = pmf
+            lights["selection_pmf"] = pmf
             if area_sampling == "solid-angle":
                 # rectangles (orthogonal edges) can use Urena et al.'s spherical rectangles
                 dots = np.einsum("ij,ij->i", lights["e1"][:, :3], lights["e2"][:, :3])
@@ -127,7 +127,7 @@ class DeviceScene:
                     np.linalg.norm(lights["e2"][:, :3], axis=1)
                 rect = (lights["info"][:, 0] == layout.LIGHT_KINDS["parallelogram"]) & \
                     (np.abs(dots) <= 1e-5 * np.maximum(norms, 1e-30))
-                lights["info"][rect, 1] |= 2
+                lights["info"][rect, 1] |= bindings.LIGHT_FLAG_RECTANGLE
         if self.env_weights is not None:
             env = p.environment - 1
             lights[env]["info"][3] = packer.add_distribution_2d(self.env_weights)
@@ -152,7 +152,7 @@ class DeviceScene:
         tex.repeat_x, tex.repeat_y = True, False
         self.env_texture = tex
         self._owned.append(tex)
-        self._units.append((layout.TEX_ENVMAP, tex.use))
+        self._units.append((bindings.TEX_ENVMAP, tex.use))
 
     def _upload_textures(self) -> None:
         """The materials' textures: image layers and records (scenes without textures bind
@@ -163,7 +163,7 @@ class DeviceScene:
             array, records = textures.upload(self.ctx, self.packed.textures)
             self.texture_bytes = array.width * array.height * array.layers * 8
             self._owned += [array, records]
-            self._units += [(layout.TEX_TEXTURES, array.use), (layout.TEX_TEXTURE_RECORDS, records.bind)]
+            self._units += [(bindings.TEX_TEXTURES, array.use), (bindings.TEX_TEXTURE_RECORDS, records.bind)]
 
     def _upload_mesh(self) -> None:
         """BVH over the static mesh triangles (world space) plus one tree per moving mesh
@@ -205,9 +205,9 @@ class DeviceScene:
             info[rows, 0], info[rows, 1] = np.take(mt, o), np.take(li, o)
             row += len(o)
         self.bvh = GpuBvh(self.ctx, bvh)
-        for unit, data, fmt, name in ((layout.TEX_TRI_NORMALS, n4, "rgba32f", "triangle normals"),
-                                      (layout.TEX_TRI_UVS, uv4, "rgba32f", "triangle uvs"),
-                                      (layout.TEX_TRI_INFO, info, "rgba32ui", "triangle info")):
+        for unit, data, fmt, name in ((bindings.TEX_TRI_NORMALS, n4, "rgba32f", "triangle normals"),
+                                      (bindings.TEX_TRI_UVS, uv4, "rgba32f", "triangle uvs"),
+                                      (bindings.TEX_TRI_INFO, info, "rgba32ui", "triangle info")):
             tex = BufferTexture(self.ctx, data, fmt, name)
             self._owned.append(tex)
             self._units.append((unit, tex.bind))

@@ -1,4 +1,5 @@
-"""Host mirror of ``shaders/scene/layout.glsl``: numpy dtypes and binding numbers.
+"""Host mirror of ``shaders/scene/layout.glsl``: numpy dtypes of its structs and the kinds
+of materials and lights (binding numbers and flag bits: :mod:`glrender.gpu.bindings`).
 
 Each structured dtype has exactly the std430 (storage blocks) or std140 (the
 uniform block) layout of its GLSL struct; ``tests/gpu/test_layout.py`` writes every
@@ -8,36 +9,6 @@ column-major: store ``M.T`` in a ``(4, 4)`` field.
 from __future__ import annotations
 
 import numpy as np
-
-# ---- binding numbers (three separate GL binding spaces) ----------------------------
-UBO_PARAMS = 0
-
-SSBO_ACCUM_SUM = 0
-SSBO_ACCUM_SQ = 1
-SSBO_MATERIALS = 2
-SSBO_LIGHTS = 3
-SSBO_DISTRIBUTIONS = 4
-SSBO_AOV = 5
-SSBO_DEBUG = 6
-SSBO_SPLAT = 7
-
-TEX_TRI_NORMALS = 4
-TEX_TRI_UVS = 5
-TEX_TRI_INFO = 6
-TEX_ENVMAP = 7
-TEX_TEXTURES = 8
-TEX_TEXTURE_RECORDS = 9
-
-SSBO_BINDINGS = {
-    "AccumSum": SSBO_ACCUM_SUM, "AccumSq": SSBO_ACCUM_SQ, "Materials": SSBO_MATERIALS,
-    "Lights": SSBO_LIGHTS, "Distributions": SSBO_DISTRIBUTIONS, "AccumAov": SSBO_AOV,
-    "DebugCounters": SSBO_DEBUG, "AccumSplat": SSBO_SPLAT,
-}
-UBO_BINDINGS = {"RenderParams": UBO_PARAMS}
-TEXTURE_BINDINGS = {
-    "u_tri_normals": TEX_TRI_NORMALS, "u_tri_uvs": TEX_TRI_UVS, "u_tri_info": TEX_TRI_INFO,
-    "u_envmap": TEX_ENVMAP, "u_textures": TEX_TEXTURES, "u_texture_records": TEX_TEXTURE_RECORDS,
-}
 
 _V4 = ("<f4", 4)
 _U4 = ("<u4", 4)
@@ -54,14 +25,20 @@ RENDER_PARAMS = np.dtype([
     ("dispatch", *_U4),
     ("counts", *_U4),
     ("scene_sphere", *_V4),
-    ("misc", *_V4),
+    ("ao_distance", "<f4"),
+    ("sample_clamp", "<f4"),
+    ("unused", "<f4", 2),
 ])
 
 MATERIAL = np.dtype([
-    ("color0", *_V4),
-    ("color1", *_V4),
-    ("color2", *_V4),
-    ("params", *_V4),
+    ("color0", "<f4", 3),
+    ("opacity_texture", "<f4"),   # texture index + 1 (0: none)
+    ("color1", "<f4", 3),
+    ("alpha_cutoff", "<f4"),
+    ("color2", "<f4", 3),
+    ("normal_scale", "<f4"),
+    ("params", "<f4", 3),         # alpha u, alpha v, eta
+    ("normal_map", "<f4"),        # texture index + 1 (0: none)
     ("info", *_U4),
     ("table", "<f4", (64,)),   # roughplastic transmittance table (glrender/gpu/microfacet_tables.py)
 ])
@@ -72,7 +49,8 @@ LIGHT = np.dtype([
     ("e2", *_V4),
     ("n", *_V4),
     ("radiance", *_V4),
-    ("params", *_V4),
+    ("params", "<f4", 3),
+    ("selection_pmf", "<f4"),
     ("info", *_U4),
 ])
 
@@ -88,17 +66,10 @@ MATERIAL_KINDS = {
     "diffuse": 0, "conductor": 1, "roughconductor": 2, "dielectric": 3, "roughdielectric": 4,
     "thindielectric": 5, "plastic": 6, "roughplastic": 7, "null": 8,
 }
-MATERIAL_FLAG_TWO_SIDED = 1
-MATERIAL_FLAG_GGX = 2
-MATERIAL_FLAG_NONLINEAR = 4
-MATERIAL_FLAG_NORMAL_SHADOWING = 8   # bsdf/bsdf.glsl bsdf_normal_shadowing
-MATERIAL_FLAG_NORMAL_FLIP = 16       # bsdf/normal_map.glsl apply_normal_map
-
 LIGHT_KINDS = {
     "parallelogram": 0, "triangle": 1, "sphere": 2, "disk": 3, "point": 4, "spot": 5,
     "directional": 6, "constant": 7, "envmap": 8,
 }
-LIGHT_FLAG_TWO_SIDED = 1
 
 
 def zeros(dtype: np.dtype, count: int = 1) -> np.ndarray:

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..scene import model as m
-from . import layout
+from . import bindings, layout
 from .textures import TextureTable
 
 NO_PRIMITIVE = 0xFFFFFFFF        # geometry/surface.glsl kNoPrimitive
@@ -188,12 +188,12 @@ def pack_material(mat: m.Material, textures: TextureTable | None = None) -> np.n
     out = np.zeros(1, layout.MATERIAL)[0]
     kind = mat.kind
     transmissive = kind in ("dielectric", "roughdielectric", "thindielectric")
-    flags = (layout.MATERIAL_FLAG_TWO_SIDED if mat.two_sided and not transmissive else 0) | \
-        (layout.MATERIAL_FLAG_GGX if mat.distribution == "ggx" else 0) | \
-        (layout.MATERIAL_FLAG_NONLINEAR if mat.nonlinear else 0)
+    flags = (bindings.MATERIAL_FLAG_TWO_SIDED if mat.two_sided and not transmissive else 0) | \
+        (bindings.MATERIAL_FLAG_GGX if mat.distribution == "ggx" else 0) | \
+        (bindings.MATERIAL_FLAG_NONLINEAR if mat.nonlinear else 0)
     if mat.normal_map is not None:
-        flags |= (layout.MATERIAL_FLAG_NORMAL_SHADOWING if mat.normal_shadowing else 0) | \
-            (layout.MATERIAL_FLAG_NORMAL_FLIP if mat.normal_flip else 0)
+        flags |= (bindings.MATERIAL_FLAG_NORMAL_SHADOWING if mat.normal_shadowing else 0) | \
+            (bindings.MATERIAL_FLAG_NORMAL_FLIP if mat.normal_flip else 0)
     what = f"material {mat.name or '?'}"
     if mat.int_ior <= 0 or mat.ext_ior <= 0:
         raise SceneError(f"{what}: int_ior and ext_ior must be positive")
@@ -235,23 +235,23 @@ def pack_material(mat: m.Material, textures: TextureTable | None = None) -> np.n
             ggx = mat.distribution == "ggx"
             out["table"] = external_transmittance(alpha[0], eta, ggx)
             out["color2"][1] = internal_reflectance(alpha[0], eta, ggx)
-    out["params"] = (alpha[0], alpha[1], eta, 0.0)
+    out["params"] = (alpha[0], alpha[1], eta)
     out["info"] = (layout.MATERIAL_KINDS[kind], flags, tex0, tex1)
     for name in ("normal_map", "opacity"):
         tex = getattr(mat, name)
         if tex is not None and (textures is None or not isinstance(tex, m.Texture)):
             raise SceneError(f"{what}.{name}: expected a texture")
     if mat.normal_map is not None:
-        out["params"][3] = textures.index(mat.normal_map, f"{what}.normal_map")
+        out["normal_map"] = textures.index(mat.normal_map, f"{what}.normal_map")
         if not np.isfinite(mat.normal_scale):
             raise SceneError(f"{what}.normal_scale: expected a finite number")
-        out["color2"][3] = mat.normal_scale
+        out["normal_scale"] = mat.normal_scale
     if mat.opacity is not None:
         if not 0.0 <= mat.alpha_cutoff <= 1.0:
             raise SceneError(f"{what}.alpha_cutoff: expected a number in [0, 1], "
                              f"got {mat.alpha_cutoff!r}")
-        out["color0"][3] = textures.index(mat.opacity, f"{what}.opacity")
-        out["color1"][3] = mat.alpha_cutoff
+        out["opacity_texture"] = textures.index(mat.opacity, f"{what}.opacity")
+        out["alpha_cutoff"] = mat.alpha_cutoff
     return out
 
 
@@ -332,7 +332,7 @@ def pack_scene(scene: m.Scene) -> PackedScene:
         for key, value in fields.items():
             rec[key][:len(value)] = value
         rec["radiance"][:3] = radiance
-        flags = layout.LIGHT_FLAG_TWO_SIDED if emission.two_sided else 0
+        flags = bindings.LIGHT_FLAG_TWO_SIDED if emission.two_sided else 0
         rec["info"] = (layout.LIGHT_KINDS[kind], flags, NO_PRIMITIVE, 0)
         area = float(rec["n"][3])
         weights.append(math.pi * area * _luminance(radiance) * (2 if emission.two_sided else 1))

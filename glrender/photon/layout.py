@@ -1,20 +1,9 @@
-"""Host mirror of ``shaders/photon/layout.glsl``: binding numbers and the std140
-uniform block of the photon kernels (tests/photon/test_photon_trace.py checks the block
-on the device)."""
+"""Host mirror of ``shaders/photon/layout.glsl`` and ``map_layout.glsl``: the std140 uniform
+blocks of the photon kernels and their record sizes (tests/photon/test_photon_trace.py
+checks the block on the device; binding numbers: :mod:`glrender.gpu.bindings`)."""
 from __future__ import annotations
 
 import numpy as np
-
-UBO_PHOTON = 1
-
-SSBO_VP_POSITION = 8
-SSBO_VP_SHADING = 9
-SSBO_VP_EXTRA = 10
-SSBO_VP_RADIANCE = 11
-SSBO_RADIUS2 = 12
-SSBO_GRID = 13
-SSBO_DEPOSITS = 14
-SSBO_RECORDS = 15
 
 # bytes per pixel of the SPPM device buffers: position 16, shading 32, extra 32,
 # radiance 16, radius^2 4, deposits 16 (the grid adds 4 per listed cell and entry)
@@ -35,13 +24,7 @@ assert PHOTON_PARAMS.itemsize == 80
 # density estimation kernels (kKernel* in shaders/photon/density.glsl)
 KERNELS = {"uniform": 0, "cone": 1, "epanechnikov": 2}
 
-# the photon integrator (shaders/photon/map_layout.glsl)
-SSBO_TRACED_PHOTONS = 8     # the map being traced, in the order stored
-SSBO_MAP_COUNTERS = 12
-TEX_GLOBAL_MAP = 10         # buffer textures: the maps' records in grid order, 3 texels a photon
-TEX_CAUSTIC_MAP = 11
-TEX_GLOBAL_CELLS = 12       # and their grids' hash tables
-TEX_CAUSTIC_CELLS = 13
+# the photon integrator (shaders/photon/map_layout.glsl): the maps' records in grid order
 BYTES_PER_PHOTON = 48       # position and type, direction and normal, power and segments
 TEXELS_PER_PHOTON = 3
 MAP_COUNTER_WORDS = 4       # stored, candidates skipped, visited, most visited by one lookup

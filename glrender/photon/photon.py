@@ -31,7 +31,7 @@ from ..gl import shaders
 from ..gl.buffers import BufferTexture
 from ..gl.context import current
 from ..gpu import codegen
-from ..gpu import layout as scene_layout
+from ..gpu import bindings
 from ..render import accum
 from ..render.renderer import SPLAT_SCALE, Renderer
 from . import layout as pl
@@ -218,7 +218,7 @@ class PhotonRenderer(Renderer):
         prm = self.param_block(0, 0)
         self.bind()
         self.write_params(prm)
-        self._view.bind_to_storage_buffer(scene_layout.SSBO_SPLAT)
+        self._view.bind_to_storage_buffer(bindings.SSBO_ACCUM_SPLAT)
         block = self._block.copy()
         max_depth = self.settings.integrator.max_depth
         view = int(self.photon.photon_view and which == 0)
@@ -229,7 +229,7 @@ class PhotonRenderer(Renderer):
             while first < total:
                 if buf is None:
                     buf = self.gl.buffer(reserve=max(16, pl.BYTES_PER_PHOTON * capacity))
-                    buf.bind_to_storage_buffer(pl.SSBO_TRACED_PHOTONS)
+                    buf.bind_to_storage_buffer(bindings.SSBO_TRACED_PHOTONS)
                     self._counters.clear()
                     stored = 0
                 count = min(per_dispatch, total - first)
@@ -307,11 +307,11 @@ class PhotonRenderer(Renderer):
 
     def bind(self) -> None:
         super().bind()
-        self._counters.bind_to_storage_buffer(pl.SSBO_MAP_COUNTERS)
-        for tex, unit in zip((*self._maps, *self._cells), (pl.TEX_GLOBAL_MAP, pl.TEX_CAUSTIC_MAP,
-                                                           pl.TEX_GLOBAL_CELLS, pl.TEX_CAUSTIC_CELLS)):
+        self._counters.bind_to_storage_buffer(bindings.SSBO_MAP_COUNTERS)
+        for tex, unit in zip((*self._maps, *self._cells), (bindings.TEX_GLOBAL_MAP, bindings.TEX_CAUSTIC_MAP,
+                                                           bindings.TEX_GLOBAL_CELLS, bindings.TEX_CAUSTIC_CELLS)):
             tex.bind(unit)
-        self._map_params.bind_to_uniform_block(pl.UBO_PHOTON)
+        self._map_params.bind_to_uniform_block(bindings.UBO_PHOTON_MAP_PARAMS)
 
     def fingerprint(self) -> str:
         """The Renderer's fingerprint with the photon maps' parameters and kernel."""

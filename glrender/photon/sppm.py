@@ -36,7 +36,7 @@ from ..film import Film
 from ..gl import shaders
 from ..gl.context import Context, current
 from ..gpu import codegen
-from ..gpu import layout as scene_layout
+from ..gpu import bindings
 from ..render import accum
 from ..render.renderer import (SPLAT_SCALE, TILE, RenderSettings, Renderer, camera_tangents,
                                settings_from_scene)
@@ -265,12 +265,12 @@ class SppmRenderer:
     # -- rendering ---------------------------------------------------------------------------
     def _bind(self) -> None:
         self.base.bind()
-        for binding, buf in ((pl.SSBO_VP_POSITION, self._vp_position), (pl.SSBO_VP_SHADING, self._vp_shading),
-                             (pl.SSBO_VP_EXTRA, self._vp_extra), (pl.SSBO_VP_RADIANCE, self._vp_radiance),
-                             (pl.SSBO_RADIUS2, self._radius2), (pl.SSBO_GRID, self._grid),
-                             (pl.SSBO_DEPOSITS, self._deposits), (pl.SSBO_RECORDS, self._records)):
+        for binding, buf in ((bindings.SSBO_VP_POSITION, self._vp_position), (bindings.SSBO_VP_SHADING, self._vp_shading),
+                             (bindings.SSBO_VP_EXTRA, self._vp_extra), (bindings.SSBO_VP_RADIANCE, self._vp_radiance),
+                             (bindings.SSBO_VP_RADIUS2, self._radius2), (bindings.SSBO_GRID_CELLS, self._grid),
+                             (bindings.SSBO_DEPOSITS, self._deposits), (bindings.SSBO_PHOTON_RECORDS, self._records)):
             buf.bind_to_storage_buffer(binding)
-        self._photon_params.bind_to_uniform_block(pl.UBO_PHOTON)
+        self._photon_params.bind_to_uniform_block(bindings.UBO_PHOTON_PARAMS)
 
     def _photon_block(self, iteration: int) -> Any:
         prm = np.zeros(1, pl.PHOTON_PARAMS)[0]
@@ -351,7 +351,7 @@ class SppmRenderer:
         """Traces the next dispatch of photons into the grid in progress; at its end,
         reads the counters, and at the slice's end its deposits."""
         self._bind()
-        self._view.bind_to_storage_buffer(scene_layout.SSBO_SPLAT)
+        self._view.bind_to_storage_buffer(bindings.SSBO_ACCUM_SPLAT)
         prm, first = work.prm, work.next_photon
         count = min(PHOTONS_PER_DISPATCH, self.photons_per_iteration - first)
         prm["photons"][:2] = (first, count)

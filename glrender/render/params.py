@@ -1,6 +1,8 @@
 """Host side of ``shaders/common/params.glsl``: the compile-time configuration.
 
-Every define that params.glsl requires is produced here and nowhere else.
+Every define that params.glsl requires is produced here and nowhere else; the switches it
+takes when present (``OPTIONAL_DEFINES``) are added by the renderer for the scenes that need
+them, and by tests. No shader file tests any other host macro (tests/gpu/test_params.py).
 """
 from __future__ import annotations
 
@@ -12,6 +14,14 @@ LIGHT_SELECTION = {"uniform": 0, "power": 1}
 AREA_SAMPLING = {"area": 0, "solid-angle": 1}
 FILTERS = {"box": 0, "tent": 1, "gaussian": 2, "mitchell": 3}
 RR_RULES = {"throughput": 0, "fixed": 1, "off": 2}
+#: the switches params.glsl defaults to 0 (the BVH depth: to 31) when the host leaves them out
+OPTIONAL_DEFINES = {
+    "GLRENDER_NORMAL_SHADOWING": "a material's normal map has the shadowing term",
+    "GLRENDER_ALPHA_CUTOUTS": "opacity textures cut holes into mesh triangles",
+    "GLRENDER_STRATEGY_DEPTH": "bdpt keeps each strategy's image up to this path length",
+    "GLRENDER_BVH_MAX_DEPTH": "the deepest BVH the traversal stack holds (tests lower it)",
+    "GLRENDER_BDPT_GENERIC_WEIGHTS": "test only: bdpt evaluates every MIS density afresh",
+}
 
 
 def kind_mask(kinds, table: dict[str, int]) -> int:

@@ -23,7 +23,7 @@ from .. import integrators
 from ..errors import UsageError
 from ..gl import shaders
 from ..gl.context import Context, current, default_context
-from ..gpu import codegen, layout
+from ..gpu import bindings, codegen, layout
 from ..gpu.device_scene import DeviceScene
 from ..gpu.pack import PackedScene
 from ..sampling.sequences import strata_columns
@@ -469,8 +469,8 @@ class Renderer:
                          self.rows[0])
         center, radius = self.packed.sphere_bounds
         prm["scene_sphere"] = (*center, radius)
-        prm["misc"][0] = min(s.integrator.ao_distance, 3.0e38)
-        prm["misc"][2] = s.clamp if s.clamp is not None else 0.0
+        prm["ao_distance"] = min(s.integrator.ao_distance, 3.0e38)
+        prm["sample_clamp"] = s.clamp if s.clamp is not None else 0.0
         return prm
 
     def write_params(self, prm: Any) -> None:
@@ -481,26 +481,26 @@ class Renderer:
         """Bind the scene, the settings' light table, the accumulation and the parameter
         block to their slots: what a kernel of this scene reads (the render kernel, and the
         photon kernels that compile against the same defines)."""
-        self._sums.bind_to_storage_buffer(layout.SSBO_ACCUM_SUM)
-        self._squares.bind_to_storage_buffer(layout.SSBO_ACCUM_SQ)
-        self._materials.bind_to_storage_buffer(layout.SSBO_MATERIALS)
-        self._lights.bind_to_storage_buffer(layout.SSBO_LIGHTS)
-        self._dist.bind_to_storage_buffer(layout.SSBO_DISTRIBUTIONS)
-        self._aov.bind_to_storage_buffer(layout.SSBO_AOV)
-        self._debug.bind_to_storage_buffer(layout.SSBO_DEBUG)
-        self._splat.bind_to_storage_buffer(layout.SSBO_SPLAT)
+        self._sums.bind_to_storage_buffer(bindings.SSBO_ACCUM_SUM)
+        self._squares.bind_to_storage_buffer(bindings.SSBO_ACCUM_SQ)
+        self._materials.bind_to_storage_buffer(bindings.SSBO_MATERIALS)
+        self._lights.bind_to_storage_buffer(bindings.SSBO_LIGHTS)
+        self._dist.bind_to_storage_buffer(bindings.SSBO_DISTRIBUTIONS)
+        self._aov.bind_to_storage_buffer(bindings.SSBO_ACCUM_AOV)
+        self._debug.bind_to_storage_buffer(bindings.SSBO_DEBUG_COUNTERS)
+        self._splat.bind_to_storage_buffer(bindings.SSBO_ACCUM_SPLAT)
         if self.settings.strategy_depth:
-            self._strategies.bind_to_storage_buffer(strategies.SSBO_STRATEGY_IMAGES)
-        self._params.bind_to_uniform_block(layout.UBO_PARAMS)
+            self._strategies.bind_to_storage_buffer(bindings.SSBO_STRATEGY_IMAGES)
+        self._params.bind_to_uniform_block(bindings.UBO_RENDER_PARAMS)
         assert self.device_scene is not None, "the renderer was released"
         self.device_scene.bind()
 
     def bind_film(self) -> None:
         """Bind the accumulation alone (sums, squares, AOVs) to its slots, for a pass that
         reads it (the preview's display)."""
-        self._sums.bind_to_storage_buffer(layout.SSBO_ACCUM_SUM)
-        self._squares.bind_to_storage_buffer(layout.SSBO_ACCUM_SQ)
-        self._aov.bind_to_storage_buffer(layout.SSBO_AOV)
+        self._sums.bind_to_storage_buffer(bindings.SSBO_ACCUM_SUM)
+        self._squares.bind_to_storage_buffer(bindings.SSBO_ACCUM_SQ)
+        self._aov.bind_to_storage_buffer(bindings.SSBO_ACCUM_AOV)
 
     @current
     def load_accumulation(self, sums: np.ndarray, squares: np.ndarray) -> None:
@@ -558,12 +558,12 @@ class Renderer:
 
     def _slice_bytes_per_pixel(self) -> list[tuple[Any, int, int]]:
         """The per-pixel accumulation buffers in use: (buffer, bytes per pixel, binding)."""
-        bufs = [(self._sums, SUM_BYTES, layout.SSBO_ACCUM_SUM),
-                (self._squares, SQUARE_BYTES, layout.SSBO_ACCUM_SQ)]
+        bufs = [(self._sums, SUM_BYTES, bindings.SSBO_ACCUM_SUM),
+                (self._squares, SQUARE_BYTES, bindings.SSBO_ACCUM_SQ)]
         if self.settings.aovs:
-            bufs.append((self._aov, AOV_BYTES, layout.SSBO_AOV))
+            bufs.append((self._aov, AOV_BYTES, bindings.SSBO_ACCUM_AOV))
         if self.settings.count_loops or self.settings.count_rays:
-            bufs.append((self._debug, 4, layout.SSBO_DEBUG))
+            bufs.append((self._debug, 4, bindings.SSBO_DEBUG_COUNTERS))
         return bufs
 
     def _slices(self) -> list[tuple[int, int]]:

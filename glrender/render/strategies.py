@@ -17,7 +17,6 @@ import numpy as np
 from ..errors import UsageError
 from .accum import fixed_sums
 
-SSBO_STRATEGY_IMAGES = 8   # the kernel's own block (integrators/strategy_images.glsl)
 WORDS_PER_PIXEL = 12       # six floats (t >= 2) or six 64-bit fixed-point sums (t = 1)
 DEFAULT_DEPTH = 5
 

@@ -65,24 +65,18 @@ float normal_shadowing_term(float cos_tilt, float cos_l) {
 // weight a path as the path tracer does (Mitsuba applies it to the sampled or
 // evaluated direction in either mode, which is not the adjoint of its radiance BSDF).
 // With it, as in Mitsuba, w must be on the same side of the unperturbed and the
-// perturbed normal. Compiled in only for scenes that ask for it (GLRENDER_NORMAL_SHADOWING).
+// perturbed normal. Compiled in only for scenes that ask for it (kNormalShadowing).
 float bsdf_normal_shadowing(Bsdf b, vec3 w) {
-#ifdef GLRENDER_NORMAL_SHADOWING
-    if ((b.flags & kMaterialFlagNormalShadowing) == 0u) return 1.0;
+    if (!kNormalShadowing || (b.flags & kMaterialFlagNormalShadowing) == 0u) return 1.0;
     float cos_l = dot(w, b.n0);
     if (cos_l * w.z <= 0.0) return 0.0;
     return normal_shadowing_term(b.n0.z, cos_l);
-#else
-    return 1.0;
-#endif
 }
 
 // Gives b the unperturbed shading normal ns0 (world) in the local frame `frame`, for
 // bsdf_normal_shadowing; a no-op unless a scene's normal map uses the term.
 void bsdf_normal_frame(inout Bsdf b, vec3 ns0, Frame frame) {
-#ifdef GLRENDER_NORMAL_SHADOWING
-    b.n0 = frame_to_local(frame, ns0);
-#endif
+    if (kNormalShadowing) b.n0 = frame_to_local(frame, ns0);
 }
 
 // f(wo, wi) |cos theta_i| of the non-delta lobes and (out) the solid-angle pdf with

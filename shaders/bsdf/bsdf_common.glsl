@@ -19,12 +19,8 @@ const uint kMaterialPlastic = 6u;
 const uint kMaterialRoughPlastic = 7u;
 const uint kMaterialNull = 8u;
 
-// Material flags: glrender.gpu.layout.MATERIAL_FLAG_*.
-const uint kMaterialFlagTwoSided = 1u;
-const uint kMaterialFlagGgx = 2u;
-const uint kMaterialFlagNonlinear = 4u;
-const uint kMaterialFlagNormalShadowing = 8u;   // normal map shadowing term (bsdf/normal_map.glsl)
-const uint kMaterialFlagNormalFlip = 16u;       // normal map flip of invalid normals
+// Material flags (kMaterialFlag*): common/bindings.glsl.
+#include "common/bindings.glsl"
 
 // A material at one surface point, its textures already looked up. The meaning of
 // c0, c1, c2 per kind is that of MaterialData (scene/layout.glsl).

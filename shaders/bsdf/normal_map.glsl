@@ -13,8 +13,8 @@
 #include "geometry/surface.glsl"
 #include "scene/layout.glsl"
 
-// Replaces hit.ns by the normal map's normal (MaterialHeader.params.w: texture + 1,
-// color2.w: scale) for a ray arriving along d; hits of materials without one are left
+// Replaces hit.ns by the normal map's normal (MaterialHeader.normal_map: texture + 1,
+// normal_scale: its strength) for a ray arriving along d; hits of materials without one are left
 // alone, and so is hit.ns0, the normal before the map. A map normal that is not finite
 // leaves the hit alone too. With kMaterialFlagNormalFlip (Mitsuba's flip_invalid_normals)
 // a map normal that puts -d below its horizon while -d is above the unperturbed one's
@@ -26,10 +26,10 @@
 // the path tracer's BSDF wherever the direction toward the camera's side needs no flip;
 // where it would, a light path misses the light the flip sends on.
 void apply_normal_map(inout SurfaceHit hit, MaterialHeader m, vec3 d) {
-    uint tex = uint(m.params.w);
+    uint tex = uint(m.normal_map);
     if (tex == 0u) return;
     vec3 c = texture_eval(tex - 1u, hit.uv) * 2.0 - 1.0;
-    c.xy *= m.color2.w;
+    c.xy *= m.normal_scale;
     Frame f = shading_frame(hit);
     vec3 n = c.x * f.x + c.y * f.y + c.z * f.z;
     if ((m.info.y & kMaterialFlagNormalFlip) != 0u && !g_light_path_rays && dot(d, f.z) * dot(d, n) <= 0.0)

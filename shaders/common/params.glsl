@@ -16,6 +16,41 @@
 #error "common/params.glsl: a host define is missing (see glrender/render/params.py)"
 #endif
 
+// Switches the host passes only for the scenes or tests that need them
+// (glrender/render/params.py OPTIONAL_DEFINES): each is a number here, 0 when absent.
+// Code reads the typed constant; it tests the macro (#if) only where a declaration
+// depends on it (a struct field, a storage block, a function the scene code defines).
+#ifndef GLRENDER_NORMAL_SHADOWING
+#define GLRENDER_NORMAL_SHADOWING 0
+#endif
+#ifndef GLRENDER_ALPHA_CUTOUTS
+#define GLRENDER_ALPHA_CUTOUTS 0
+#endif
+#ifndef GLRENDER_STRATEGY_DEPTH
+#define GLRENDER_STRATEGY_DEPTH 0
+#endif
+#ifndef GLRENDER_BVH_MAX_DEPTH
+#define GLRENDER_BVH_MAX_DEPTH 31
+#endif
+#ifndef GLRENDER_BDPT_GENERIC_WEIGHTS
+#define GLRENDER_BDPT_GENERIC_WEIGHTS 0
+#endif
+// A material's normal map has Mitsuba's shadowing term (bsdf/bsdf.glsl
+// bsdf_normal_shadowing; bdpt's vertices keep the unperturbed normal for it).
+const bool kNormalShadowing = GLRENDER_NORMAL_SHADOWING != 0;
+// Opacity textures cut holes into mesh triangles: BVH traversal asks the scene code's
+// bvh_alpha_pass about each hit (geometry/bvh.glsl, glrender/gpu/codegen.py).
+const bool kAlphaCutouts = GLRENDER_ALPHA_CUTOUTS != 0;
+// bdpt keeps the image of every strategy of path lengths up to this (0: none;
+// integrators/strategy_images.glsl and its storage block).
+const int kStrategyDepth = GLRENDER_STRATEGY_DEPTH;
+// The deepest BVH the traversal stack holds (glrender/accel/bvh.py MAX_DEPTH; tests lower
+// it to see the overflow answer).
+const int kBvhMaxDepth = GLRENDER_BVH_MAX_DEPTH;
+// Test only (tests/render/test_bdpt.py): bdpt evaluates every MIS density afresh
+// instead of reusing its connections' own, the oracle of the O(1) weights.
+const bool kBdptGenericWeights = GLRENDER_BDPT_GENERIC_WEIGHTS != 0;
+
 // Sample generator (sampling/sampler.glsl).
 const int kSamplerIndependent = 0;
 const int kSamplerStratified = 1;

@@ -21,18 +21,15 @@
 // kBvhStackOverflow: it never writes out of bounds, loops, or misses silently.
 #include "common/constants.glsl"
 #include "common/loop_counter.glsl"
+#include "common/params.glsl"
 #include "geometry/aabb.glsl"
 #include "geometry/bvh_layout.glsl"
 #include "geometry/triangle.glsl"
 
-#ifndef GLRENDER_BVH_MAX_DEPTH
-#define GLRENDER_BVH_MAX_DEPTH 31
-#endif
-const int kBvhMaxDepth = GLRENDER_BVH_MAX_DEPTH;
 const int kBvhStackSize = 3 * (kBvhMaxDepth + 1);
 const uint kBvhNoHit = 0xFFFFFFFFu;
 
-#ifdef GLRENDER_ALPHA_CUTOUTS
+#if GLRENDER_ALPHA_CUTOUTS
 // Whether the hit at barycentrics bary of triangle prim is solid (not cut out by its
 // material's opacity texture): defined by the scene code (glrender/gpu/codegen.py).
 bool bvh_alpha_pass(uint prim, vec2 bary);
@@ -137,7 +134,7 @@ bool bvh_traverse(uint root, vec3 o, vec3 d, float t_max, const bool any_hit, ou
                 float t;
                 vec2 bary;
                 bool solid = watertight_resolve(uvwt, hit.t, t, bary);
-#ifdef GLRENDER_ALPHA_CUTOUTS
+#if GLRENDER_ALPHA_CUTOUTS
                 solid = solid && bvh_alpha_pass(leaf_first, bary);
 #endif
                 if (solid) {

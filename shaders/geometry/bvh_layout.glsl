@@ -1,6 +1,7 @@
 // The geometry buffer textures and their encoding: the one place texture units
-// 0-3 are declared. glrender/accel/gpu.py binds them and a test checks the
-// units and constants below against it and against glrender/accel/bvh.py.
+// 0-3 are declared. glrender/gpu/bvh_upload.py binds them and a test checks the
+// units and constants below against it and against glrender/accel/bvh.py; the unit
+// numbers are named in common/bindings.glsl.
 //
 // u_bvh_nodes      rgba32ui, 4 texels (64 bytes) per 4-wide node
 //                  (glrender/accel/quantize.py): origin + exponents, the four
@@ -11,9 +12,10 @@
 //
 // A child reference is an inner node index (high bit clear), or a leaf
 // kBvhLeafFlag | count << kBvhLeafCountShift | first: triangles [first, first + count).
-layout(binding = 0) uniform usamplerBuffer u_bvh_nodes;
-layout(binding = 1) uniform samplerBuffer u_bvh_triangles;
-layout(binding = 2) uniform samplerBuffer u_bvh_instances;
+#include "common/bindings.glsl"
+layout(binding = TEX_BVH_NODES) uniform usamplerBuffer u_bvh_nodes;
+layout(binding = TEX_BVH_TRIANGLES) uniform samplerBuffer u_bvh_triangles;
+layout(binding = TEX_BVH_INSTANCES) uniform samplerBuffer u_bvh_instances;
 
 const uint kBvhLeafFlag = 0x80000000u;
 const uint kBvhLeafCountShift = 28u;

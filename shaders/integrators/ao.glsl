@@ -2,7 +2,7 @@
 //
 // AO(p) = (1/pi) ∫ V(p, w, r) cos theta dw, estimated with one cosine-sampled
 // direction per camera sample (a zero-variance choice for an unoccluded point).
-// Rays that miss the scene return 0. r = u_params.misc.x (infinite by default).
+// Rays that miss the scene return 0. r = u_params.ao_distance (infinite by default).
 #include "integrators/integrator_common.glsl"
 #include "integrators/shading.glsl"
 #include "sampling/hemisphere.glsl"
@@ -18,5 +18,5 @@ vec3 integrator_li(vec3 o, vec3 d, float t_max, float time, inout SamplerState s
     if (dot(wi, hit.ng) * dot(n, hit.ng) <= 0.0) return vec3(0.0);
     vec3 p = hit.p;
     vec3 o2 = offset_ray_origin(p, hit.ng, wi);
-    return scene_occluded(o2, wi, u_params.misc.x, time, kNoPrimitive) ? vec3(0.0) : vec3(1.0);
+    return scene_occluded(o2, wi, u_params.ao_distance, time, kNoPrimitive) ? vec3(0.0) : vec3(1.0);
 }

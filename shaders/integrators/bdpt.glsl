@@ -24,11 +24,11 @@
 #include "integrators/splat.glsl"
 #include "integrators/bdpt_vertex.glsl"
 #include "integrators/strategy_images.glsl"
-// The strategies weigh with the densities of their own BSDF evaluations; tests define
-// BDPT_GENERIC_WEIGHTS to evaluate every density afresh instead (the same bits).
+// The strategies weigh with the densities of their own BSDF evaluations; tests set
+// kBdptGenericWeights to evaluate every density afresh instead (the same bits).
 // Next-event estimation and lens connections pass their own light or lens vertex (the
 // generic weights read it from index 0 of its subpath, where they put it for the call).
-#ifdef BDPT_GENERIC_WEIGHTS
+#if GLRENDER_BDPT_GENERIC_WEIGHTS
 #define STRATEGY_WEIGHT(s, t, cp) bdpt_mis_weight(s, t)
 #define LIGHT_SAMPLE_WEIGHT(t, cp, light, delta) light_sample_weight_generic(t, light)
 #define LENS_WEIGHT(s, cp, lens) lens_weight_generic(s, lens)
@@ -38,7 +38,7 @@
 #define LENS_WEIGHT(s, cp, lens) bdpt_mis_weight_pdfs(s, 1, cp)
 #endif
 
-#ifdef BDPT_GENERIC_WEIGHTS
+#if GLRENDER_BDPT_GENERIC_WEIGHTS
 float light_sample_weight_generic(int t, Vertex light) {
     Vertex saved = g_light[0];
     g_light[0] = light;

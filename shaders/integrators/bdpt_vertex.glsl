@@ -36,7 +36,7 @@ struct Vertex {
     vec3 p;
     vec3 ng;        // geometric normal (0 for points off surfaces: pinhole, lens, point lights)
     vec3 ns;        // shading normal
-#ifdef GLRENDER_NORMAL_SHADOWING
+#if GLRENDER_NORMAL_SHADOWING
     vec3 ns0;       // the shading normal before a normal map (bsdf_normal_frame)
 #endif
     vec3 tangent;   // x axis of the shading frame (geometry/surface.glsl's shading_frame)
@@ -81,7 +81,7 @@ void vertex_set_delta(inout Vertex v, bool delta) {
 
 // Vertex's constructor argument ns0 (n), in scenes with a normal map's shadowing term only:
 // the others keep no copy of it in their subpaths.
-#ifdef GLRENDER_NORMAL_SHADOWING
+#if GLRENDER_NORMAL_SHADOWING
 #define VERTEX_NS0(n) n,
 #else
 #define VERTEX_NS0(n)
@@ -89,7 +89,7 @@ void vertex_set_delta(inout Vertex v, bool delta) {
 
 // The shading normal before a normal map at v (its shading normal where none keeps it).
 vec3 vertex_ns0(Vertex v) {
-#ifdef GLRENDER_NORMAL_SHADOWING
+#if GLRENDER_NORMAL_SHADOWING
     return v.ns0;
 #else
     return v.ns;
@@ -99,13 +99,9 @@ vec3 vertex_ns0(Vertex v) {
 // arr[index] = value with constant indices: a loop over every index that the compiler
 // unrolls, each a masked vector store. llvmpipe stores to a dynamically indexed local
 // array lane by lane, and its vector loads after such scalar stores stall: bdpt samples
-// measured 17-25% cheaper this way (benchmarks/bdpt_cost.py --define
-// BDPT_INDEXED_STORES compiles the plain indexed store for comparison).
-#ifdef BDPT_INDEXED_STORES
-#define STORE_AT(arr, index, value) arr[index] = value
-#else
+// measured 17-25% cheaper this way (benchmarks/patches/bdpt-indexed-stores.patch
+// restores the plain indexed store for comparison).
 #define STORE_AT(arr, index, value) { int at_ = (index); for (int i_ = 0; i_ < arr.length(); ++i_) if (i_ == at_) arr[i_] = value; }
-#endif
 
 Vertex g_camera[kBdptVertices];
 Vertex g_light[kBdptVertices];

@@ -101,7 +101,7 @@ CameraSample camera_sample(uvec2 pixel, inout SamplerState s) {
 
 // Adds one sample's radiance L (and first-hit AOVs) to the pixel's statistics;
 // non-finite samples, and those with a component of kAccumLimit or more, are dropped
-// and counted. With a clamp c > 0 (u_params.misc.z) a sample whose largest component
+// and counted. With a clamp c > 0 (u_params.sample_clamp) a sample whose largest component
 // exceeds c is scaled down to it (hue kept; biased).
 float max_abs(vec3 v) {
     return max(abs(v.x), max(abs(v.y), abs(v.z)));
@@ -109,7 +109,7 @@ float max_abs(vec3 v) {
 
 void accumulate(inout Accumulator acc, vec3 L, Aov aov, uint index) {
     if (kDebugNonFinite != 0u && (index % 7u) == kDebugNonFinite - 1u) L = vec3(uintBitsToFloat(0x7fc00000u));
-    float clamp_to = u_params.misc.z;
+    float clamp_to = u_params.sample_clamp;
     float largest = max(L.r, max(L.g, L.b));
     if (clamp_to > 0.0 && largest > clamp_to) {
         L *= clamp_to / largest;

@@ -2,7 +2,7 @@
 // lengths 1 .. kStrategyDepth adds its MIS-weighted and its unweighted contribution to an
 // image of its own (Veach 1997, fig. 10.3), beside the normal accumulation.
 //
-// Only kernels compiled with the host define GLRENDER_STRATEGY_DEPTH (the depth) have
+// Only kernels compiled with kStrategyDepth > 0 (common/params.glsl) have
 // this code and storage block 8; otherwise the functions below are empty and bdpt pays
 // nothing. Block 8 is this kernel's own (the photon kernels number theirs from 8 too;
 // the two never meet in one kernel); glrender/render/strategies.py reads it back.
@@ -13,12 +13,12 @@
 // owns the pixel, in sample order. The t = 1 strategies land anywhere on the film: six
 // 64-bit fixed-point sums (weighted rgb, unweighted rgb) as word pairs, added with
 // integer atomics through the pixel filter as integrators/splat.glsl does.
+#include "common/params.glsl"
 #include "integrators/splat.glsl"
 
-#ifdef GLRENDER_STRATEGY_DEPTH
-layout(std430, binding = 8) buffer StrategyImages { uint strategy_data[]; };
+#if GLRENDER_STRATEGY_DEPTH
+layout(std430, binding = SSBO_STRATEGY_IMAGES) buffer StrategyImages { uint strategy_data[]; };
 
-const int kStrategyDepth = GLRENDER_STRATEGY_DEPTH;
 uint g_strategy_pixel;   // the camera sample's pixel (index into the whole image)
 
 void strategy_begin(uvec2 pixel) {

@@ -29,9 +29,7 @@ const uint kLightSpot = 5u;
 const uint kLightDirectional = 6u;
 const uint kLightConstant = 7u;
 const uint kLightEnvmap = 8u;
-// Light flags: glrender.gpu.layout.LIGHT_FLAG_*.
-const uint kLightFlagTwoSided = 1u;
-const uint kLightFlagRectangle = 2u;  // a parallelogram with orthogonal edges
+// Light flags (kLightFlag*): common/bindings.glsl, included by scene/layout.glsl.
 
 // Solid angles outside this range are sampled by area: below it float32 loses the
 // digits of the spherical construction, above it the warp is badly conditioned

@@ -1,7 +1,7 @@
 // Choosing one light for next-event estimation: uniformly, or by power with an alias table.
 //
 // Lecture 13: p_i = Phi_i / sum_j Phi_j. The host writes each light's selection
-// probability into LightData.params.w (used by MIS to evaluate the pdf of a light hit
+// probability into LightData.selection_pmf (used by MIS to evaluate the pdf of a light hit
 // by BSDF sampling) and, for power selection, the alias table at offset 0 of the
 // packed distributions.
 #include "common/params.glsl"
@@ -26,5 +26,5 @@ LightChoice select_light(float u) {
 
 // Probability that select_light picks light `index`.
 float light_selection_pmf(uint index) {
-    return scene_light(index).params.w;
+    return scene_light(index).selection_pmf;
 }

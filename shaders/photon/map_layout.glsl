@@ -1,9 +1,10 @@
 // Bindings of the photon integrator (integrators/photon.glsl) and its photon tracing
 // kernel (photon/photon_store.comp.glsl): the device side of their host/device contract,
 // mirrored by glrender/photon/layout.py. Beside the render kernels' bindings
-// (scene/layout.glsl: uniform block 0, storage blocks 0-7).
+// (scene/layout.glsl: uniform block 0, storage blocks 0-7), named in common/bindings.glsl.
+#include "common/bindings.glsl"
 // ---- uniform block 1: the photon maps' parameters (std140) ----------------------------
-layout(std140, binding = 1) uniform PhotonMapParams {
+layout(std140, binding = UBO_PHOTON_MAP_PARAMS) uniform PhotonMapParams {
     uvec4 trace;          // x: first photon of this dispatch, y: photons in it, z: photons of the pass,
                           // w: the map traced (0 global, 1 caustic)
     uvec4 store;          // x: capacity of the map being stored (photons), y: max depth (segments),
@@ -26,13 +27,13 @@ layout(std140, binding = 1) uniform PhotonMapParams {
 //   [3 k + 1] = (unit direction back toward where it came from xyz, geometric normal
 //   as packSnorm4x8 bits), [3 k + 2] = (power rgb, path segments from the light)
 // and their grids' hash tables: cells[h] .. cells[h + 1] are the photons under hash h
-// (glrender/photon/grid.py build_point_grid). Texture units 10-13 (glrender/photon/layout.py).
-layout(binding = 10) uniform samplerBuffer u_global_map;
-layout(binding = 11) uniform samplerBuffer u_caustic_map;
-layout(binding = 12) uniform usamplerBuffer u_global_cells;
-layout(binding = 13) uniform usamplerBuffer u_caustic_cells;
+// (glrender/photon/grid.py build_point_grid). Texture units 10-13.
+layout(binding = TEX_GLOBAL_MAP) uniform samplerBuffer u_global_map;
+layout(binding = TEX_CAUSTIC_MAP) uniform samplerBuffer u_caustic_map;
+layout(binding = TEX_GLOBAL_CELLS) uniform usamplerBuffer u_global_cells;
+layout(binding = TEX_CAUSTIC_CELLS) uniform usamplerBuffer u_caustic_cells;
 // 8: the tracing kernel's photons, the same 3 records each, in the order stored.
-layout(std430, binding = 8) buffer TracedPhotons { vec4 traced_photons[]; };
+layout(std430, binding = SSBO_TRACED_PHOTONS) buffer TracedPhotons { vec4 traced_photons[]; };
 
 // Record k of the global (map 0) or caustic (map 1) map.
 vec4 map_record(uint map, uint k) {
@@ -48,7 +49,7 @@ uint map_cell(uint map, uint h) {
 
 // 12: counters: [0] photons stored (the tracing kernel), [1] lookup candidates skipped by
 // the bound, [2] candidates visited, [3] the most visited by one lookup.
-layout(std430, binding = 12) buffer PhotonMapCounters { uint map_counters[]; };
+layout(std430, binding = SSBO_MAP_COUNTERS) buffer PhotonMapCounters { uint map_counters[]; };
 
 const uint kPhotonDirect = 0u;     // the first surface a photon reaches (NEE's light)
 const uint kPhotonCaustic = 1u;    // reached through delta surfaces only: L S+ D

@@ -48,9 +48,8 @@ void sppm_deposit(vec3 p, vec3 ng, vec3 wi, vec3 beta, int segments, inout uint 
         vec4 s0 = vp_shading[2u * i], s1 = vp_shading[2u * i + 1u];
         Bsdf b = bsdf_from_material(floatBitsToUint(s0.w), vec2(s1.w, extra.w));
         Frame frame = frame_from_z(s1.xyz);
-#ifdef GLRENDER_NORMAL_SHADOWING
-        b.n0 = vp_unpack_unit(vp_extra[2u * i + 1u].w);   // bsdf_normal_frame's, in this frame
-#endif
+        if (kNormalShadowing)
+            b.n0 = vp_unpack_unit(vp_extra[2u * i + 1u].w);   // bsdf_normal_frame's, in this frame
         vec3 f;
         if (!photon_bsdf(b, frame, frame_to_local(frame, s0.xyz), extra.xyz, wi, f)) continue;
         float w = density_kernel(u_photon.estimate.x, dot(dp, dp) / vp_radius2[i]);

@@ -4,10 +4,11 @@
 // on the device. Nothing else declares a binding.
 //
 // Binding spaces are separate in GL: uniform blocks, storage blocks and texture
-// units each count from 0.
+// units each count from 0; their numbers are named in common/bindings.glsl.
+#include "common/bindings.glsl"
 
 // ---- uniform block 0: per-dispatch parameters (std140) -------------------------
-layout(std140, binding = 0) uniform RenderParams {
+layout(std140, binding = UBO_RENDER_PARAMS) uniform RenderParams {
     mat4 camera_open;      // world_from_camera at shutter open (Mitsuba camera frame: +z forward, +x left)
     mat4 camera_close;     // world_from_camera at shutter close
     vec4 camera_screen;    // x: tan(fov_x / 2), y: tan(fov_y / 2), z: lens radius, w: focus distance
@@ -19,7 +20,9 @@ layout(std140, binding = 0) uniform RenderParams {
     uvec4 dispatch;        // x: first tile (permuted order), y: tiles in this dispatch, z: seed, w: tile permutation seed
     uvec4 counts;          // x: lights, y: materials, z: environment light index + 1 (0: none), w: first tile row in the accumulation
     vec4 scene_sphere;     // bounding sphere of the scene: centre xyz, radius w
-    vec4 misc;             // x: AO distance, y: sum of light selection weights, z: sample clamp (0: off), w: unused
+    float ao_distance;     // the ambient-occlusion integrator's reach
+    float sample_clamp;    // a sample's largest RGB component is scaled down to it (0: off)
+    vec2 unused;
 } u_params;
 
 // ---- storage blocks (std430) ---------------------------------------------------
@@ -27,28 +30,36 @@ layout(std140, binding = 0) uniform RenderParams {
 //   accum_sum[4 i + c] = sum of channel c (r, g, b) of the finite samples, c < 3;
 //   accum_sum[4 i + 3] = (count of finite samples, count of dropped samples, 0, 0)
 //   accum_sq[3 i + c]  = sum of the squares of channel c
-layout(std430, binding = 0) buffer AccumSum { uvec4 accum_sum[]; };
-layout(std430, binding = 1) buffer AccumSq { uvec4 accum_sq[]; };
+layout(std430, binding = SSBO_ACCUM_SUM) buffer AccumSum { uvec4 accum_sum[]; };
+layout(std430, binding = SSBO_ACCUM_SQ) buffer AccumSq { uvec4 accum_sq[]; };
 
 // 2: materials. kind: see kMaterial* in bsdf/bsdf.glsl.
 struct MaterialData {
-    vec4 color0;   // diffuse reflectance (diffuse, plastics) | conductor eta | specular reflectance (dielectrics)
-    vec4 color1;   // specular reflectance (conductors, plastics) | specular transmittance (dielectrics)
-    vec4 color2;   // conductor k (rgb) | plastic, roughplastic: x specular sampling weight, y internal reflectance
-    vec4 params;   // x: alpha u, y: alpha v, z: relative IOR int/ext, w: unused
-    uvec4 info;    // x: kind, y: flags (kMaterialFlag*), z: color0 texture + 1 (0: none), w: color1 texture + 1
-    float table[64];  // roughplastic: the coating's transmittance T(cos theta) at cos theta = i / 63
+    vec3 color0;            // diffuse reflectance (diffuse, plastics) | conductor eta | specular reflectance (dielectrics)
+    float opacity_texture;  // the opacity texture + 1 (0: none; alpha cutouts)
+    vec3 color1;            // specular reflectance (conductors, plastics) | specular transmittance (dielectrics)
+    float alpha_cutoff;     // an opacity below it is a hole
+    vec3 color2;            // conductor k (rgb) | plastic, roughplastic: x specular sampling weight, y internal reflectance
+    float normal_scale;     // the normal map's strength (scales its x and y)
+    vec3 params;            // x: alpha u, y: alpha v, z: relative IOR int/ext
+    float normal_map;       // the normal map texture + 1 (0: none)
+    uvec4 info;             // x: kind, y: flags (kMaterialFlag*), z: color0 texture + 1 (0: none), w: color1 texture + 1
+    float table[64];        // roughplastic: the coating's transmittance T(cos theta) at cos theta = i / 63
 };
-layout(std430, binding = 2) readonly buffer Materials { MaterialData materials[]; };
+layout(std430, binding = SSBO_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
 
 // The members of a MaterialData that every kind reads (all but the table). The
 // generated scene code returns it from scene_material(index): constants for scenes
 // with few materials, the Materials buffer otherwise.
 struct MaterialHeader {
-    vec4 color0;
-    vec4 color1;
-    vec4 color2;
-    vec4 params;
+    vec3 color0;
+    float opacity_texture;
+    vec3 color1;
+    float alpha_cutoff;
+    vec3 color2;
+    float normal_scale;
+    vec3 params;
+    float normal_map;
     uvec4 info;
 };
 
@@ -59,42 +70,43 @@ struct LightData {
     vec4 e2;        // edge 2 | disk/spot frame y axis
     vec4 n;         // unit normal (area) | spot axis | direction (directional); w: area
     vec4 radiance;  // radiance (area, environment), intensity (point, spot), irradiance (directional)
-    vec4 params;    // spot: x cos(cutoff), y cos(beam width); environment: x scale
+    vec3 params;    // spot: x cos(cutoff), y cos(beam width); environment: x scale
+    float selection_pmf;  // the probability that light selection picks it (lights/light_selection.glsl)
     uvec4 info;     // x: kind, y: flags (kLightFlag*), z: primitive id, w: distribution offset
 };
-layout(std430, binding = 3) readonly buffer Lights { LightData lights[]; };
+layout(std430, binding = SSBO_LIGHTS) readonly buffer Lights { LightData lights[]; };
 
 // 4: packed distributions (light selection alias table, environment map 2D distribution).
-layout(std430, binding = 4) readonly buffer Distributions { float distribution_data[]; };
+layout(std430, binding = SSBO_DISTRIBUTIONS) readonly buffer Distributions { float distribution_data[]; };
 
 // 5: first-hit AOVs per pixel, sums over the finite samples as accum_sum's (kAovChannels
 //   per pixel, glrender/render/accum.py AOV_CHANNELS): albedo r, g, b, shading normal
 //   x, y, z, depth, seen emission r, g, b.
-layout(std430, binding = 5) buffer AccumAov { uvec4 accum_aov[]; };
+layout(std430, binding = SSBO_ACCUM_AOV) buffer AccumAov { uvec4 accum_aov[]; };
 const uint kAovChannels = 10u;
 
 // 6: debug counters per pixel (loop iterations of the worst sample) when enabled.
-layout(std430, binding = 6) buffer DebugCounters { uint debug_counters[]; };
+layout(std430, binding = SSBO_DEBUG_COUNTERS) buffer DebugCounters { uint debug_counters[]; };
 
 // 7: splatted contributions (light tracing, BDPT's t = 1 strategies) for the whole image:
 //   per pixel and channel a signed 64-bit fixed-point sum (kSplatScale units) as two
 //   words, low then high; integer atomics make the sum independent of the order of
 //   the splats (integrators/splat.glsl).
-layout(std430, binding = 7) buffer AccumSplat { uint accum_splat[]; };
+layout(std430, binding = SSBO_ACCUM_SPLAT) buffer AccumSplat { uint accum_splat[]; };
 
 // ---- texture units ---------------------------------------------------------------
 // 0-3: BVH nodes and triangles (geometry/bvh_layout.glsl).
 // 4-6: per-triangle shading data of BVH meshes, in BVH order.
-layout(binding = 4) uniform samplerBuffer u_tri_normals;  // 3 texels per triangle: vertex normals (xyz, -)
-layout(binding = 5) uniform samplerBuffer u_tri_uvs;      // 2 texels per triangle: (uv0, uv1), (uv2, -, -)
-layout(binding = 6) uniform usamplerBuffer u_tri_info;    // 1 texel per triangle: material, light + 1, flags, -
+layout(binding = TEX_TRI_NORMALS) uniform samplerBuffer u_tri_normals;  // 3 texels per triangle: vertex normals (xyz, -)
+layout(binding = TEX_TRI_UVS) uniform samplerBuffer u_tri_uvs;      // 2 texels per triangle: (uv0, uv1), (uv2, -, -)
+layout(binding = TEX_TRI_INFO) uniform usamplerBuffer u_tri_info;    // 1 texel per triangle: material, light + 1, flags, -
 // 7: environment map (lat-long, linear RGB).
-layout(binding = 7) uniform sampler2D u_envmap;
+layout(binding = TEX_ENVMAP) uniform sampler2D u_envmap;
 // 8: surface textures: one layer per bitmap, each in the corner [0, w) x [0, h) of
 // layers as large as the largest (glrender/gpu/textures.py; read by bsdf/texture.glsl).
-layout(binding = 8) uniform sampler2DArray u_textures;
+layout(binding = TEX_TEXTURES) uniform sampler2DArray u_textures;
 // 9: texture records, 5 texels each (kind, layer, size; uv transform, filter, wrap; colours).
-layout(binding = 9) uniform samplerBuffer u_texture_records;
+layout(binding = TEX_TEXTURE_RECORDS) uniform samplerBuffer u_texture_records;
 
 // The packed distribution array for sampling/distribution_data.glsl's prototype.
 float distribution_fetch(uint i) {

@@ -73,6 +73,7 @@ def trace_glsl(gpu_bvh, o: np.ndarray, d: np.ndarray, t_max=np.inf,
     ``any`` (the any-hit answer for the same ray), and ``loops`` (the larger
     loop count of the two queries) when ``defines`` sets GLRENDER_COUNT_LOOPS.
     """
+    from glrender.render.params import shader_defines
     from glrender.testing.harness import run_glsl
 
     n = len(o)
@@ -90,7 +91,8 @@ def trace_glsl(gpu_bvh, o: np.ndarray, d: np.ndarray, t_max=np.inf,
     gpu_bvh.bind()
     return run_glsl("\n".join(body), {"o": np.asarray(o, np.float32), "d": np.asarray(d, np.float32),
                                        "t_max": t_max},
-                    outputs, includes=["geometry/bvh.glsl"], defines=defines)
+                    outputs, includes=["geometry/bvh.glsl"],
+                    defines={**shader_defines(), **(defines or {})})
 
 
 def random_soup(rng, count: int, spread: float = 1.0, size: float = 0.2) -> tuple[np.ndarray, np.ndarray]:

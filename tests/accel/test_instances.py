@@ -8,6 +8,7 @@ from glrender.accel import MotionInstance, build_bvh, flatten_instances
 from glrender.gpu.bvh_upload import GpuBvh
 from glrender.accel.instances import decompose, matrix_from_quaternion, motion_bounds
 from glrender.errors import SceneError, UsageError
+from glrender.render.params import shader_defines
 from glrender.testing.harness import run_glsl
 
 
@@ -118,7 +119,7 @@ def trace_t(gpu, o, d, time, t_max=np.inf):
                     {"o": o, "d": d, "time": time.astype(np.float32),
                      "t_max": np.broadcast_to(np.float32(t_max), (n,)).copy()},
                     {"t": "float", "prim": "uint", "hit": "bool", "any": "bool"},
-                    includes=["geometry/motion.glsl"])
+                    includes=["geometry/motion.glsl"], defines=shader_defines())
 
 
 def test05_queries_at_a_time_against_brute_force(gl_ctx):
@@ -176,7 +177,7 @@ def test07_world_vertices_at_a_time(gl_ctx):
     for time in (0.0, 0.3, 1.0):
         out = run_glsl("vec3 a = bvh_triangle_vertex_t(prim, 0u, time); vec3 c = bvh_triangle_vertex_t(prim, 2u, time);",
                        {"prim": prim}, {"a": "vec3", "c": "vec3"}, uniforms={"time": time},
-                       includes=["geometry/motion.glsl"])
+                       includes=["geometry/motion.glsl"], defines=shader_defines())
         expect = world_corners_at(bvh, time)
         np.testing.assert_allclose(out["a"], expect[:, 0], atol=2e-5 * 5)
         np.testing.assert_allclose(out["c"], expect[:, 2], atol=2e-5 * 5)

@@ -18,6 +18,7 @@ from bvh_reference import NO_HIT, brute_force, icosphere, load_mesh, random_soup
 
 from glrender.accel import build_bvh
 from glrender.accel import bvh as bvh_module
+from glrender.gpu import bindings
 from glrender.gpu.bvh_upload import TEXTURES, UNITS_RESERVED, GpuBvh
 from glrender.errors import UsageError
 from glrender.gl.shaders import packaged_root
@@ -271,8 +272,9 @@ def test09_stack_overflow_is_reported_not_silent(gl_ctx):
 
 def test10_texture_units_agree_with_the_layout_file():
     text = (packaged_root() / "geometry" / "bvh_layout.glsl").read_text()
-    declared = {m[2]: (int(m[0]), m[1]) for m in
-                re.findall(r"layout\(binding = (\d+)\) uniform (\w+) (\w+);", text)}
+    points = bindings.binding_points()
+    declared = {m[2]: (points[m[0]], m[1]) for m in
+                re.findall(r"layout\(binding = (\w+)\) uniform (\w+) (\w+);", text)}
     expected = {name: (unit, "usamplerBuffer" if fmt.endswith("ui") else "samplerBuffer")
                 for unit, fmt, name in TEXTURES.values()}
     assert declared == expected
@@ -285,8 +287,8 @@ def test10_texture_units_agree_with_the_layout_file():
     assert int(constants["kBvhLeafFlag"], 0) == bvh_module.LEAF_FLAG
     assert int(constants["kBvhLeafCountShift"], 0) == bvh_module.LEAF_COUNT_SHIFT
     assert int(constants["kBvhLeafFirstMask"], 0) == bvh_module.LEAF_FIRST_MASK
-    bvh_text = (packaged_root() / "geometry" / "bvh.glsl").read_text()
-    assert re.search(rf"#define GLRENDER_BVH_MAX_DEPTH {bvh_module.MAX_DEPTH}\n", bvh_text)
+    params_text = (packaged_root() / "common" / "params.glsl").read_text()
+    assert re.search(rf"#define GLRENDER_BVH_MAX_DEPTH {bvh_module.MAX_DEPTH}\n", params_text)
 
 
 def test11_gpu_bvh_refuses_trees_deeper_than_the_stack(gl_ctx, monkeypatch):

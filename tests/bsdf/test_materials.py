@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from glrender.errors import SceneError
-from glrender.gpu import layout
+from glrender.gpu import bindings, layout
 from glrender.gpu.microfacet_tables import external_transmittance, internal_reflectance
 from glrender.gpu.pack import _fresnel_diffuse_reflectance, pack_material
 from glrender.scene import load
@@ -74,7 +74,7 @@ def test04_pack_material_records():
     rec = pack_material(Material(kind="roughconductor", alpha=(1e-6, 0.2), two_sided=True,
                                  distribution="ggx", eta=(0.1, 0.2, 0.3), k=(3, 2, 1)))
     assert rec["params"][0] == np.float32(1e-4)          # Mitsuba clamps alpha to 1e-4
-    assert rec["info"][1] == layout.MATERIAL_FLAG_TWO_SIDED | layout.MATERIAL_FLAG_GGX
+    assert rec["info"][1] == bindings.MATERIAL_FLAG_TWO_SIDED | bindings.MATERIAL_FLAG_GGX
     np.testing.assert_array_equal(rec["color2"][:3], np.float32([3, 2, 1]))
     # dielectrics answer on both sides by themselves: two_sided is dropped
     assert pack_material(Material(kind="dielectric", two_sided=True))["info"][1] == 0

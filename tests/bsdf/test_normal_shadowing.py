@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from glrender.gpu import layout
+from glrender.gpu import bindings
 from glrender.scene.model import Material, Texture
 from glrender.testing.harness import run_glsl
 
@@ -82,8 +82,8 @@ N0 = direction(40.0, 200.0)
 
 
 def test03_flag_and_pack():
-    assert _packed(True)["info"][1] & layout.MATERIAL_FLAG_NORMAL_SHADOWING
-    assert not _packed(False)["info"][1] & layout.MATERIAL_FLAG_NORMAL_SHADOWING
+    assert _packed(True)["info"][1] & bindings.MATERIAL_FLAG_NORMAL_SHADOWING
+    assert not _packed(False)["info"][1] & bindings.MATERIAL_FLAG_NORMAL_SHADOWING
 
 
 @pytest.mark.parametrize("adjoint", [False, True])

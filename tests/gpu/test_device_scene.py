@@ -44,9 +44,9 @@ def test01_light_table_follows_the_selection_rule(gl_ctx):
         n = len(p.lights)
         assert n == 4 and p.environment
         uniform = ds.light_table("uniform", "area")
-        np.testing.assert_array_equal(uniform.lights["params"][:, 3], np.full(n, 1.0 / n, np.float32))
+        np.testing.assert_array_equal(uniform.lights["selection_pmf"], np.full(n, 1.0 / n, np.float32))
         power = ds.light_table("power", "area")
-        pmf = power.lights["params"][:, 3].astype(np.float64)
+        pmf = power.lights["selection_pmf"].astype(np.float64)
         np.testing.assert_allclose(pmf, p.light_weights / p.light_weights.sum(), rtol=1e-6)
         assert len(set(np.round(pmf, 6))) > 1, "the lights must differ in power"
         # the power table holds the alias table before the environment's distribution
@@ -56,7 +56,7 @@ def test01_light_table_follows_the_selection_rule(gl_ctx):
         np.testing.assert_array_equal(power.distributions, expected.array())
         assert power.lights[p.environment - 1]["info"][3] == env_at
         # settings never change the device scene's own records
-        assert not (p.lights["params"][:, 3]).any()
+        assert not p.lights["selection_pmf"].any()
     finally:
         ds.release()
 

@@ -1,7 +1,7 @@
 """The host/device contract: scene/layout.glsl and glrender/gpu/layout.py agree.
 
-Bindings are compared by parsing the GLSL; struct layouts by writing every field from
-numpy with distinct values and reading each back on the device.
+Struct layouts are compared by writing every field from numpy with distinct values and
+reading each back on the device (binding points and flag bits: tests/gpu/test_bindings.py).
 """
 import re
 
@@ -9,25 +9,10 @@ import numpy as np
 import pytest
 
 from glrender.gl.shaders import ShaderLibrary, compile_compute
-from glrender.gpu import layout
+from glrender.gpu import bindings, layout
 from glrender.render.params import shader_defines
 
 LAYOUT = ShaderLibrary().read("scene/layout.glsl")
-
-
-def parsed_bindings():
-    blocks = dict(re.findall(r"layout\(std430, binding = (\d+)\)\s+(?:readonly\s+)?buffer (\w+)", LAYOUT))
-    ubos = dict(re.findall(r"layout\(std140, binding = (\d+)\) uniform (\w+)", LAYOUT))
-    textures = dict(re.findall(r"layout\(binding = (\d+)\) uniform \w+ (\w+);", LAYOUT))
-    flip = lambda d: {name: int(b) for b, name in d.items()}
-    return flip(blocks), flip(ubos), flip(textures)
-
-
-def test01_binding_numbers_agree():
-    ssbo, ubo, tex = parsed_bindings()
-    assert ssbo == layout.SSBO_BINDINGS
-    assert ubo == layout.UBO_BINDINGS
-    assert tex == layout.TEXTURE_BINDINGS
 
 
 def struct_fields(name):
@@ -51,17 +36,20 @@ void main() {
     uint k = 0u;
     for (uint i = 0u; i < 2u; ++i) {
         MaterialData m = materials[i];
-        put(k, m.color0); put(k, m.color1); put(k, m.color2); put(k, m.params); put(k, m.info);
+        put(k, vec4(m.color0, m.opacity_texture)); put(k, vec4(m.color1, m.alpha_cutoff));
+        put(k, vec4(m.color2, m.normal_scale)); put(k, vec4(m.params, m.normal_map)); put(k, m.info);
         for (int j = 0; j < 64; ++j) words[k++] = floatBitsToUint(m.table[j]);
     }
     for (uint i = 0u; i < 2u; ++i) {
         LightData l = lights[i];
-        put(k, l.p); put(k, l.e1); put(k, l.e2); put(k, l.n); put(k, l.radiance); put(k, l.params); put(k, l.info);
+        put(k, l.p); put(k, l.e1); put(k, l.e2); put(k, l.n); put(k, l.radiance);
+        put(k, vec4(l.params, l.selection_pmf)); put(k, l.info);
     }
     put(k, u_params.camera_open); put(k, u_params.camera_close); put(k, u_params.camera_screen);
     put(k, u_params.camera_clip); put(k, u_params.shutter); put(k, u_params.filter_params);
     put(k, u_params.image); put(k, u_params.samples); put(k, u_params.dispatch); put(k, u_params.counts);
-    put(k, u_params.scene_sphere); put(k, u_params.misc);
+    put(k, u_params.scene_sphere);
+    put(k, vec4(u_params.ao_distance, u_params.sample_clamp, u_params.unused));
 }
 """
 
@@ -82,9 +70,9 @@ def test03_structs_round_trip_on_device(gl_ctx):
     n_words = (mats.nbytes + lights.nbytes + params.nbytes) // 4
     bufs = [gl.buffer(mats.tobytes()), gl.buffer(lights.tobytes()), gl.buffer(params.tobytes()),
             gl.buffer(reserve=4 * n_words)]
-    bufs[0].bind_to_storage_buffer(layout.SSBO_MATERIALS)
-    bufs[1].bind_to_storage_buffer(layout.SSBO_LIGHTS)
-    bufs[2].bind_to_uniform_block(layout.UBO_PARAMS)
+    bufs[0].bind_to_storage_buffer(bindings.SSBO_MATERIALS)
+    bufs[1].bind_to_storage_buffer(bindings.SSBO_LIGHTS)
+    bufs[2].bind_to_uniform_block(bindings.UBO_RENDER_PARAMS)
     bufs[3].bind_to_storage_buffer(7)
     program.run(1)
     out = np.frombuffer(bufs[3].read(), np.uint32)

@@ -9,20 +9,22 @@ import math
 
 import numpy as np
 
-from glrender.gpu import layout
+from glrender.gpu import bindings, layout
 from glrender.render.params import shader_defines
 from glrender.testing.harness import run_glsl
 
 DEFINES = shader_defines(light_kinds=tuple(layout.LIGHT_KINDS))
 SPHERE = (0.5, -0.25, 1.0, 3.0)   # the scene's bounding sphere for lights at infinity
-LIGHT = ("LightData l = LightData(l_p, l_e1, l_e2, l_n, l_radiance, l_params, l_info);\n")
+LIGHT = ("LightData l = LightData(l_p, l_e1, l_e2, l_n, l_radiance, l_params.xyz, l_params.w, "
+         "l_info);\n")
 
 
 def record(kind: str, *, p=(0, 0, 0), e1=(0, 0, 0, 0), e2=(0, 0, 0), n=(0, 0, 1, 0),
            radiance=(1, 1, 1), params=(0, 0, 0, 0), flags=0) -> np.ndarray:
     rec = np.zeros(1, layout.LIGHT)[0]
     rec["p"][:3], rec["e1"][:len(e1)], rec["e2"][:3] = p, e1, e2
-    rec["n"][:len(n)], rec["radiance"][:3], rec["params"] = n, radiance, params
+    rec["n"][:len(n)], rec["radiance"][:3] = n, radiance
+    rec["params"], rec["selection_pmf"] = params[:3], params[3]
     rec["info"][:3] = (layout.LIGHT_KINDS[kind], flags, 0xFFFFFFFF)
     return rec
 
@@ -31,7 +33,7 @@ def parallelogram(p, e1, e2, radiance=(1, 2, 3), two_sided=False) -> np.ndarray:
     c = np.cross(e1, e2)
     area = float(np.linalg.norm(c))
     return record("parallelogram", p=p, e1=e1, e2=e2, n=(*(c / area), area), radiance=radiance,
-                  flags=layout.LIGHT_FLAG_TWO_SIDED if two_sided else 0)
+                  flags=bindings.LIGHT_FLAG_TWO_SIDED if two_sided else 0)
 
 
 def triangle(p, e1, e2, radiance=(1, 2, 3)) -> np.ndarray:
@@ -52,8 +54,8 @@ def spot(position, axis, intensity=(1, 2, 3), cutoff=30.0, beam=20.0) -> np.ndar
 
 
 def _uniforms(rec) -> dict:
-    f = {name: ("vec4", tuple(map(float, rec[name]))) for name in
-         ("p", "e1", "e2", "n", "radiance", "params")}
+    f = {name: ("vec4", tuple(map(float, rec[name]))) for name in ("p", "e1", "e2", "n", "radiance")}
+    f["params"] = ("vec4", (*map(float, rec["params"]), float(rec["selection_pmf"])))
     uniforms = {f"l_{k}": v for k, v in f.items()}
     uniforms["l_info"] = ("uvec4", tuple(int(x) for x in rec["info"]))
     uniforms["u_sphere"] = ("vec4", SPHERE)

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from glrender.film.tonemap import TONE_CURVES, tonemap
-from glrender.gpu import layout
+from glrender.gpu import bindings
 from glrender.preview.display import VIEWS, Display, DisplaySettings, fit_viewport
 from glrender.render import accum
 
@@ -24,9 +24,9 @@ class _Film(SimpleNamespace):
     """A stand-in for a renderer's accumulation: what the display reads of a renderer."""
 
     def bind_film(self) -> None:
-        self.sums.bind_to_storage_buffer(layout.SSBO_ACCUM_SUM)
-        self.squares.bind_to_storage_buffer(layout.SSBO_ACCUM_SQ)
-        self.aov.bind_to_storage_buffer(layout.SSBO_AOV)
+        self.sums.bind_to_storage_buffer(bindings.SSBO_ACCUM_SUM)
+        self.squares.bind_to_storage_buffer(bindings.SSBO_ACCUM_SQ)
+        self.aov.bind_to_storage_buffer(bindings.SSBO_ACCUM_AOV)
 
     def release(self) -> None:
         for buf in (self.sums, self.squares, self.aov):

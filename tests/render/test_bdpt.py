@@ -105,7 +105,7 @@ def test03_loop_counts_far_below_the_cap(gl_ctx, make):
 def test06_connection_densities_are_the_fresh_ones(gl_ctx, monkeypatch, make):
     """The strategies take the MIS densities of the connection from their own BSDF
     evaluations (no second material lookup): the image is bitwise the one whose weights
-    evaluate every density afresh (BDPT_GENERIC_WEIGHTS)."""
+    evaluate every density afresh (GLRENDER_BDPT_GENERIC_WEIGHTS)."""
     from glrender.render import renderer as renderer_module
 
     scene = make(16)
@@ -114,10 +114,10 @@ def test06_connection_densities_are_the_fresh_ones(gl_ctx, monkeypatch, make):
         defines = renderer_module.shader_defines
         if generic:
             monkeypatch.setattr(renderer_module, "shader_defines",
-                                lambda **kw: {**defines(**kw), "BDPT_GENERIC_WEIGHTS": 1})
+                                lambda **kw: {**defines(**kw), "GLRENDER_BDPT_GENERIC_WEIGHTS": 1})
         r = Renderer(scene, settings_from_scene(scene, integrator="bdpt", spp=4, seed=8), ctx=gl_ctx)
         r.step(4)
         images.append(r.film().mean)
-        assert ("BDPT_GENERIC_WEIGHTS" in r.defines) == generic
+        assert ("GLRENDER_BDPT_GENERIC_WEIGHTS" in r.defines) == generic
         r.release()
     assert np.array_equal(images[0], images[1]) and images[0].max() > 0

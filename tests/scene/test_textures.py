@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import glrender
-from glrender.gpu import layout, textures
+from glrender.gpu import bindings, textures
 from glrender.scene import model as m
 from glrender.testing.harness import run_glsl
 
@@ -51,8 +51,8 @@ def reference(tex: m.Texture, uv: np.ndarray) -> np.ndarray:
 def evaluate(gl_ctx, table: textures.TextureTable, index: np.ndarray, uv: np.ndarray) -> np.ndarray:
     array, records = textures.upload(gl_ctx, table)
     try:
-        array.use(layout.TEX_TEXTURES)
-        records.bind(layout.TEX_TEXTURE_RECORDS)
+        array.use(bindings.TEX_TEXTURES)
+        records.bind(bindings.TEX_TEXTURE_RECORDS)
         out = run_glsl("vec3 c = texture_eval(k, uv);",
                        inputs={"k": index.astype(np.uint32), "uv": uv.astype(np.float32)},
                        outputs={"c": "vec3"}, includes=["bsdf/texture.glsl"], ctx=gl_ctx)
