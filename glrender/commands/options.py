@@ -123,7 +123,7 @@ def _available_memory() -> int | None:
 def check_memory(width: int, height: int, aovs: bool, on_host_device: bool) -> None:
     """Refuse images whose buffers cannot fit, before allocating them."""
     pixels = width * height
-    from ..render.renderer import AOV_BYTES, SQUARE_BYTES, SUM_BYTES
+    from ..render.accumulation import AOV_BYTES, SQUARE_BYTES, SUM_BYTES
 
     accumulation = SUM_BYTES + SQUARE_BYTES
     device = pixels * (accumulation + (AOV_BYTES if aovs else 0)) * 2   # and the undo copy

@@ -96,7 +96,7 @@ class FrameImage:
         if self.splat is not None:
             # as Renderer.film and splat_image: the sums over the light paths (one per
             # camera sample of every pixel), rounded to float32, added in float32
-            from ..render.renderer import SPLAT_SCALE
+            from ..render.accumulation import SPLAT_SCALE
 
             paths = max(spp, 1) * w * h
             image = (self.splat.astype(np.float64) / (SPLAT_SCALE * paths)).astype(np.float32)

@@ -33,7 +33,8 @@ from ..gl.context import current
 from ..gpu import codegen
 from ..gpu import bindings
 from ..render import accum
-from ..render.renderer import SPLAT_SCALE, Renderer
+from ..render.accumulation import SPLAT_SCALE
+from ..render.renderer import Renderer
 from . import layout as pl
 from .grid import PointGrid, build_point_grid, typical_radius
 

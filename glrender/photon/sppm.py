@@ -38,7 +38,8 @@ from ..gl.context import Context, current
 from ..gpu import codegen
 from ..gpu import bindings
 from ..render import accum
-from ..render.renderer import (SPLAT_SCALE, TILE, RenderSettings, Renderer, camera_tangents,
+from ..render.accumulation import SPLAT_SCALE, TILE
+from ..render.renderer import (RenderSettings, Renderer, camera_tangents,
                                settings_from_scene)
 from ..scene import model as m
 from . import layout as pl
@@ -554,10 +555,6 @@ class SppmRenderer:
         4 bytes per listed cell, up to 27 per visible point) and the inner renderer's
         accumulation (unused by SPPM but allocated)."""
         return pl.BYTES_PER_PIXEL + self.base.device_bytes_per_pixel()
-
-    def _slices(self) -> list[tuple[int, int]]:
-        """The slices of pixel rows an iteration runs (:meth:`slices`; --stats counts them)."""
-        return self.slices()
 
     def stats(self) -> dict[str, Any]:
         """``--stats`` entries: the photon maps, radii, lookups and memory (``photon``); a

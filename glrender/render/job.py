@@ -397,7 +397,7 @@ class Job:
             "memory": {"device_bytes_per_pixel": r.device_bytes_per_pixel(),
                        "device_accumulation_bytes": r.device_bytes_per_pixel()
                        * r.width * r.band_height,
-                       "slices": len(r._slices()),
+                       "slices": len(r.slices()),
                        "texture_bytes": r.texture_bytes},
             "noise_threshold": None if plan is None else {
                 "threshold": plan.threshold, "pilot_spp": plan.pilot_spp,

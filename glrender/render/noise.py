@@ -63,7 +63,7 @@ class NoisePlan:
 
 def crop_rows(region) -> tuple[int, int]:
     """The tile rows (first, count) that hold the pixel rows of region (x0, y0, x1, y1)."""
-    from .renderer import TILE
+    from .accumulation import TILE
 
     first = region[1] // TILE
     return first, -(-region[3] // TILE) - first
@@ -71,7 +71,7 @@ def crop_rows(region) -> tuple[int, int]:
 
 def crop_band(film: Film, region, rows: tuple[int, int]) -> Film:
     """The region's pixels of a film that holds the tile rows ``rows`` of the image."""
-    from .renderer import TILE
+    from .accumulation import TILE
 
     x0, y0, x1, y1 = region
     top = TILE * rows[0]

@@ -1,4 +1,8 @@
-"""Progressive rendering on the device: compile, upload, dispatch in chunks, accumulate.
+"""Progressive rendering on the device: compile the kernel, dispatch it in chunks.
+
+The scene's device data is a shared :class:`~glrender.gpu.device_scene.DeviceScene`; the
+per-pixel sums live in an :class:`~glrender.render.accumulation.Accumulation`. What stays
+here is the kernel (its defines and slots), the parameter block and the dispatch policy.
 
 A *pass* renders ``samples_per_pass`` samples in every pixel; a pass is split into
 dispatches of whole 8x8 tiles, as many per dispatch as fit the time target
@@ -14,7 +18,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from typing import Any, Callable
 
 import numpy as np
@@ -29,15 +33,11 @@ from ..gpu.pack import PackedScene
 from ..sampling.sequences import strata_columns
 from ..scene import model as m
 from ..film import Film
-from . import accum, strategies
+from . import strategies
+from .accumulation import SPLAT_SCALE, Accumulation
 from .params import shader_defines
 
-TILE = 8
-SPLAT_SCALE = 65536.0   # kSplatScale: fixed-point units per unit of splatted value
 BDPT_DEPTH_CAP = 16     # kBdptDepthCap: bdpt's longest path (integrators/bdpt_vertex.glsl)
-# bytes per pixel of the accumulation (glrender/render/accum.py): 128-bit sums of r, g, b
-# and the counts; sums of squares; the AOVs' sums
-SUM_BYTES, SQUARE_BYTES, AOV_BYTES = 64, 48, 16 * accum.AOV_CHANNELS
 
 
 @dataclass
@@ -167,13 +167,15 @@ class Renderer:
             pack = time.perf_counter() - t_pack      # about 0: the scene data is shared
         self.packed: PackedScene = self.device_scene.packed
         self.width, self.height = scene.film.width, scene.film.height
-        self.tiles_x = -(-self.width // TILE)
-        self.tiles_y = -(-self.height // TILE)
+        s = self.settings
+        self.accumulation = Accumulation(
+            self.gl, self.width, self.height, aovs=s.aovs,
+            counting=s.count_loops or s.count_rays, splatting=self.splatting,
+            strategy_depth=s.strategy_depth, binding_limit=lambda: self.binding_limit())
+        self.tiles_x, self.tiles_y = self.accumulation.tiles_x, self.accumulation.tiles_y
         self.spp_done = 0
-        self.rows = (0, self.tiles_y)   # the tile rows accumulated: (first, count)
         self._tile_rate: float | None = None    # measured seconds per tile-sample
         self._buffers: list[Any] = []
-        self._snapshot: list[Any] | None = None     # accumulation copies that undo a stopped pass
         self._upload()
         t1 = time.perf_counter()
         self._compile()
@@ -289,9 +291,8 @@ class Renderer:
         render's max depth."""
         if not self.settings.strategy_depth:
             raise UsageError("strategy_images: render with strategy_depth >= 1 (bdpt)")
-        words = np.frombuffer(self._strategies.read(), np.uint32)
-        return strategies.read(words, self.settings.strategy_depth, self.width, self.height,
-                               self.spp_done, SPLAT_SCALE)
+        return strategies.read(self.accumulation.strategy_words(), self.settings.strategy_depth,
+                               self.width, self.height, self.spp_done, SPLAT_SCALE)
 
     def stats(self) -> dict[str, Any]:
         """The integrator's own ``--stats`` entries: none for the render kernel's."""
@@ -329,14 +330,8 @@ class Renderer:
         exact sums of glrender.render.accum (uint32 words): those of disjoint sample
         ranges add up (accum.add) to the bits of one render of all of them."""
         return {"fingerprint": self.fingerprint(), "spp_done": self.spp_done,
-                "spp_start": self.spp_start,
-                **{name: self._read(buf).copy() for name, buf in self._state_buffers()},
-                "splat": np.frombuffer(self._splat.read(), np.uint32).copy(),
-                "strategies": np.frombuffer(self._strategies.read(), np.uint32).copy(),
+                "spp_start": self.spp_start, **self.accumulation.state(),
                 "width": self.width, "height": self.height, "rows": self.rows}
-
-    def _state_buffers(self) -> tuple[tuple[str, Any], ...]:
-        return (("sums", self._sums), ("squares", self._squares), ("aov", self._aov))
 
     @current
     def restore(self, state: dict[str, Any]) -> None:
@@ -348,23 +343,7 @@ class Renderer:
         if rows != self.rows:
             raise UsageError(f"the saved accumulation holds tile rows {rows}, this renderer "
                              f"{self.rows} (reset(rows=...) first)")
-        for name, buf in self._state_buffers():
-            data = np.ascontiguousarray(state[name], np.uint32)
-            if data.nbytes != buf.size:
-                raise UsageError(f"the saved accumulation's {name} has {data.nbytes} bytes, "
-                                 f"expected {buf.size}")
-            buf.write(data.tobytes())
-        splat = np.ascontiguousarray(state.get("splat", np.zeros(self._splat.size // 4)), np.uint32)
-        if splat.nbytes != self._splat.size:
-            raise UsageError(f"the saved accumulation's splat image has {splat.nbytes} bytes, "
-                             f"expected {self._splat.size}")
-        self._splat.write(splat.tobytes())
-        if self.settings.strategy_depth:
-            words = np.ascontiguousarray(state.get("strategies", ()), np.uint32)
-            if words.nbytes != self._strategies.size:
-                raise UsageError(f"the saved accumulation's strategy images have {words.nbytes} "
-                                 f"bytes, expected {self._strategies.size}")
-            self._strategies.write(words.tobytes())
+        self.accumulation.restore(state)
         self.spp_done = int(state["spp_done"])
         self.spp_start = int(state.get("spp_start", 0))
 
@@ -378,10 +357,14 @@ class Renderer:
         self.gl.finish()
 
     @property
+    def rows(self) -> tuple[int, int]:
+        """The tile rows accumulated: (first, count)."""
+        return self.accumulation.rows
+
+    @property
     def band_height(self) -> int:
         """Pixel rows in the accumulation (the image's height unless ``rows`` is a band)."""
-        first, count = self.rows
-        return min(self.height, TILE * (first + count)) - TILE * first
+        return self.accumulation.band_height
 
     @current
     def reset(self, start: int = 0, rows: tuple[int, int] | None = None) -> None:
@@ -398,30 +381,7 @@ class Renderer:
                              f"{self.tiles_y}")
         if not 0 <= start < 1 << 31:
             raise UsageError(f"start: expected a sample index in [0, 2^31), got {start}")
-        self.rows = (int(first), int(count))
-        n = self.width * self.band_height
-        for name in ("_sums", "_squares", "_aov", "_debug"):
-            old = getattr(self, name, None)
-            if old is not None:
-                old.release()
-        self._release_snapshot()
-        self._sums = self.gl.buffer(reserve=SUM_BYTES * n)
-        self._squares = self.gl.buffer(reserve=SQUARE_BYTES * n)
-        self._aov = self.gl.buffer(reserve=AOV_BYTES * n if self.settings.aovs else 16)
-        counting = self.settings.count_loops or self.settings.count_rays
-        self._debug = self.gl.buffer(reserve=4 * n if counting else 16)
-        # splats land anywhere on the film: the whole image, two words per pixel and channel
-        if getattr(self, "_splat", None) is not None:
-            self._splat.release()
-        splats = self.splatting
-        self._splat: Any = self.gl.buffer(reserve=24 * self.width * self.height if splats else 16)
-        if getattr(self, "_strategies", None) is not None:
-            self._strategies.release()
-        depth = self.settings.strategy_depth
-        self._strategies: Any = self.gl.buffer(
-            reserve=strategies.buffer_bytes(depth, self.width, self.height) if depth else 16)
-        for buf in self._accumulators():
-            buf.clear()
+        self.accumulation.allocate((first, count))
         self.spp_done = self.spp_start = int(start)
 
     @current
@@ -481,16 +441,10 @@ class Renderer:
         """Bind the scene, the settings' light table, the accumulation and the parameter
         block to their slots: what a kernel of this scene reads (the render kernel, and the
         photon kernels that compile against the same defines)."""
-        self._sums.bind_to_storage_buffer(bindings.SSBO_ACCUM_SUM)
-        self._squares.bind_to_storage_buffer(bindings.SSBO_ACCUM_SQ)
+        self.accumulation.bind()
         self._materials.bind_to_storage_buffer(bindings.SSBO_MATERIALS)
         self._lights.bind_to_storage_buffer(bindings.SSBO_LIGHTS)
         self._dist.bind_to_storage_buffer(bindings.SSBO_DISTRIBUTIONS)
-        self._aov.bind_to_storage_buffer(bindings.SSBO_ACCUM_AOV)
-        self._debug.bind_to_storage_buffer(bindings.SSBO_DEBUG_COUNTERS)
-        self._splat.bind_to_storage_buffer(bindings.SSBO_ACCUM_SPLAT)
-        if self.settings.strategy_depth:
-            self._strategies.bind_to_storage_buffer(bindings.SSBO_STRATEGY_IMAGES)
         self._params.bind_to_uniform_block(bindings.UBO_RENDER_PARAMS)
         assert self.device_scene is not None, "the renderer was released"
         self.device_scene.bind()
@@ -498,17 +452,14 @@ class Renderer:
     def bind_film(self) -> None:
         """Bind the accumulation alone (sums, squares, AOVs) to its slots, for a pass that
         reads it (the preview's display)."""
-        self._sums.bind_to_storage_buffer(bindings.SSBO_ACCUM_SUM)
-        self._squares.bind_to_storage_buffer(bindings.SSBO_ACCUM_SQ)
-        self._aov.bind_to_storage_buffer(bindings.SSBO_ACCUM_AOV)
+        self.accumulation.bind_film()
 
     @current
     def load_accumulation(self, sums: np.ndarray, squares: np.ndarray) -> None:
         """Replace the accumulation's sums and sums of squares (glrender.render.accum words)
         with an estimate made elsewhere, to show it through the same display path (SPPM's
         preview)."""
-        self._sums.write(np.ascontiguousarray(sums, np.uint32).tobytes())
-        self._squares.write(np.ascontiguousarray(squares, np.uint32).tobytes())
+        self.accumulation.load(sums, squares)
 
     def _run_pass(self, first_sample: int, samples: int,
                   should_stop: Callable[[], bool] | None = None) -> bool:
@@ -521,10 +472,10 @@ class Renderer:
         total = self.tiles_x * self.rows[1]
         done = 0
         self.bind()
-        slices = self._slices()
+        slices = self.accumulation.slices()
         for first_row, n_rows in slices:
             if len(slices) > 1:
-                self._bind_slice(first_row, n_rows)
+                self.accumulation.bind_slice(first_row, n_rows)
             prm["image"][3], prm["counts"][3] = n_rows, first_row
             tiles = self.tiles_x * n_rows
             start = 0
@@ -537,9 +488,9 @@ class Renderer:
                 count = min(count, tiles - start)
                 if should_stop is not None:
                     if done == 0 and count < total:
-                        self._take_snapshot()
+                        self.accumulation.take_snapshot()
                     elif done > 0 and should_stop():
-                        self._restore_snapshot()
+                        self.accumulation.restore_snapshot()
                         self.bind()
                         return False
                 prm["dispatch"][0], prm["dispatch"][1] = start, count
@@ -556,86 +507,18 @@ class Renderer:
             self.bind()
         return True
 
-    def _slice_bytes_per_pixel(self) -> list[tuple[Any, int, int]]:
-        """The per-pixel accumulation buffers in use: (buffer, bytes per pixel, binding)."""
-        bufs = [(self._sums, SUM_BYTES, bindings.SSBO_ACCUM_SUM),
-                (self._squares, SQUARE_BYTES, bindings.SSBO_ACCUM_SQ)]
-        if self.settings.aovs:
-            bufs.append((self._aov, AOV_BYTES, bindings.SSBO_ACCUM_AOV))
-        if self.settings.count_loops or self.settings.count_rays:
-            bufs.append((self._debug, 4, bindings.SSBO_DEBUG_COUNTERS))
-        return bufs
-
-    def _slices(self) -> list[tuple[int, int]]:
-        """The accumulation's tile rows in slices (first row, rows) whose part of every
-        per-pixel buffer fits one storage-buffer binding (llvmpipe: 128 MiB, so a film of
-        more than 2.1M pixels, or 0.84M with AOVs, takes several), each starting at an
-        offset the device can bind."""
-        limit = self.binding_limit()
-        widest = max(bpp for _, bpp, _ in self._slice_bytes_per_pixel())
-        row_bytes = TILE * self.width * widest
-        first, count = self.rows
-        if row_bytes * count <= limit:
-            return [(first, count)]
-        align = max(1, int(self._ssbo_alignment()))
-        # rows of a slice: a multiple of k, so that every buffer's offset stays aligned
-        smallest = min(bpp for _, bpp, _ in self._slice_bytes_per_pixel())
-        k = align // math.gcd(align, TILE * self.width * smallest)
-        per = (limit // row_bytes) // k * k
-        if per < 1:
-            raise UsageError(f"a {self.width}-pixel-wide image does not fit this device's "
-                             f"storage buffers ({limit} bytes a binding): render fewer columns")
-        return [(r, min(per, first + count - r)) for r in range(first, first + count, per)]
+    def slices(self) -> list[tuple[int, int]]:
+        """The tile rows of a pass in slices that fit one storage-buffer binding
+        (Accumulation.slices)."""
+        return self.accumulation.slices()
 
     def device_bytes_per_pixel(self) -> int:
-        """Bytes of device memory per accumulated pixel: sums and squares, AOVs and loop counters
-        when enabled, a whole-image splat image for light tracing and BDPT, and the copy that
-        undoes a stopped pass."""
-        per = sum(bpp for _, bpp, _ in self._slice_bytes_per_pixel())
-        if self.splatting:
-            per += 24
-        if self.settings.strategy_depth:
-            per += strategies.buffer_bytes(self.settings.strategy_depth, 1, 1)
-        return 2 * per
+        """Bytes of device memory per accumulated pixel (Accumulation.device_bytes_per_pixel)."""
+        return self.accumulation.device_bytes_per_pixel()
 
     def binding_limit(self) -> int:
         """Bytes one storage-buffer binding may hold on this device."""
         return int(self.gl.info["GL_MAX_SHADER_STORAGE_BLOCK_SIZE"])
-
-    def _ssbo_alignment(self) -> int:
-        from ..gl.egl import gl as raw_gl
-
-        return int(raw_gl.get_integer(0x90DF))   # GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT
-
-    def _bind_slice(self, first_row: int, n_rows: int) -> None:
-        """Bind the part of the per-pixel buffers that holds tile rows [first_row, +n_rows)."""
-        top = TILE * (first_row - self.rows[0])
-        rows = min(self.height, TILE * (first_row + n_rows)) - TILE * first_row
-        for buf, bpp, slot in self._slice_bytes_per_pixel():
-            buf.bind_to_storage_buffer(slot, offset=top * self.width * bpp,
-                                       size=rows * self.width * bpp)
-
-    def _accumulators(self) -> tuple[Any, ...]:
-        return (self._sums, self._squares, self._aov, self._debug, self._splat, self._strategies)
-
-    def _take_snapshot(self) -> None:
-        if self._snapshot is None:
-            self._snapshot = [self.gl.buffer(reserve=buf.size) for buf in self._accumulators()]
-        self.gl.memory_barrier()  # the kernel's SSBO writes, visible to the copies
-        for copy, buf in zip(self._snapshot, self._accumulators()):
-            self.gl.copy_buffer(copy, buf)
-
-    def _restore_snapshot(self) -> None:
-        assert self._snapshot is not None
-        self.gl.memory_barrier()
-        for copy, buf in zip(self._snapshot, self._accumulators()):
-            self.gl.copy_buffer(buf, copy)
-        self.gl.finish()
-
-    def _release_snapshot(self) -> None:
-        for copy in self._snapshot or ():
-            copy.release()
-        self._snapshot = None
 
     @current
     def step(self, spp: int, callback: Callable[[int, int], None] | None = None,
@@ -668,34 +551,19 @@ class Renderer:
     @current
     def film(self) -> Film:
         """Read the accumulation back as a :class:`Film` (the band of ``rows`` only)."""
-        h = self.band_height
-        aov = self._read(self._aov) if self.settings.aovs else None
-        mean, m2, count, dropped, aov_means = accum.statistics(
-            self._read(self._sums), self._read(self._squares), aov)
-        mean = mean.reshape(h, self.width, 3)
-        aovs = {}
-        if aov_means is not None:
-            aovs = accum.aov_images(aov_means, h, self.width)
-        if self.splatting:
-            first = TILE * self.rows[0]
-            mean += self.splat_image()[first:first + h]
-        debug = None
-        if self.settings.count_loops:
-            debug = self.debug_counters()
-        return Film(mean=mean, m2=m2.reshape(h, self.width, 3), count=count.reshape(h, self.width),
-                    nonfinite=dropped.reshape(h, self.width), spp=self.spp_done, aovs=aovs,
-                    loop_counts=debug, sampler=self.settings.sampler.kind)
+        return self.accumulation.film(self.spp_done, self._splat_paths(),
+                                      self.settings.sampler.kind, self.settings.count_loops)
 
-    @staticmethod
-    def _read(buf: Any) -> np.ndarray:
-        return np.frombuffer(buf.read(), np.uint32)
+    def _splat_paths(self) -> int:
+        """Light paths splatted since the band's start: one per camera sample of every
+        pixel accumulated."""
+        return max(self.spp_done - self.spp_start, 1) * self.width * self.band_height
 
     @current
     def debug_counters(self) -> np.ndarray:
         """The per-pixel debug counter of the band (settings with count_loops: the most loop
         iterations an invocation ran; count_rays: the rays traced), uint32 (H, W)."""
-        h = self.band_height
-        return np.frombuffer(self._debug.read(), np.uint32)[:h * self.width].reshape(h, self.width).copy()
+        return self.accumulation.debug_counters()
 
     @current
     def rays(self) -> int:
@@ -712,20 +580,15 @@ class Renderer:
         of every pixel accumulated (the band's, since ``reset``'s start). ``film()`` adds it
         to the camera-side mean; its variance is not in the film's M2 (error bars of
         splatted images come from independent renders)."""
-        if not self.splatting:
-            return np.zeros((self.height, self.width, 3), np.float32)
-        sums = accum.fixed_sums(np.frombuffer(self._splat.read(), np.uint32))
-        paths = max(self.spp_done - self.spp_start, 1) * self.width * self.band_height
-        image = sums.astype(np.float64) / (SPLAT_SCALE * paths)
-        return image.reshape(self.height, self.width, 3).astype(np.float32)
+        return self.accumulation.splat_image(self._splat_paths())
 
     @current
     def release(self) -> None:
         """Free the device buffers (the renderer cannot render afterwards); the scene's
         own data stays on the device while another renderer shares it."""
-        for buf in self._buffers + [*self._accumulators(), self._params]:
+        for buf in self._buffers + [self._params]:
             buf.release()
-        self._release_snapshot()
+        self.accumulation.release()
         self._buffers = []
         data, self.device_scene = self.device_scene, None
         if data is not None:

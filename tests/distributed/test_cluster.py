@@ -159,7 +159,7 @@ def test06_splatting_integrators_render_whole_frames(gl_ctx, cluster, kind):
     ranges. One range: bitwise the single-process film. Several: the splats' fixed-point
     sums are exactly the single process's (integers add in any order), the camera side
     merges as sample ranges do."""
-    from glrender.render.renderer import SPLAT_SCALE
+    from glrender.render.accumulation import SPLAT_SCALE
 
     _, client = cluster
     s = glrender.load(CORNELL)
@@ -168,7 +168,7 @@ def test06_splatting_integrators_render_whole_frames(gl_ctx, cluster, kind):
     r = Renderer(s, settings)
     r.step(16)
     ref = r.film()
-    words = np.frombuffer(r._splat.read(), np.uint32).reshape(-1, 2).astype(np.uint64)
+    words = r.state()["splat"].reshape(-1, 2).astype(np.uint64)
     ref_sums = ((words[:, 1] << np.uint64(32)) | words[:, 0]).view(np.int64).reshape(-1, 3)
     r.release()
     assert np.count_nonzero(ref_sums) > ref_sums.size // 2     # the splats are there

@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from glrender.render import accum, strategies
-from glrender.render.renderer import SPLAT_SCALE, Renderer, settings_from_scene
+from glrender.render.accumulation import SPLAT_SCALE
+from glrender.render.renderer import Renderer, settings_from_scene
 from glrender.testing.images import compare_images
 
 from bidir_scenes import cornell, directional, environment, renders
@@ -40,9 +41,9 @@ def test01_weighted_images_partition_the_render(gl_ctx, make):
     r = strategy_render(scene, spp, 5, 4, 4, gl_ctx)
     film, splat = r.film(), r.splat_image()
     images = r.strategy_images()
-    words = np.frombuffer(r._strategies.read(), np.uint32).reshape(
+    words = r.state()["strategies"].reshape(
         len(strategies.strategies(4)), SIZE, SIZE, strategies.WORDS_PER_PIXEL)
-    splat_sums = accum.fixed_sums(np.frombuffer(r._splat.read(), np.uint32))
+    splat_sums = accum.fixed_sums(r.state()["splat"])
     r.release()
     assert set(images) == set(strategies.strategies(4))
     # t = 1: every splat went to its strategy image as the same integers
@@ -64,7 +65,7 @@ def test01_weighted_images_partition_the_render(gl_ctx, make):
 def test02_kernel_without_strategy_images_has_none_of_their_code(gl_ctx):
     scene = cornell(8)
     r = Renderer(scene, settings_from_scene(scene, integrator="bdpt", spp=1), ctx=gl_ctx)
-    assert "GLRENDER_STRATEGY_DEPTH" not in r.defines and r._strategies.size == 16
+    assert "GLRENDER_STRATEGY_DEPTH" not in r.defines and r.accumulation.strategies.size == 16
     r.release()
 
 

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 import glrender
-from glrender.render.renderer import AOV_BYTES, SUM_BYTES, Renderer, settings_from_scene
+from glrender.render.accumulation import AOV_BYTES, SUM_BYTES
+from glrender.render.renderer import Renderer, settings_from_scene
 
 CORNELL = Path(__file__).resolve().parents[2] / "scenes" / "cornell-box" / "scene.toml"
 
@@ -25,7 +26,7 @@ def test01_slices_equal_one_binding(gl_ctx, monkeypatch, aovs, count_loops):
     scene = cornell(52, 45)              # 7 x 6 tiles, odd sizes: a short last slice
     settings = settings_from_scene(scene, spp=8, seed=3, aovs=aovs, count_loops=count_loops)
     with Renderer(scene, settings, ctx=gl_ctx) as whole:
-        assert len(whole._slices()) == 1
+        assert len(whole.slices()) == 1
         whole.step(4)
         whole.step(4)
         expected = whole.film()
@@ -33,7 +34,7 @@ def test01_slices_equal_one_binding(gl_ctx, monkeypatch, aovs, count_loops):
     widest = AOV_BYTES if aovs else SUM_BYTES
     monkeypatch.setattr(Renderer, "binding_limit", lambda self: 2 * 8 * 52 * widest)
     with Renderer(scene, settings, ctx=gl_ctx) as sliced:
-        slices = sliced._slices()
+        slices = sliced.slices()
         assert len(slices) == 3 and sum(n for _, n in slices) == 6
         sliced.step(4)
         sliced.step(4, should_stop=lambda: False)
@@ -52,7 +53,7 @@ def test02_stopped_pass_is_undone_across_slices(gl_ctx, monkeypatch):
     settings = settings_from_scene(scene, spp=8, seed=1, samples_per_pass=4, time_target=1e-9)
     monkeypatch.setattr(Renderer, "binding_limit", lambda self: 2 * 8 * 40 * SUM_BYTES)
     with Renderer(scene, settings, ctx=gl_ctx) as r:
-        assert len(r._slices()) == 3
+        assert len(r.slices()) == 3
         r.step(4)
         before = r.film()
         asked = 0
@@ -74,14 +75,14 @@ def test03_dci_4k_film(gl_ctx):
     scene = cornell(4096, 2160)
     settings = settings_from_scene(scene, spp=1, seed=9)
     with Renderer(scene, settings, ctx=gl_ctx) as r:
-        slices = r._slices()
+        slices = r.slices()
         assert len(slices) >= 2
         r.step(1)
         full = r.film()
     boundary = 8 * slices[1][0]                          # first pixel row of the second slice
     with Renderer(scene, settings, ctx=gl_ctx) as r:
         r.reset(rows=(boundary // 8 - 2, 4))             # 4 tile rows around the boundary
-        assert len(r._slices()) == 1
+        assert len(r.slices()) == 1
         r.step(1)
         band = r.film()
     np.testing.assert_array_equal(band.mean, full.mean[boundary - 16:boundary + 16])
