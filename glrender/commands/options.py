@@ -7,6 +7,7 @@ import os
 from pathlib import Path
 
 from ..errors import SceneError, UsageError
+from ..render.job import SPP_LIMIT
 from ..scene.model import SPLIT_LIMIT, parse_rr
 
 
@@ -14,10 +15,6 @@ AOV_NAMES = ("albedo", "normal", "depth", "emission", "variance", "radius", "pho
 
 
 FIRST_HIT_AOVS = ("albedo", "normal", "depth", "emission")
-
-
-# sample indices are 32-bit on the device: the open-ended target of a time budget
-SPP_LIMIT = 1 << 31
 
 
 # the options a checkpoint remembers; --resume takes those not given again

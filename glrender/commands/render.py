@@ -8,7 +8,6 @@ from __future__ import annotations
 import signal
 import sys
 import time
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -21,21 +20,14 @@ from .outputs import write_outputs, write_stats
 
 def _denoise(film, job, say) -> tuple[np.ndarray, dict]:
     """The film's mean denoised (--denoise), and what the statistics record about it: the
-    seen emission kept out of the filter and rendered again by its own pass (at the
-    film's samples per pixel, which a time budget or a resume may change)."""
+    seen emission kept out of the filter and rendered again by the job's own pass
+    (Job.seen_emission, at the film's samples per pixel)."""
     from ..denoise import Denoiser, aovs_are_clean
-    from ..render.emission_pass import render_seen_emission
-    from ..render.noise import crop_band, crop_rows
 
-    crop = job.options.crop
     clean = aovs_are_clean(job.scene)
     t0 = time.perf_counter()
-    settings = replace(job.settings, sampler=replace(job.settings.sampler, spp=film.spp))
-    rows = crop_rows(crop) if crop is not None else None
-    seen = render_seen_emission(job.scene, settings, ctx=job.ctx, rows=rows, share=job.driver)
+    seen = job.seen_emission(film)
     pass_spp = None if seen is None else seen.spp
-    if seen is not None and crop is not None:
-        seen = crop_band(seen, crop, rows)
     t1 = time.perf_counter()
     with Denoiser() as denoiser:
         image = denoiser.denoise_film(film, clean_aux=clean,

@@ -10,6 +10,13 @@ the image of an uninterrupted render, bitwise, on the same device.
 
 The file is an uncompressed ``.npz`` (numpy's zip of arrays, read with
 ``allow_pickle=False``: nothing in it is executed) written atomically.
+
+A render whose units run elsewhere (a cluster, :class:`~glrender.render.job.UnitsJob`)
+checkpoints its finished bands instead (:func:`save_band_checkpoint`): each band's exact
+sums, sums of squares, AOV and splat sums and its sample range, keyed (frame, band), and a
+record naming the job (the scene, settings and plan) and its unit size. The bands are the
+caller's objects, read by attribute and made again by the ``make_band`` it gives
+:func:`load_band_checkpoint`.
 """
 from __future__ import annotations
 
@@ -19,6 +26,7 @@ import os
 import zipfile
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Any, Callable
 
 import numpy as np
 
@@ -28,6 +36,8 @@ from ..film.io import atomic_write
 FORMAT = "glrender-checkpoint"
 VERSION = 2     # 2: exact fixed-point sums (1: float32 Welford means)
 ARRAYS = ("sums", "squares", "aov")
+BAND_FORMAT = "glrender-distributed-checkpoint"
+BAND_VERSION = 2    # 2: exact fixed-point sums per band (1: float32 means and M2)
 
 
 @dataclass
@@ -129,6 +139,82 @@ def check_resumable(checkpoint: Checkpoint, renderer) -> None:
                          f"settings ({'; '.join(differ)}): {fix}")
     raise UsageError(f"{checkpoint.path}: the checkpoint belongs to a different scene (same "
                      f"settings, but the scene or a file it uses changed since): {fix}")
+
+
+def save_band_checkpoint(path, record: dict, bands: dict) -> None:
+    """Write finished bands ({(frame, band): band}, each with ``sums``, ``squares``, ``aov``,
+    ``splat`` and ``samples``) and ``record`` (JSON: the job, its plan, ...) to ``path``,
+    atomically."""
+    arrays = {}
+    for (frame, band), p in bands.items():
+        tag = f"{'s' if frame is None else frame}_{band}"
+        arrays[f"sums_{tag}"] = p.sums
+        arrays[f"squares_{tag}"] = p.squares
+        if p.aov is not None:
+            arrays[f"aov_{tag}"] = p.aov
+        if p.splat is not None:
+            arrays[f"splat_{tag}"] = p.splat
+    meta = {**record, "format": BAND_FORMAT, "version": BAND_VERSION,
+            "bands": [[frame, band, list(p.samples)] for (frame, band), p in bands.items()]}
+
+    def write(tmp: Path) -> None:
+        with open(tmp, "wb") as f:
+            np.savez(f, meta=np.array(json.dumps(meta)), **arrays)
+
+    atomic_write(path, write)
+
+
+def _open_band_checkpoint(path: Path):
+    """A band checkpoint of this version: (its record, its arrays: an open npz)."""
+    if not path.is_file():
+        raise UsageError(f"{path}: no checkpoint to resume (render without --resume to start, "
+                         f"or name the file with --checkpoint)")
+    try:
+        z = np.load(path, allow_pickle=False)
+        meta = json.loads(str(z["meta"]))
+        if not isinstance(meta, dict) or meta.get("format") != BAND_FORMAT:
+            raise ValueError("not a distributed render's checkpoint")
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
+        raise UsageError(f"{path}: not a readable checkpoint ({exc})") from None
+    if meta.get("version") != BAND_VERSION:
+        z.close()
+        raise UsageError(f"{path}: a distributed checkpoint of version {meta.get('version')}, "
+                         f"this glrender reads version {BAND_VERSION} (render without "
+                         f"--resume)")
+    return meta, z
+
+
+def band_checkpoint_unit_size(path) -> int:
+    """The unit size a band checkpoint's render used (its plan record)."""
+    path = Path(path)
+    meta, z = _open_band_checkpoint(path)
+    z.close()
+    try:
+        return int(meta["plan"]["unit_size"])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise UsageError(f"{path}: not a readable checkpoint (no unit size: {exc})") from None
+
+
+def load_band_checkpoint(path, job: str, make_band: Callable[..., Any]) -> dict:
+    """The finished bands of a band checkpoint of ``job`` (refused for another job),
+    {(frame, band): make_band(sums, squares, aov, samples, splat=splat)}."""
+    path = Path(path)
+    meta, z = _open_band_checkpoint(path)
+    with z:
+        if meta.get("job") != job:
+            raise UsageError(f"{path}: the checkpoint belongs to another scene, other "
+                             f"settings or another unit size (render without --resume)")
+        try:
+            bands = {}
+            for frame, band, samples in meta["bands"]:
+                tag = f"{'s' if frame is None else frame}_{band}"
+                aov = z[f"aov_{tag}"] if f"aov_{tag}" in z.files else None
+                splat = z[f"splat_{tag}"] if f"splat_{tag}" in z.files else None
+                bands[(frame, band)] = make_band(z[f"sums_{tag}"], z[f"squares_{tag}"], aov,
+                                                 tuple(samples), splat=splat)
+            return bands
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            raise UsageError(f"{path}: not a readable checkpoint ({exc})") from None
 
 
 def _check_files(checkpoint: Checkpoint, now: dict) -> None:

@@ -13,7 +13,19 @@ the cluster worker use. From a scene and its :class:`JobOptions` it
 - hands the film to the caller's ``outputs`` while the driver still holds the
   accumulation, writes the last checkpoint (always after a stop) and gathers the
   statistics (``--stats``, ``film.stats``): timings, samples, samples/s, memory, and the
-  driver's own entries.
+  driver's own entries;
+- renders ``--denoise``'s seen-emission pass for a film (:meth:`Job.seen_emission`): the
+  job's settings at the film's sample count, its crop, its driver's scene data.
+
+:class:`UnitsJob` is the same assembly for a render whose samples run elsewhere, in units
+that come back as finished bands (``glrender render --workers/--scheduler/--frames``, on
+the Dask cluster of :mod:`glrender.distributed`): the caller runs the units, reporting
+their progress to the job's bar (:meth:`UnitsJob.units_bar`) and their result to
+:meth:`UnitsJob.finish`, which writes the checkpoint of the finished bands (after a stop;
+at the end with ``keep_checkpoint``), hands the films to the caller's ``outputs`` and
+gathers the statistics; :meth:`UnitsJob.resume` takes a checkpoint's bands back. The bands
+are the cluster's objects (``Partial``), which the job reads by attribute and makes again
+with the ``make_band`` it is given: the cluster sits above ``render/``.
 
 The job makes its driver with a factory it receives (:func:`glrender.drivers.create_driver`
 for every caller): the driver table sits above the drivers, which this module is one of
@@ -39,15 +51,17 @@ import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Callable, Iterator
+from typing import Any, Callable, Iterator, Protocol
 
 from .. import integrators
 from ..errors import UsageError
 from ..film import Film
-from .checkpoint import Checkpoint, check_resumable, save_checkpoint
+from .checkpoint import (Checkpoint, band_checkpoint_unit_size, check_resumable,
+                         load_band_checkpoint, save_band_checkpoint, save_checkpoint)
 from .driver import RenderDriver
+from .emission_pass import render_seen_emission
 from .noise import crop_band, crop_rows, mean_relative_stderr
-from .progress import ProgressBar
+from .progress import ProgressBar, UnitsBar
 from .renderer import RenderSettings, settings_from_scene
 
 #: ``create_driver(scene, settings, options=None, *, ctx=None, device=None, share=None)``:
@@ -308,6 +322,19 @@ class Job:
         crop = self.options.crop
         return crop_band(film, crop, self.driver.rows) if crop is not None else film
 
+    def seen_emission(self, film: Film) -> Film | None:
+        """The seen-emission pass of a denoised render of ``film``
+        (:func:`~glrender.render.emission_pass.render_seen_emission`): the job's settings at
+        the film's samples per pixel (which a time budget or a resume may make other than
+        the target), the job's crop, the scene data its driver holds. Its film (the crop's
+        pixels with a crop), or None where the pass has nothing to add."""
+        settings = replace(self.settings, sampler=replace(self.settings.sampler, spp=film.spp))
+        crop = self.options.crop
+        rows = crop_rows(crop) if crop is not None else None
+        seen = render_seen_emission(self.scene, settings, ctx=self.ctx, rows=rows,
+                                    share=self.driver)
+        return crop_band(seen, crop, rows) if seen is not None and crop is not None else seen
+
     def write_checkpoint(self) -> None:
         """The accumulation (whole passes) and the record to ``options.checkpoint``, with
         the device (a resume elsewhere is warned of) and the sample target."""
@@ -424,3 +451,119 @@ class Job:
 
     def __exit__(self, *exc: object) -> None:
         self.release()
+
+
+# -- a render whose samples run elsewhere, in units ------------------------------------------
+
+class UnitsResult(Protocol):
+    """What a run of units reports (:class:`glrender.distributed.client.Result`)."""
+
+    films: dict             # frame (None: a still) -> its merged Film; empty after a stop
+    bands: dict             # (frame, band) -> the band's accumulation (a Partial): sums,
+                            # squares, aov, splat, samples
+    complete: bool          # False: stopped before every band finished
+    seconds: float          # wall time of the run
+    unit_seconds: float     # render time summed over the units
+    bytes_to_client: int
+    plan: Any               # .pixel_samples (all frames), .record() (JSON)
+
+
+@dataclass
+class UnitsOutcome:
+    """What :meth:`UnitsJob.finish` made of a run of units."""
+
+    units: UnitsResult
+    samples_per_second: float | None        # the plan's pixel-samples over the run's time
+    checkpoint: str | None = None           # the checkpoint written
+    outputs: dict[str, Any] = field(default_factory=dict)   # what ``outputs`` returned
+    stats: dict[str, Any] | None = None
+
+
+class UnitsJob:
+    """One render of ``scene`` as ``options`` ask whose units the caller runs elsewhere
+    (``frames``: an animation's frame numbers, None: a still). Of the options it reads the
+    settings, ``checkpoint``, ``keep_checkpoint`` and ``record``, ``progress_bar``,
+    ``stats``, ``info``, ``timings`` and ``started``."""
+
+    def __init__(self, scene: Any, options: JobOptions, frames: list[int] | None = None):
+        self.scene, self.options, self.frames = scene, options, frames
+        self.timings = options.timings
+        self.started = time.perf_counter() if options.started is None else options.started
+        self.settings = job_settings(scene, options)
+        self.resumed_bands = 0
+
+    def checkpoint_unit_size(self) -> int:
+        """The unit size the render in ``options.checkpoint`` used (a resume plans the same
+        units)."""
+        return band_checkpoint_unit_size(self.options.checkpoint)
+
+    def resume(self, job_id: str, make_band: Callable[..., Any]) -> dict:
+        """The finished bands of ``options.checkpoint`` (refused unless it holds ``job_id``,
+        the same scene, settings and plan), made by ``make_band(sums, squares, aov,
+        samples, splat=...)``."""
+        bands = load_band_checkpoint(self.options.checkpoint, job_id, make_band)
+        self.resumed_bands = len(bands)
+        return bands
+
+    @contextmanager
+    def units_bar(self) -> Iterator[Callable[[int, int, int, float], None] | None]:
+        """While the units run: the progress callback (units done, units, pixel-samples
+        done, seconds) that draws the units bar on standard error when it is a terminal
+        (``options.progress_bar``), else None."""
+        bar = None
+        if self.options.progress_bar and sys.stderr is not None and sys.stderr.isatty():
+            bar = UnitsBar(sys.stderr)
+        try:
+            yield None if bar is None else bar.update
+        finally:
+            if bar is not None:
+                bar.close()
+
+    def write_checkpoint(self, bands: dict, job_id: str, plan: Any) -> None:
+        """The finished ``bands`` to ``options.checkpoint``, recorded as ``job_id``'s with
+        ``plan``'s record and ``options.record``."""
+        record = {"job": job_id, "plan": plan.record(), **self.options.record}
+        save_band_checkpoint(self.options.checkpoint, record, bands)
+
+    def finish(self, units: UnitsResult, job_id: str,
+               outputs: Callable[[dict], dict[str, Any]] | None = None,
+               where: dict[str, Any] | None = None) -> UnitsOutcome:
+        """After the run of units: a stopped run's finished bands to the checkpoint (when
+        there are some); a complete run's films to ``outputs`` (the caller's files; the
+        entries it returns join the statistics), its bands to the checkpoint with
+        ``keep_checkpoint``, and its statistics, with ``where`` (the entries that say where
+        the units ran) after the outputs."""
+        o = self.options
+        rate = units.plan.pixel_samples / units.seconds if units.seconds > 0 else None
+        outcome = UnitsOutcome(units, rate)
+        if not units.complete:
+            if units.bands and o.checkpoint is not None:
+                self.write_checkpoint(units.bands, job_id, units.plan)
+                outcome.checkpoint = str(o.checkpoint)
+            return outcome
+        if outputs is not None:
+            outcome.outputs = outputs(units.films)
+        if o.keep_checkpoint and o.checkpoint is not None:
+            self.write_checkpoint(units.bands, job_id, units.plan)
+            outcome.checkpoint = str(o.checkpoint)
+        if o.stats:
+            outcome.stats = self.stats(outcome, where or {})
+        return outcome
+
+    def stats(self, outcome: UnitsOutcome, where: dict[str, Any]) -> dict[str, Any]:
+        """The statistics of a complete run of units: ``options.info``, the outputs,
+        ``where``, then what the job knows and what the run reported."""
+        s, units = self.settings, outcome.units
+        stats = {
+            **self.options.info, "outputs": [], **where,
+            "width": self.scene.film.width, "height": self.scene.film.height,
+            "integrator": s.integrator.kind, "sampler": s.sampler.kind, "seed": s.sampler.seed,
+            "spp": s.sampler.spp, "frames": self.frames, "resumed_bands": self.resumed_bands,
+            "seconds": {"render": units.seconds, "units": units.unit_seconds,
+                        "total": time.perf_counter() - self.started},
+            "samples_per_second": outcome.samples_per_second,
+            "bytes_to_client": units.bytes_to_client,
+            "nonfinite_samples": int(sum(f.nonfinite_total for f in units.films.values())),
+        }
+        stats.update(outcome.outputs)
+        return stats

@@ -5,6 +5,10 @@
 Redrawn in place (carriage return) at most ``max_rate`` times a second, fitted to the
 terminal's width. With a time budget the bar and the ETA follow whichever of the sample
 target and the budget ends first.
+
+:class:`UnitsBar` is the line of a render whose samples run elsewhere in units (a cluster):
+
+    [##########....................] 5/16 units  2.31 Msamples/s  0:03 elapsed
 """
 from __future__ import annotations
 
@@ -68,3 +72,27 @@ class ProgressBar:
             self.stream.write("\n")
             self.stream.flush()
             self._drawn = False
+
+
+class UnitsBar:
+    """One aggregated line: units finished of all, samples/s over the cluster."""
+
+    def __init__(self, stream, clock=time.monotonic):
+        self.stream, self.clock, self.last = stream, clock, 0.0
+
+    def update(self, done: int, total: int, pixel_samples: int, seconds: float,
+               force: bool = False) -> None:
+        now = self.clock()
+        if not force and now - self.last < 0.1:
+            return
+        self.last = now
+        width = 30
+        filled = int(round(width * done / max(total, 1)))
+        rate = pixel_samples / seconds / 1e6 if seconds > 0 else 0.0
+        self.stream.write(f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{total} units  "
+                          f"{rate:.2f} Msamples/s  {format_seconds(seconds)} elapsed\033[K")
+        self.stream.flush()
+
+    def close(self) -> None:
+        self.stream.write("\n")
+        self.stream.flush()

@@ -124,7 +124,8 @@ def test05_stop_checkpoint_resume(gl_ctx, cluster, larger, tmp_path):
     """A render stopped after some units (as Ctrl-C stops it) keeps its finished bands;
     saved to a checkpoint and given back, the render runs only the rest, and the image is
     bitwise the uninterrupted one."""
-    from glrender.commands.cluster import _load_checkpoint, _save_checkpoint
+    from glrender.distributed.merge import Partial
+    from glrender.render.checkpoint import load_band_checkpoint, save_band_checkpoint
 
     _, client = cluster
     settings = settings_from_scene(larger, spp=64, seed=9)
@@ -140,10 +141,10 @@ def test05_stop_checkpoint_resume(gl_ctx, cluster, larger, tmp_path):
     assert not res.complete and res.films == {}
     assert 1 <= len(res.bands) < 16
     path = tmp_path / "render.ckpt"
-    _save_checkpoint(path, {"job": "the job"}, res.bands)
+    save_band_checkpoint(path, {"job": "the job"}, res.bands)
     with pytest.raises(glrender.errors.UsageError, match="another scene"):
-        _load_checkpoint(path, "another job")
-    done = _load_checkpoint(path, "the job")
+        load_band_checkpoint(path, "another job", Partial)
+    done = load_band_checkpoint(path, "the job", Partial)
     assert done.keys() == res.bands.keys()
     seen.clear()
     res2 = render(larger, client=client, settings=settings, unit_size=128 * 8 * 64, done=done,

@@ -130,20 +130,21 @@ def test07_default_unit_size():
 
 
 def test08_distributed_checkpoints_keep_sums_and_refuse_other_versions(tmp_path, monkeypatch):
-    from glrender.commands import cluster as command
     from glrender.errors import UsageError
+    from glrender.render import checkpoint
 
     part = _partial(np.arange(24, dtype=np.float32).reshape(2, 4, 3), 0)
     path = tmp_path / "c.ckpt"
-    command._save_checkpoint(path, {"job": "j", "plan": {"unit_size": 4096}}, {(None, 0): part})
-    (got,) = command._load_checkpoint(path, "j").values()
+    checkpoint.save_band_checkpoint(path, {"job": "j", "plan": {"unit_size": 4096}},
+                                    {(None, 0): part})
+    (got,) = checkpoint.load_band_checkpoint(path, "j", Partial).values()
     np.testing.assert_array_equal(got.sums, part.sums)
     np.testing.assert_array_equal(got.squares, part.squares)
-    assert command._checkpoint_unit_size(path) == 4096
-    monkeypatch.setattr(command, "CHECKPOINT_VERSION", 1)
-    command._save_checkpoint(path, {"job": "j"}, {(None, 0): part})
-    monkeypatch.setattr(command, "CHECKPOINT_VERSION", 2)
-    for read in (lambda: command._load_checkpoint(path, "j"),
-                 lambda: command._checkpoint_unit_size(path)):
+    assert checkpoint.band_checkpoint_unit_size(path) == 4096
+    monkeypatch.setattr(checkpoint, "BAND_VERSION", 1)
+    checkpoint.save_band_checkpoint(path, {"job": "j"}, {(None, 0): part})
+    monkeypatch.setattr(checkpoint, "BAND_VERSION", 2)
+    for read in (lambda: checkpoint.load_band_checkpoint(path, "j", Partial),
+                 lambda: checkpoint.band_checkpoint_unit_size(path)):
         with pytest.raises(UsageError, match="version 1, this glrender reads version 2"):
             read()

@@ -2,9 +2,11 @@
 on a small Cornell box."""
 from __future__ import annotations
 
+import io
 import warnings
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
+from types import SimpleNamespace
 
 import moderngl
 import numpy as np
@@ -14,7 +16,8 @@ import glrender
 from glrender.drivers import create_driver
 from glrender.errors import UsageError
 from glrender.render.checkpoint import load_checkpoint
-from glrender.render.job import PHASES, Job, JobOptions, job_settings, make_driver
+from glrender.render.emission_pass import emission_spp, render_seen_emission
+from glrender.render.job import PHASES, Job, JobOptions, UnitsJob, job_settings, make_driver
 from glrender.render.renderer import Renderer, settings_from_scene
 
 CORNELL = Path(__file__).resolve().parents[2] / "scenes" / "cornell-box" / "scene.toml"
@@ -139,3 +142,108 @@ def test06_crop(scene, gl_ctx):
     np.testing.assert_array_equal(part.film.mean, whole.mean[2:9, 3:11])
     with pytest.raises(UsageError, match="not available with the lighttrace integrator"):
         run(scene, integrator="lighttrace", spp=1, ctx=gl_ctx, crop=[0, 0, 8, 8])
+
+
+def test07_seen_emission(scene, gl_ctx):
+    """--denoise's seen-emission pass: the job's settings at the film's spp (a stopped run's,
+    not the target's), the crop's pixels with a crop, None where the pass adds nothing."""
+    passes = []
+    with Job(scene, JobOptions(spp=20, seed=3, settings=PASS, ctx=gl_ctx,
+                               stop=lambda: bool(passes),
+                               on_pass=lambda spp, seconds: passes.append(spp)),
+             create_driver) as job:
+        film = job.run().film
+        seen = job.seen_emission(film)
+    assert film.spp == 4 and seen.spp == emission_spp(4) != emission_spp(20)
+    whole = render_seen_emission(scene, settings_from_scene(scene, spp=4, seed=3, **PASS),
+                                 ctx=gl_ctx)
+    np.testing.assert_array_equal(seen.mean, whole.mean)
+    crop = [3, 2, 11, 9]
+    with Job(scene, JobOptions(spp=4, seed=3, settings=PASS, ctx=gl_ctx, crop=crop),
+             create_driver) as job:
+        part = job.seen_emission(job.run().film)
+    assert part.shape == (7, 8)
+    np.testing.assert_array_equal(part.mean, whole.mean[2:9, 3:11])
+    with Job(scene, JobOptions(integrator="ao", spp=1, ctx=gl_ctx), create_driver) as job:
+        assert job.seen_emission(job.run().film) is None
+
+
+@dataclass
+class Band:
+    """A finished band as a cluster reports it (glrender.distributed.merge.Partial)."""
+
+    sums: np.ndarray
+    squares: np.ndarray
+    aov: np.ndarray | None
+    samples: tuple
+    splat: np.ndarray | None = None
+
+
+class Plan:
+    pixel_samples = 16 * 12 * 8
+
+    def record(self):
+        return {"unit_size": 4096, "units": 3}
+
+
+def units(complete=True, bands=1):
+    band = Band(np.arange(32, dtype=np.uint32).reshape(2, 4, 4),
+                np.ones((2, 3, 4), np.uint32), None, (0, 8))
+    return SimpleNamespace(films={None: SimpleNamespace(nonfinite_total=2)} if complete else {},
+                           bands={(None, b): band for b in range(bands)}, complete=complete,
+                           seconds=0.5, unit_seconds=0.8, bytes_to_client=100, plan=Plan())
+
+
+def test08_units_job_checkpoints_and_stats(scene, tmp_path):
+    """A render of units elsewhere: its settings; a stopped run's bands to the checkpoint,
+    which a resume of the same job takes back; a complete run's outputs, checkpoint (kept)
+    and statistics in the cluster command's order."""
+    path = tmp_path / "units.ckpt"
+
+    def job(**options):
+        return UnitsJob(scene, JobOptions(spp=8, seed=4, checkpoint=path,
+                                          record={"scene": "s.toml"}, **options))
+
+    assert job().settings == job_settings(scene, JobOptions(spp=8, seed=4))
+    assert job().finish(units(False, bands=0), "j1").checkpoint is None and not path.exists()
+    called = []
+    stopped = job().finish(units(False), "j1", lambda films: called.append(films))
+    assert stopped.checkpoint == str(path) and stopped.stats is None and called == []
+    again = job(stats=True, keep_checkpoint=True, info={"glrender": "x"})
+    assert again.checkpoint_unit_size() == 4096
+    with pytest.raises(UsageError, match="another scene, other settings"):
+        again.resume("j2", Band)
+    (band,) = again.resume("j1", Band).values()
+    np.testing.assert_array_equal(band.sums, units().bands[(None, 0)].sums)
+    assert band.samples == (0, 8) and band.aov is None
+    path.unlink()
+    outcome = again.finish(units(), "j1", lambda films: {"outputs": [f"{len(films)} film"]},
+                           where={"cluster": "here", "workers": 2})
+    assert outcome.checkpoint == str(path) and path.is_file()
+    stats = outcome.stats
+    assert list(stats) == ["glrender", "outputs", "cluster", "workers", "width", "height",
+                           "integrator", "sampler", "seed", "spp", "frames", "resumed_bands",
+                           "seconds", "samples_per_second", "bytes_to_client",
+                           "nonfinite_samples"]
+    assert stats["outputs"] == ["1 film"] and stats["resumed_bands"] == 1
+    assert (stats["width"], stats["spp"], stats["seed"], stats["frames"]) == (16, 8, 4, None)
+    assert list(stats["seconds"]) == ["render", "units", "total"]
+    assert stats["samples_per_second"] == Plan.pixel_samples / 0.5
+    assert stats["nonfinite_samples"] == 2 and stats["bytes_to_client"] == 100
+    assert job(stats=False).finish(units(), "j1").stats is None
+
+
+def test09_units_bar(scene, monkeypatch):
+    """The units bar is drawn on a terminal when asked for, and ends its line."""
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    terminal = Terminal()
+    monkeypatch.setattr("sys.stderr", terminal)
+    with UnitsJob(scene, JobOptions(spp=8)).units_bar() as progress:
+        assert progress is None
+    with UnitsJob(scene, JobOptions(spp=8, progress_bar=True)).units_bar() as progress:
+        progress(3, 4, 2_000_000, 1.0)
+    assert terminal.getvalue() == ("\r[######################........] 3/4 units  2.00 Msamples/s  "
+                                   "0:01 elapsed\033[K\n")
