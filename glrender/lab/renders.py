@@ -75,17 +75,20 @@ def render_variants(lab, scene, variants: dict[str, dict], runs: int, spp: int,
     (independent across runs and variants); the variants take turns run by run, so a
     busy spell of the machine hits them alike. ``count_rays``: count the rays each variant
     traces (every variant counts, so the counters' cost is alike too)."""
-    from ..render.renderer import Renderer, settings_from_scene
+    from ..drivers import create_driver
+    from ..render.job import JobOptions, job_settings, make_driver
 
     renderers, settings = {}, {}
     acc = {name: {"means": [], "variances": [], "seconds": 0.0, "albedo": None, "normal": None,
                   "rays": 0} for name in variants}
     try:
         for name, overrides in variants.items():
-            settings[name] = settings_from_scene(scene, sampler="independent", spp=spp,
-                                                 aovs=name == aovs_of, count_rays=count_rays,
-                                                 **overrides)
-            renderers[name] = Renderer(scene, settings[name], ctx=lab.ctx)
+            overrides = dict(overrides)
+            options = JobOptions(integrator=overrides.pop("integrator", None), spp=spp,
+                                 settings=dict(sampler="independent", aovs=name == aovs_of,
+                                               count_rays=count_rays, **overrides))
+            settings[name] = job_settings(scene, options)
+            renderers[name] = make_driver(scene, settings[name], create_driver, ctx=lab.ctx)
         for r in range(runs):
             for v, (name, renderer) in enumerate(renderers.items()):
                 seed = (lab.seed * 100_003 + v * 1009 + r) & 0x7FFFFFFF
