@@ -33,8 +33,15 @@ class IntegratorSpec:
     #: it records the emission the camera sees at the first hit in its emission AOV, so a
     #: denoised render adds back a seen-emission pass (glrender.render.emission_pass)
     emission_aov: bool = True
-    #: it renders one image per connection strategy (s, t) (--strategy-images)
+    #: it connects subpaths by strategies (s, t): one image per strategy (--strategy-images),
+    #: and a sample's connections grow with the square of the depth (fewer per invocation)
     strategies: bool = False
+    #: light samples per vertex and BSDF branches at the first vertex (--light-samples,
+    #: --split) apply to it
+    splitting: bool = False
+    #: its emission AOV follows delta surfaces to the emitter behind them, and it renders
+    #: that seen emission alone (emission_only: the seen-emission pass of a denoised render)
+    seen_emission_pass: bool = False
     #: a cluster can render it (glrender.distributed)
     distributed: bool = True
     #: a time budget without a sample count renders until the budget ends (sppm: its
@@ -78,7 +85,7 @@ def running_on(driver: str) -> tuple[str, ...]:
     return tuple(n for n, s in _REGISTRY.items() if s.driver == driver)
 
 
-register(IntegratorSpec("path", "integrators/path.glsl",
+register(IntegratorSpec("path", "integrators/path.glsl", splitting=True, seen_emission_pass=True,
                         summary="unidirectional path tracing with next-event estimation and MIS"))
 register(IntegratorSpec("direct", "integrators/direct.glsl",
                         uses_depth=False,

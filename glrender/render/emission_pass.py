@@ -28,7 +28,8 @@ def emission_settings(settings):
     integ = settings.integrator
     if not integrators.get(integ.kind).emission_aov or settings.clamp is not None:
         return None
-    max_depth = integ.max_depth if integ.kind == "path" else 1
+    # the path tracer's AOV follows delta surfaces to its own depth; the others' is the first hit
+    max_depth = integ.max_depth if integrators.get(integ.kind).seen_emission_pass else 1
     return replace(settings, integrator=replace(integ, kind="path", max_depth=max_depth),
                    sampler=replace(settings.sampler, spp=emission_spp(settings.sampler.spp)),
                    aovs=False, count_loops=False, debug_nonfinite=0, emission_only=True)

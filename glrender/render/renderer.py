@@ -95,8 +95,10 @@ def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: i
                                   and clamp > 0):
         raise UsageError(f"clamp: expected a positive number (the largest RGB component a "
                          f"sample keeps), got {clamp!r}")
-    if emission_only and integ.kind != "path":
-        raise UsageError(f"emission_only: only with the path integrator, not {integ.kind}")
+    if emission_only and not integrators.get(integ.kind).seen_emission_pass:
+        passes = [n for n in integrators.names() if integrators.get(n).seen_emission_pass]
+        raise UsageError(f"emission_only: only with the {', '.join(passes)} integrator, not "
+                         f"{integ.kind}")
     if count_loops and count_rays:
         raise UsageError("count_loops and count_rays share one debug counter: ask for one")
     return RenderSettings(integ, samp, aovs=aovs, count_loops=count_loops, count_rays=count_rays,
@@ -232,8 +234,8 @@ class Renderer:
         self.defines = shader_defines(
             sampler=s.sampler.kind, material_kinds=p.material_kinds, light_kinds=p.light_kinds,
             max_depth=integ.max_depth, rr_depth=integ.rr_depth, rr=integ.rr,
-            light_samples=integ.light_samples if integ.kind == "path" else 1,
-            split=integ.split if integ.kind == "path" else 1, strategy=integ.strategy,
+            light_samples=integ.light_samples if spec.splitting else 1,
+            split=integ.split if spec.splitting else 1, strategy=integ.strategy,
             emitter_samples=integ.emitter_samples, bsdf_samples=integ.bsdf_samples,
             hide_emitters=integ.hide_emitters, light_selection=integ.light_selection,
             area_sampling=integ.area_sampling, filter=self.scene.film.filter, aovs=s.aovs,
@@ -254,7 +256,7 @@ class Renderer:
             library=library)
         if s.samples_per_pass is not None:
             self.samples_per_pass = max(1, int(s.samples_per_pass))
-        elif integ.kind == "bdpt" and not 0 < integ.max_depth <= 8:
+        elif spec.strategies and not 0 < integ.max_depth <= 8:
             # a bdpt sample traces two subpaths and up to ~(max_depth + 1)^2 / 2 connections:
             # beyond depth 8 (up to its cap of 16), 2 per invocation keep the loop count far
             # below llvmpipe's cap (tests/render/test_bdpt.py checks the worst scenes)
@@ -266,12 +268,12 @@ class Renderer:
             # regeneration more to fill idle lanes with (8 measured best with and without a BVH).
             # Splitting multiplies a sample's work: fewer samples per invocation keep the
             # product bounded (tests/render/test_splitting.py checks the largest settings).
-            work = integ.split * integ.light_samples if integ.kind == "path" else 1
+            work = integ.split * integ.light_samples if spec.splitting else 1
             self.samples_per_pass = max(1, 8 // work)
 
     def _check_strategy_images(self) -> None:
         s = self.settings
-        if s.integrator.kind != "bdpt":
+        if not integrators.get(s.integrator.kind).strategies:
             raise UsageError(f"strategy images: only the bdpt integrator has strategies (s, t), "
                              f"not {s.integrator.kind}")
         strategies.check_depth(s.strategy_depth, s.integrator.max_depth, BDPT_DEPTH_CAP)
