@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 from ..errors import SceneError
+from .loaders.diagnostics import excerpt
 
 RGB = tuple[float, float, float]
 
@@ -124,7 +125,7 @@ def _lookup(table: dict, name: str, what: str):
     by_lower = {key.lower(): key for key in table}
     key = by_lower.get(name.strip().lower())
     if key is None:
-        raise SceneError(f"unknown {what} {name!r} (expected one of {', '.join(table)})")
+        raise SceneError(f"unknown {what} {excerpt(name)} (expected one of {', '.join(table)})")
     return table[key]
 
 

@@ -257,9 +257,10 @@ def test10_bulk_parser_equals_the_general_one_or_declines(tmp_path):
     assert len(accepted) > 20 and 3 * len(accepted) > len(loaded)   # a good share of those that load
 
 
-def test11_bulk_parser_on_the_shared_and_test_obj_files(write):
-    """Every OBJ file the tests read (the shared scenes where present, a generated mixed
-    file with relative indices, quads and groups): the bulk parser (forced) equals the general one."""
+def test11_bulk_parser_on_the_vendored_and_test_obj_files(write):
+    """Every OBJ file the tests read (the third-party scenes of tests/data/scenes, a generated
+    mixed file with relative indices, quads and groups): the bulk parser (forced) equals the
+    general one."""
     from glrender.scene.loaders import obj as obj_module
 
     rng = np.random.default_rng(5)
@@ -271,7 +272,7 @@ def test11_bulk_parser_on_the_shared_and_test_obj_files(write):
         lines += ["f " + " ".join(f"{a}//{b}" for a, b in zip(q, rng.integers(-200, 0, 4)))
                   for q in rng.integers(-200, 0, (300, 4))]
     paths = [write("mixed.obj", "\n".join(lines) + "\n")]
-    paths += sorted(SCENES.glob("**/*.obj")) if SCENES.is_dir() else []
+    paths += sorted(SCENES.glob("**/*.obj"))
     taken = 0
     for path in paths:
         fast = obj_module._read_obj_fast(path.read_bytes(), path)

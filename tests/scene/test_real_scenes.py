@@ -1,9 +1,9 @@
-"""Every third-party scene of ../shared/scenes (SOURCES.md) loads with the documented
-counts and renders; Mitsuba's Cornell box matches Mitsuba 3 and Veach's MIS scene the
-official reference images.
-
-These read ../shared, which sits beside the repository in development and CI; where it
-is absent they skip with that reason (under CI=true a skip fails the run)."""
+"""Every third-party scene the tests carry (tests/data/scenes, copied from the project's
+collection of public scenes; tests/data/README.md says where each came from and under which
+licence) loads with the documented counts and renders; Mitsuba's Cornell box matches Mitsuba 3
+and Veach's MIS scene the official reference images. Nothing here reads outside the
+repository: the bunny is the one of scenes/cornell-bunny, the small PLY meshes those of
+tests/data/meshes."""
 from __future__ import annotations
 
 import warnings
@@ -16,11 +16,15 @@ import glrender
 from glrender.scene import model as m
 from glrender.testing.stats import sidak_z
 
-SHARED = Path(__file__).resolve().parents[2].parent / "shared" / "scenes"
-pytestmark = pytest.mark.skipif(not (SHARED / "SOURCES.md").is_file(),
-                                reason=f"the shared third-party scenes are not at {SHARED}")
+ROOT = Path(__file__).resolve().parents[2]
+DATA = ROOT / "tests" / "data"
+VENDORED = DATA / "scenes"
+# scenes kept elsewhere in the repository (byte-for-byte the same files)
+ELSEWHERE = {"meshes/bunny.ply": ROOT / "scenes" / "cornell-bunny" / "bunny.ply",
+             "meshes/bunny_lowres.ply": DATA / "meshes" / "bunny_lowres.ply",
+             "meshes/teapot.ply": DATA / "meshes" / "teapot.ply"}
 
-# file -> triangles (SOURCES.md; spheres are analytic and not counted)
+# file -> triangles (spheres are analytic and not counted)
 SCENES = {
     "mitsuba-cbox/cbox.xml": 38, "mitsuba-cbox/cbox-rgb.xml": 38, "mitsuba-cbox/cbox-spectral.xml": 38,
     "mitsuba-cbox-tutorial/cbox.xml": 12,
@@ -28,27 +32,32 @@ SCENES = {
     "mitsuba-veach-mis/integrator_direct_lum.xml": 12,
     "cornellbox-mcguire-obj/CornellBox-Original.obj": 36,
     "meshes/bunny.ply": 69451, "meshes/bunny_lowres.ply": 948, "meshes/teapot.ply": 2256,
-    "meshes/suzanne.ply": 62976,
+    "meshes/suzanne_4k.ply": 3999,      # decimated (tests/data/README.md)
     "spot/spot_triangulated.obj": 5856,
-    "gltf/BoxTextured.glb": 12, "gltf/BoxTextured-glTF/BoxTextured.gltf": 12, "gltf/barrel.glb": 1148,
+    "gltf/BoxTextured.glb": 12, "gltf/BoxTextured-glTF/BoxTextured.gltf": 12, "gltf/barrel_256.glb": 1148,
     "gltf/draco/Box_draco.glb": 12, "gltf/draco/BoxTextured_draco.glb": 12,
 }
 SPHERES = {"mitsuba-cbox-tutorial/cbox.xml": 2, "mitsuba-veach-mis/integrator_direct_both.xml": 5,
            "mitsuba-veach-mis/integrator_direct_bsdf.xml": 5, "mitsuba-veach-mis/integrator_direct_lum.xml": 5}
 
 
+def _path(name: str) -> Path:
+    return ELSEWHERE.get(name, VENDORED / name)
+
+
 def _load(name: str) -> m.Scene:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")   # no camera / no lights / unsupported features
-        return glrender.load(SHARED / name)
+        return glrender.load(_path(name))
 
 
-def test01_every_scene_of_sources_md_is_covered():
-    listed = {p.relative_to(SHARED).as_posix() for p in SHARED.rglob("*")
+def test01_every_vendored_scene_is_covered():
+    listed = {p.relative_to(VENDORED).as_posix() for p in VENDORED.rglob("*")
               if p.suffix.lower() in (".xml", ".obj", ".ply", ".glb", ".gltf")}
     # fragments and meshes that scenes include are loaded through those scenes
     parts = {n for n in listed if "/fragments/" in n or "/include/" in n or "/meshes/" in n[n.index("/"):]}
-    assert listed - parts - set(SCENES) == set()
+    assert listed - parts == set(SCENES) - set(ELSEWHERE)
+    assert all(path.is_file() for path in ELSEWHERE.values())
 
 
 @pytest.mark.parametrize("name", sorted(SCENES))
@@ -75,7 +84,7 @@ def test03_renders(name):
 def test04_mitsuba_cornell_box_matches_mitsuba_3(shift):
     mi = pytest.importorskip("mitsuba")
     mi.set_variant("scalar_rgb")
-    path = SHARED / "mitsuba-cbox" / "cbox-rgb.xml"
+    path = VENDORED / "mitsuba-cbox" / "cbox-rgb.xml"
     res, spp, seeds, block = 48, 64, 4, 16
     scene = glrender.load(path, res=res, spp=spp * seeds)
     # the whole scene moved (camera too): the same image
@@ -108,7 +117,7 @@ def test05_veach_mis_matches_the_reference_images(variant):
 
     from glrender.film.io import srgb_to_linear
 
-    root = SHARED / "mitsuba-veach-mis"
+    root = VENDORED / "mitsuba-veach-mis"
     scene = _load(f"mitsuba-veach-mis/integrator_direct_{variant}.xml")
     w, h, spp, block = 192, 128, 64, 16
     scene.film.width, scene.film.height = w, h

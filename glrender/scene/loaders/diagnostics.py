@@ -1,12 +1,14 @@
-"""What loaders tell their users besides errors: warnings, and referenced files.
+"""What loaders tell their users: warnings, excerpts of file content, the files read.
 
 - Warnings go through Python's :mod:`warnings` with the category
   :class:`GlrenderWarning`; a loader collects what it skipped (unsupported tags,
   plugins, extensions) and reports it in *one* warning that lists each item with its
   line number, instead of one warning per occurrence.
-- Files a scene refers to are resolved relative to the referencing file's folder;
-  a path that leaves the scene's folder (``..``, absolute paths) is reported, a
-  missing file is an error that names the referencing file and line.
+- A message that quotes a file's content quotes it through :func:`excerpt`: control
+  characters escaped (a scene file must not be able to drive the user's terminal with
+  ESC sequences), the length capped; :func:`printable` escapes a whole message, which
+  every warning and every error leaving :func:`glrender.load` gets as well.
+- Where referenced files may be, and how they are read: :mod:`.scene_files`.
 """
 from __future__ import annotations
 
@@ -26,11 +28,52 @@ class GlrenderWarning(UserWarning):
 
 
 def warn(message: str) -> None:
-    warnings.warn(message, GlrenderWarning, stacklevel=3)
+    warnings.warn(printable(message), GlrenderWarning, stacklevel=3)
+
+
+EXCERPT_CHARS = 80
+
+
+def printable(text: str) -> str:
+    """``text`` with every character that is not printable (ESC, BEL, NUL, the other C0
+    and C1 controls, line breaks, Unicode format characters such as bidi overrides)
+    written as its Python escape (``\\x1b``); printable text is unchanged."""
+    if text.isprintable():
+        return text
+    return "".join(ch if ch.isprintable() else repr(ch)[1:-1] for ch in text)
+
+
+def excerpt(value, limit: int = EXCERPT_CHARS, quote: bool = True) -> str:
+    """File content as a message may quote it: text (bytes are decoded as UTF-8 with
+    replacement characters) with the non-printable characters escaped as
+    :func:`printable` does, cut to ``limit`` characters followed by ``...`` when longer,
+    in quotes as ``repr`` writes them unless ``quote`` is false. Anything else (a number
+    or list from a JSON file) is shown by a size-limited ``repr``."""
+    if isinstance(value, (bytes, bytearray)):
+        value = bytes(value[:4 * limit + 4]).decode("utf-8", errors="replace")
+    elif not isinstance(value, str):
+        import reprlib
+
+        value, quote = reprlib.repr(value), False
+    head = value[:limit + 1]          # every character takes at least one place
+    size = kept = 0
+    for ch in head:
+        width = 1 if ch.isprintable() else len(repr(ch)) - 2
+        if size + width > limit:
+            break
+        size += width
+        kept += 1
+    text = value[:kept]
+    shown = repr(text) if quote else printable(text)
+    return shown + ("..." if kept < len(value) else "")
+
+
+MAX_NOTES = 20
 
 
 class Notes:
-    """Things a loader skipped, reported together: ``add(what, line)`` then ``emit()``."""
+    """Things a loader skipped, reported together: ``add(what, line)`` then ``emit()``
+    (the first MAX_NOTES kinds of them, and how many more)."""
 
     def __init__(self, source, title: str):
         self.source, self.title = str(source), title
@@ -51,6 +94,8 @@ class Notes:
                 parts.append(f"{what} (line{'s' if len(lines) > 1 else ''} {shown})")
             else:
                 parts.append(what)
+        if len(parts) > MAX_NOTES:       # a garbage file: thousands of distinct "statements"
+            parts = parts[:MAX_NOTES] + [f"and {len(parts) - MAX_NOTES} more"]
         warn(f"{self.source}: {self.title}: {'; '.join(parts)}")
         self.items = {}
 
@@ -75,6 +120,23 @@ def record_files():
             outer.extend(files)
 
 
+def cause(exc: BaseException, path=None) -> str:
+    """Why a reader failed, for the parenthesis of a message about ``path``: a SceneError's
+    own text (already made safe; the leading ``path:`` dropped), or the first line of
+    another exception's text through :func:`excerpt` (a parser's message may quote the file)."""
+    text = str(exc)
+    if isinstance(exc, SceneError):
+        return text.removeprefix(f"{printable(str(path))}: ") if path is not None else text
+    first = text.splitlines()[0] if text.strip() else type(exc).__name__
+    return excerpt(first, 2 * EXCERPT_CHARS, quote=False)
+
+
+def note_file(path) -> None:
+    """Add ``path`` to the files :func:`record_files` collects on this thread, if any."""
+    if getattr(_recording, "files", None) is not None:
+        _recording.files.append(Path(os.path.abspath(path)))
+
+
 def file_hashes(paths) -> dict[str, str]:
     """SHA-256 of each file (absolute path -> hex digest): what a checkpoint records, so that
     resuming after an input changed is refused by the file's name."""
@@ -94,61 +156,6 @@ def file_hashes(paths) -> dict[str, str]:
             continue            # gone since the loader read it: nothing to compare
         hashes[key] = h.hexdigest()
     return hashes
-
-
-class SceneFiles:
-    """Resolves the files a scene refers to, relative to the folder of the scene file
-    that refers to them, and remembers the scene's root folder to report paths that
-    leave it (once per path)."""
-
-    def __init__(self, root: Path):
-        self.root = Path(root).resolve()
-        self._reported: set[Path] = set()
-
-    def resolve(self, name: str, referrer, line: int | None = None, what: str = "file",
-                search: tuple = ()) -> Path:
-        """The existing file ``name`` refers to; ``search`` adds extra folders to try
-        (Mitsuba's <path>). Raises SceneError naming ``referrer`` and ``line``."""
-        where = f"{referrer}:{line}" if line is not None else f"{referrer}"
-        if not isinstance(name, str) or not name.strip() or "\0" in name:
-            raise SceneError(f"{where}: expected a {what} name, got {name!r}")
-        base = Path(referrer).parent
-        candidates = [base / name] + [Path(folder) / name for folder in search]
-        for candidate in candidates:
-            try:
-                path = candidate.resolve()
-                found = path.is_file()
-            except (OSError, RuntimeError):
-                continue
-            if found:
-                self._check_inside(path, name, where)
-                if getattr(_recording, "files", None) is not None:
-                    _recording.files.append(Path(os.path.abspath(candidate)))
-                return path
-        raise SceneError(f"{where}: {what} {name!r} not found (looked in {base.resolve()})")
-
-    def _check_inside(self, path: Path, name: str, where: str) -> None:
-        try:
-            path.relative_to(self.root)
-        except ValueError:
-            if path not in self._reported:
-                self._reported.add(path)
-                warn(f"{where}: {name!r} resolves to {path}, outside the scene's folder "
-                     f"{self.root}")
-
-
-def read_bytes(path, limit: int | None = None) -> bytes:
-    """A whole file, with errors that name it (and refuse files above ``limit`` bytes)."""
-    path = Path(path)
-    try:
-        if limit is not None and path.stat().st_size > limit:
-            raise SceneError(f"{path}: {path.stat().st_size} bytes is more than this loader reads "
-                             f"({limit})")
-        return path.read_bytes()
-    except FileNotFoundError:
-        raise SceneError(f"{path}: no such file") from None
-    except OSError as exc:
-        raise SceneError(f"{path}: cannot read ({exc.strerror or exc})") from None
 
 
 MAX_IMAGE_PIXELS = 1 << 26        # 8192 x 8192: larger textures are refused before decoding
@@ -175,8 +182,8 @@ def read_image_checked(path) -> np.ndarray:
         except SceneError:
             raise
         except Exception as exc:       # PIL's errors for truncated, unknown or bomb files
-            raise SceneError(f"{path}: cannot read the image ({exc})") from None
+            raise SceneError(f"{path}: cannot read the image ({cause(exc)})") from None
     try:
         return read_image(path)
     except Exception as exc:
-        raise SceneError(f"{path}: cannot read the image ({exc})") from None
+        raise SceneError(f"{path}: cannot read the image ({cause(exc)})") from None

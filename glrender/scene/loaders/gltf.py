@@ -20,6 +20,7 @@ import base64
 import io
 import json
 import math
+import re
 import struct
 from pathlib import Path
 
@@ -27,9 +28,10 @@ import numpy as np
 
 from ...errors import SceneError
 from .. import model as m
-from .diagnostics import Notes, SceneFiles, check_image_size, read_bytes
+from .diagnostics import Notes, cause, check_image_size, excerpt
 from .meshes import MeshData, finish_mesh
 from .pbr import metallic_roughness_material
+from .scene_files import SceneFiles, read_bytes
 
 SUPPORTED_EXTENSIONS = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
                         "KHR_materials_transmission", "KHR_materials_ior", "KHR_texture_transform",
@@ -40,6 +42,7 @@ _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "M
 _WRAP = {10497: "repeat", 33071: "clamp", 33648: "mirror"}
 LUMENS_PER_WATT = 683.0
 MAX_NODE_DEPTH = 256
+_SCHEME = re.compile(r"[A-Za-z][A-Za-z0-9+.-]*:")     # file:, http:, ... (data: is read inline)
 
 
 class _Gltf:
@@ -54,17 +57,40 @@ class _Gltf:
     def fail(self, where: str, message: str):
         raise SceneError(f"{self.path}: {where}: {message}")
 
+    def table(self, value, where: str) -> dict:
+        """An optional JSON object ({} when absent)."""
+        if value is None:
+            return {}
+        if not isinstance(value, dict):
+            self.fail(where, f"expected an object, got {excerpt(value)}")
+        return value
+
+    def array(self, value, where: str) -> list:
+        """An optional JSON array ([] when absent)."""
+        if value is None:
+            return []
+        if not isinstance(value, list):
+            self.fail(where, f"expected an array, got {excerpt(value)}")
+        return value
+
+    def names(self, value, where: str) -> list[str]:
+        """An optional array of strings (extension names)."""
+        items = self.array(value, where)
+        if not all(isinstance(x, str) for x in items):
+            self.fail(where, f"expected an array of names, got {excerpt(items)}")
+        return items
+
     def item(self, kind: str, index, where: str) -> dict:
         items = self.doc.get(kind)
         if not isinstance(index, int) or isinstance(index, bool) or not isinstance(items, list) \
                 or not 0 <= index < len(items) or not isinstance(items[index], dict):
-            self.fail(where, f"refers to {kind}[{index!r}], which does not exist")
+            self.fail(where, f"refers to {kind}[{excerpt(index)}], which does not exist")
         return items[index]
 
     # -- binary data -----------------------------------------------------------------
     def _uri_bytes(self, uri, where: str) -> bytes:
         if not isinstance(uri, str):
-            self.fail(where, f"expected a uri string, got {uri!r}")
+            self.fail(where, f"expected a uri string, got {excerpt(uri)}")
         if uri.startswith("data:"):
             head, _, payload = uri.partition(",")
             if not head.endswith(";base64"):
@@ -75,12 +101,15 @@ class _Gltf:
                 self.fail(where, "the data URI is not valid base64")
         from urllib.parse import unquote
 
-        return self.files.resolve(unquote(uri), self.path, None, f"file ({where})").read_bytes()
+        if _SCHEME.match(uri):
+            self.fail(f"{where}.uri", f"expected a relative path or a data: URI, got {excerpt(uri)}")
+        return read_bytes(self.files.resolve(unquote(uri), self.path, what="file",
+                                             field=f"{where}.uri"))
 
-    def buffer(self, index) -> bytes:
+    def buffer(self, index, referrer: str) -> bytes:
+        b = self.item("buffers", index, referrer)
         if index not in self._buffers:
             where = f"buffers[{index}]"
-            b = self.item("buffers", index, where)
             if "uri" in b:
                 data = self._uri_bytes(b["uri"], where)
             elif index == 0 and self.bin is not None:
@@ -89,34 +118,36 @@ class _Gltf:
                 self.fail(where, "has no uri and there is no GLB binary chunk")
             length = b.get("byteLength")
             if not isinstance(length, int) or length < 0 or length > len(data):
-                self.fail(where, f"byteLength {length!r} exceeds the {len(data)} bytes available")
+                self.fail(where, f"byteLength {excerpt(length)} exceeds the {len(data)} bytes available")
             self._buffers[index] = data[:length]
         return self._buffers[index]
 
     def view(self, index, where: str) -> tuple[bytes, int, int, int | None]:
         """(buffer bytes, offset, length, stride) of a buffer view, checked."""
         v = self.item("bufferViews", index, where)
-        data = self.buffer(v.get("buffer"))
+        data = self.buffer(v.get("buffer"), f"bufferViews[{index}].buffer")
         offset, length = v.get("byteOffset", 0), v.get("byteLength")
         stride = v.get("byteStride")
         for name, value in (("byteOffset", offset), ("byteLength", length)):
             if not isinstance(value, int) or value < 0:
-                self.fail(f"bufferViews[{index}]", f"{name} must be a non-negative integer, got {value!r}")
+                self.fail(f"bufferViews[{index}]",
+                          f"{name} must be a non-negative integer, got {excerpt(value)}")
         if offset + length > len(data):
             self.fail(f"bufferViews[{index}]", f"bytes [{offset}, {offset + length}) run past the "
                       f"end of buffer {v.get('buffer')} ({len(data)} bytes)")
         if stride is not None and (not isinstance(stride, int) or not 4 <= stride <= 252):
-            self.fail(f"bufferViews[{index}]", f"byteStride must be in [4, 252], got {stride!r}")
+            self.fail(f"bufferViews[{index}]", f"byteStride must be in [4, 252], got {excerpt(stride)}")
         return data, offset, length, stride
 
     def accessor(self, index, where: str) -> np.ndarray:
         a = self.item("accessors", index, where)
         where = f"accessors[{index}]"
         ctype, atype, count = a.get("componentType"), a.get("type"), a.get("count")
-        if ctype not in _COMPONENT or atype not in _WIDTH:
-            self.fail(where, f"unknown componentType {ctype!r} or type {atype!r}")
-        if not isinstance(count, int) or count < 0:
-            self.fail(where, f"count must be a non-negative integer, got {count!r}")
+        if not isinstance(ctype, int) or ctype not in _COMPONENT or not isinstance(atype, str) \
+                or atype not in _WIDTH:
+            self.fail(where, f"unknown componentType {excerpt(ctype)} or type {excerpt(atype)}")
+        if not isinstance(count, int) or isinstance(count, bool) or count < 0:
+            self.fail(where, f"count must be a non-negative integer, got {excerpt(count)}")
         dtype, width = np.dtype(_COMPONENT[ctype]), _WIDTH[atype]
         if "bufferView" in a:
             arr = self._elements(a["bufferView"], a.get("byteOffset", 0), count, dtype, width, where)
@@ -137,7 +168,7 @@ class _Gltf:
         elem = dtype.itemsize * width
         stride = stride or elem
         if not isinstance(offset, int) or offset < 0:
-            self.fail(where, f"byteOffset must be a non-negative integer, got {offset!r}")
+            self.fail(where, f"byteOffset must be a non-negative integer, got {excerpt(offset)}")
         need = offset + (stride * (count - 1) + elem if count else 0)
         if need > view_length:
             self.fail(where, f"{count} elements need {need} bytes of bufferView {view}, "
@@ -153,15 +184,15 @@ class _Gltf:
         if not isinstance(sparse, dict):
             self.fail(where, "expected an object")
         n = sparse.get("count")
-        if not isinstance(n, int) or not 1 <= n <= len(arr):
-            self.fail(where, f"count must be an integer in [1, {len(arr)}], got {n!r}")
+        if not isinstance(n, int) or isinstance(n, bool) or not 1 <= n <= len(arr):
+            self.fail(where, f"count must be an integer in [1, {len(arr)}], got {excerpt(n)}")
         indices, values = sparse.get("indices"), sparse.get("values")
         if not isinstance(indices, dict) or not isinstance(values, dict) \
                 or "bufferView" not in indices or "bufferView" not in values:
             self.fail(where, "needs indices and values, each with a bufferView")
         itype = indices.get("componentType")
-        if itype not in (5121, 5123, 5125):
-            self.fail(f"{where}.indices", f"componentType must be 5121, 5123 or 5125, got {itype!r}")
+        if not isinstance(itype, int) or itype not in (5121, 5123, 5125):
+            self.fail(f"{where}.indices", f"componentType must be 5121, 5123 or 5125, got {excerpt(itype)}")
         idx = self._elements(indices["bufferView"], indices.get("byteOffset", 0), n,
                              np.dtype(_COMPONENT[itype]), 1, f"{where}.indices").reshape(-1).astype(np.int64)
         if idx.max() >= len(arr) or (n > 1 and np.any(np.diff(idx) <= 0)):
@@ -177,15 +208,15 @@ class _Gltf:
         where = f"meshes[{mesh_index}].primitives[{k}]"
         mode = prim.get("mode", 4)
         if mode not in (4, 5, 6):
-            self.notes.add(f"point and line primitives (mode {mode}), skipped")
+            self.notes.add(f"point and line primitives (mode {excerpt(mode, quote=False)}), skipped")
             return None
         attrs = prim.get("attributes")
         if not isinstance(attrs, dict) or "POSITION" not in attrs:
             self.fail(where, "has no POSITION attribute")
-        extensions = prim.get("extensions") or {}
+        extensions = self.table(prim.get("extensions"), f"{where}.extensions")
         for name in extensions:
             if name not in SUPPORTED_EXTENSIONS:
-                self.notes.add(f"primitive extension {name}")
+                self.notes.add(f"primitive extension {excerpt(name, quote=False)}")
         if prim.get("targets"):
             self.notes.add("morph targets")
         if "KHR_draco_mesh_compression" in extensions:
@@ -238,7 +269,7 @@ class _Gltf:
         try:
             mesh = DracoPy.decode(data[offset:offset + length])
         except Exception as exc:
-            self.fail(where, f"cannot decode the Draco data ({exc})")
+            self.fail(where, f"cannot decode the Draco data ({cause(exc)})")
         faces = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), np.int64).reshape(-1, 3)
         points = np.asarray(mesh.points, np.float64).reshape(-1, 3)
         normals = getattr(mesh, "normals", None)
@@ -251,7 +282,7 @@ class _Gltf:
     # -- materials and textures -------------------------------------------------------------
     def texture(self, info, where: str, srgb: bool = True, alpha: bool = False) -> m.Texture:
         if not isinstance(info, dict):
-            self.fail(where, f"expected a textureInfo object, got {info!r}")
+            self.fail(where, f"expected a textureInfo object, got {excerpt(info)}")
         index = info.get("index")
         tex_def = self.item("textures", index, where)
         if info.get("texCoord", 0) != 0:
@@ -260,26 +291,27 @@ class _Gltf:
         if key not in self._textures:
             source = tex_def.get("source")
             if source is None:
-                for ext in (tex_def.get("extensions") or {}):
-                    self.notes.add(f"texture extension {ext}")
+                for ext in self.table(tex_def.get("extensions"), f"textures[{index}].extensions"):
+                    self.notes.add(f"texture extension {excerpt(ext, quote=False)}")
                 self.fail(f"textures[{index}]", "has no source image this loader can read")
             image = self.image(source, f"textures[{index}]", srgb, alpha)
             tex = m.Texture("bitmap", image=image, name=f"texture {index}")
             if "sampler" in tex_def:
                 sampler = self.item("samplers", tex_def["sampler"], f"textures[{index}]")
                 wrap_s, wrap_t = sampler.get("wrapS", 10497), sampler.get("wrapT", 10497)
-                tex.wrap = _WRAP.get(wrap_s, "repeat")
+                tex.wrap = _WRAP.get(wrap_s, "repeat") if isinstance(wrap_s, int) else "repeat"
                 if wrap_t != wrap_s:
                     self.notes.add("different wrap modes along s and t (wrapS used)")
                 if sampler.get("magFilter") == 9728:
                     tex.filter = "nearest"
             self._textures[key] = tex
         tex = self._textures[key]
-        transform = (info.get("extensions") or {}).get("KHR_texture_transform")
+        transform = self.table(info.get("extensions"), f"{where}.extensions").get("KHR_texture_transform")
         if isinstance(transform, dict):
             from dataclasses import replace
 
-            tex = replace(tex, uv_transform=_texture_transform(transform))
+            tex = replace(tex, uv_transform=_texture_transform(
+                transform, self, f"{where}.extensions.KHR_texture_transform"))
         return tex
 
     def image(self, index, where: str, srgb: bool, alpha: bool = False) -> np.ndarray:
@@ -305,7 +337,7 @@ class _Gltf:
         except SceneError:
             raise
         except Exception as exc:
-            self.fail(f"images[{index}]", f"cannot decode the image ({exc})")
+            self.fail(f"images[{index}]", f"cannot decode the image ({cause(exc)})")
         return (srgb_to_linear(pixels) if srgb else pixels).astype(np.float32)
 
     def material(self, index, double_sided_default=False) -> tuple[int, m.Emission | None]:
@@ -316,18 +348,18 @@ class _Gltf:
                                  alpha=(1.0, 1.0), distribution="ggx", name="glTF default")
                 self._materials[key] = (self.scene.add_material(mat), None)
             return self._materials[key]
+        mdef = self.item("materials", index, "material")
         if (index,) in self._materials:
             return self._materials[(index,)]
         where = f"materials[{index}]"
-        mdef = self.item("materials", index, where)
         name = str(mdef.get("name", f"material {index}"))
-        ext = mdef.get("extensions") or {}
+        ext = self.table(mdef.get("extensions"), f"{where}.extensions")
         for e in ext:
             if e not in SUPPORTED_EXTENSIONS:
-                self.notes.add(f"material extension {e}")
+                self.notes.add(f"material extension {excerpt(e, quote=False)}")
         if "occlusionTexture" in mdef:
             self.notes.add("occlusionTexture")
-        pbr = mdef.get("pbrMetallicRoughness") or {}
+        pbr = self.table(mdef.get("pbrMetallicRoughness"), f"{where}.pbrMetallicRoughness")
         base = _floats(pbr.get("baseColorFactor", [1, 1, 1, 1]), 4, self, where)[:3]
         metallic = _floats([pbr.get("metallicFactor", 1.0)], 1, self, where)[0]
         roughness = min(max(_floats([pbr.get("roughnessFactor", 1.0)], 1, self, where)[0], 0.0), 1.0)
@@ -349,9 +381,9 @@ class _Gltf:
 
                 tex = replace(tex, image=tex.image * np.asarray(base, np.float32))
             color = tex
-        ior = _floats([(ext.get("KHR_materials_ior") or {}).get("ior", 1.5)], 1, self, where)[0]
+        ior = _floats([self.table(ext.get("KHR_materials_ior"), where).get("ior", 1.5)], 1, self, where)[0]
         ior = ior if ior > 1.0 else 1.5
-        transmission = _floats([(ext.get("KHR_materials_transmission") or {}).get(
+        transmission = _floats([self.table(ext.get("KHR_materials_transmission"), where).get(
             "transmissionFactor", 0.0)], 1, self, where)[0]
         two_sided = bool(mdef.get("doubleSided", double_sided_default))
         mat = metallic_roughness_material(color, metallic, roughness, ior=ior, transmission=transmission,
@@ -381,10 +413,10 @@ class _Gltf:
             elif factor < (0.5 if mode == "BLEND" else mdef.get("alphaCutoff", 0.5)):
                 self.notes.add("alphaMode with a constant alpha below the cutoff (left opaque)")
         elif mode != "OPAQUE":
-            self.notes.add(f"alphaMode {mode}")
+            self.notes.add(f"alphaMode {excerpt(mode, quote=False)}")
         emission = None
         emissive = _floats(mdef.get("emissiveFactor", [0, 0, 0]), 3, self, where)
-        strength = _floats([(ext.get("KHR_materials_emissive_strength") or {}).get(
+        strength = _floats([self.table(ext.get("KHR_materials_emissive_strength"), where).get(
             "emissiveStrength", 1.0)], 1, self, where)[0]
         if "emissiveTexture" in mdef and max(emissive) > 0:
             self.notes.add("emissiveTexture (its mean scales the emissive factor)")
@@ -399,15 +431,15 @@ class _Gltf:
 def _floats(value, n: int, g: _Gltf, where: str) -> list[float]:
     if not isinstance(value, list) or len(value) != n or not all(
             isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in value):
-        g.fail(where, f"expected {n} finite numbers, got {value!r}")
+        g.fail(where, f"expected {n} finite numbers, got {excerpt(value)}")
     return [float(x) for x in value]
 
 
-def _texture_transform(t: dict) -> np.ndarray:
+def _texture_transform(t: dict, g: _Gltf, where: str) -> np.ndarray:
     """KHR_texture_transform: uv' = T(offset) R(rotation) S(scale) uv."""
-    ox, oy = (t.get("offset") or [0.0, 0.0])[:2]
-    sx, sy = (t.get("scale") or [1.0, 1.0])[:2]
-    r = float(t.get("rotation", 0.0))
+    ox, oy = _floats(t.get("offset", [0.0, 0.0]), 2, g, f"{where}.offset")
+    sx, sy = _floats(t.get("scale", [1.0, 1.0]), 2, g, f"{where}.scale")
+    r = _floats([t.get("rotation", 0.0)], 1, g, f"{where}.rotation")[0]
     c, s = math.cos(r), math.sin(r)
     T = np.array([[1, 0, ox], [0, 1, oy], [0, 0, 1]], np.float64)
     R = np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]], np.float64)
@@ -462,12 +494,14 @@ def _read_container(path: Path) -> tuple[dict, bytes | None]:
     try:
         doc = json.loads(text.decode("utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
-        raise SceneError(f"{path}: invalid glTF JSON ({exc})") from None
+        raise SceneError(f"{path}: invalid glTF JSON ({cause(exc)})") from None
     if not isinstance(doc, dict):
         raise SceneError(f"{path}: the glTF JSON is not an object")
-    version = str((doc.get("asset") or {}).get("version", ""))
+    asset = doc.get("asset")
+    version = str(asset.get("version", "")) if isinstance(asset, dict) else ""
     if not version.startswith("2"):
-        raise SceneError(f"{path}: glTF version {version or '(none)'}; only glTF 2.0 is supported")
+        raise SceneError(f"{path}: glTF version {excerpt(version, quote=False) or '(none)'}; only "
+                         f"glTF 2.0 is supported")
     return doc, bin_chunk
 
 
@@ -477,23 +511,29 @@ def load_gltf(path, **params) -> m.Scene:
     path = Path(path)
     doc, bin_chunk = _read_container(path)
     g = _Gltf(path, doc, bin_chunk, SceneFiles(path.parent))
-    required = [e for e in doc.get("extensionsRequired", []) if e not in SUPPORTED_EXTENSIONS]
+    required = [e for e in g.names(doc.get("extensionsRequired"), "extensionsRequired")
+                if e not in SUPPORTED_EXTENSIONS]
     if required:
         raise SceneError(f"{path}: requires the glTF extension{'s' if len(required) > 1 else ''} "
-                         f"{', '.join(map(str, required))}, which glrender does not support")
-    for e in doc.get("extensionsUsed", []):
+                         f"{excerpt(', '.join(required), quote=False)}, which glrender does not "
+                         f"support")
+    for e in g.names(doc.get("extensionsUsed"), "extensionsUsed"):
         if e not in SUPPORTED_EXTENSIONS:
-            g.notes.add(f"extension {e}")
+            g.notes.add(f"extension {excerpt(e, quote=False)}")
     scene = m.Scene(source=str(path))
     g.scene = scene
-    scenes = doc.get("scenes") or []
-    if scenes:
-        sc = g.item("scenes", doc.get("scene", 0), "scene")
-        roots = sc.get("nodes", [])
+    nodes = g.array(doc.get("nodes"), "nodes")
+    if g.array(doc.get("scenes"), "scenes"):
+        scene_index = doc.get("scene", 0)
+        roots = g.array(g.item("scenes", scene_index, "scene").get("nodes"), f"scenes[{scene_index}].nodes")
     else:
-        children = {c for n in doc.get("nodes", []) if isinstance(n, dict) for c in n.get("children", [])}
-        roots = [i for i in range(len(doc.get("nodes", []))) if i not in children]
-    light_defs = ((doc.get("extensions") or {}).get("KHR_lights_punctual") or {}).get("lights", [])
+        children = {c for i, n in enumerate(nodes) if isinstance(n, dict)
+                    for c in g.array(n.get("children"), f"nodes[{i}].children")
+                    if isinstance(c, int)}
+        roots = [i for i in range(len(nodes)) if i not in children]
+    lights = g.table(g.table(doc.get("extensions"), "extensions").get("KHR_lights_punctual"),
+                     "extensions.KHR_lights_punctual")
+    light_defs = g.array(lights.get("lights"), "extensions.KHR_lights_punctual.lights")
     camera = None
     stack = [(r, np.eye(4), 0, ()) for r in reversed(roots)]
     while stack:
@@ -507,7 +547,8 @@ def load_gltf(path, **params) -> m.Scene:
         M = parent @ _node_matrix(g, node, where)
         if "mesh" in node:
             mesh_def = g.item("meshes", node["mesh"], where)
-            for k, prim in enumerate(mesh_def.get("primitives", [])):
+            for k, prim in enumerate(g.array(mesh_def.get("primitives"),
+                                             f"meshes[{node['mesh']}].primitives")):
                 if not isinstance(prim, dict):
                     g.fail(f"meshes[{node['mesh']}].primitives[{k}]", "expected an object")
                 mesh = g.primitive_mesh(node["mesh"], k, prim)
@@ -520,14 +561,16 @@ def load_gltf(path, **params) -> m.Scene:
                                             name=str(node.get("name", f"node {index}"))))
         if "camera" in node and camera is None:
             camera = _camera(g, node["camera"], M, scene)
-        light_ref = ((node.get("extensions") or {}).get("KHR_lights_punctual") or {}).get("light")
+        light_ref = g.table(g.table(node.get("extensions"), f"{where}.extensions").get(
+            "KHR_lights_punctual"), f"{where}.extensions.KHR_lights_punctual").get("light")
         if light_ref is not None:
-            if not isinstance(light_ref, int) or not 0 <= light_ref < len(light_defs):
-                g.fail(where, f"refers to light {light_ref!r}, which does not exist")
+            if not isinstance(light_ref, int) or isinstance(light_ref, bool) or \
+                    not 0 <= light_ref < len(light_defs):
+                g.fail(where, f"refers to light {excerpt(light_ref)}, which does not exist")
             light = _light(g, light_defs[light_ref], M, f"KHR_lights_punctual.lights[{light_ref}]")
             if light is not None:
                 scene.lights.append(light)
-        for child in reversed(node.get("children", [])):
+        for child in reversed(g.array(node.get("children"), f"{where}.children")):
             stack.append((child, M, depth + 1, path_nodes + (index,)))
     g.notes.emit()
     if camera is not None:
@@ -544,9 +587,9 @@ _FLIP_XZ = np.diag([-1.0, 1.0, -1.0, 1.0])
 def _camera(g: _Gltf, index, M: np.ndarray, scene: m.Scene) -> m.Camera | None:
     cam = g.item("cameras", index, "camera")
     if cam.get("type") != "perspective":
-        g.notes.add(f"{cam.get('type')} cameras")
+        g.notes.add(f"{excerpt(cam.get('type'), quote=False)} cameras")
         return None
-    p = cam.get("perspective") or {}
+    p = g.table(cam.get("perspective"), f"cameras[{index}].perspective")
     yfov = _floats([p.get("yfov", 0.8)], 1, g, f"cameras[{index}].perspective.yfov")[0]
     if not 0 < yfov < math.pi:
         g.fail(f"cameras[{index}].perspective.yfov", f"expected radians in (0, pi), got {yfov}")
@@ -579,7 +622,7 @@ def _light(g: _Gltf, ldef, M: np.ndarray, where: str) -> m.Light | None:
         d = R @ np.array([0.0, 0.0, -1.0])
         return m.Light("directional", direction=tuple(d), irradiance=value, name=str(ldef.get("name", "")))
     if kind == "spot":
-        spot = ldef.get("spot") or {}
+        spot = g.table(ldef.get("spot"), f"{where}.spot")
         outer = _floats([spot.get("outerConeAngle", math.pi / 4)], 1, g, f"{where}.spot")[0]
         inner = _floats([spot.get("innerConeAngle", 0.0)], 1, g, f"{where}.spot")[0]
         W = np.eye(4)
@@ -589,5 +632,5 @@ def _light(g: _Gltf, ldef, M: np.ndarray, where: str) -> m.Light | None:
         return m.Light("spot", world_from_light=W, intensity=value, cutoff_angle=outer_deg,
                        beam_width=min(max(math.degrees(inner), 0.0), outer_deg),
                        name=str(ldef.get("name", "")))
-    g.notes.add(f"light type {kind!r}")
+    g.notes.add(f"light type {excerpt(kind)}")
     return None

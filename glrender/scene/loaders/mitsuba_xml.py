@@ -13,6 +13,7 @@ variants do (``spectrum_list_to_srgb``, with an analytic CIE 1931 fit).
 from __future__ import annotations
 
 import math
+import os
 import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
@@ -22,7 +23,8 @@ import numpy as np
 
 from ...errors import SceneError
 from .. import model as m
-from .diagnostics import Notes, SceneFiles, read_bytes, read_image_checked, warn
+from .diagnostics import Notes, cause, excerpt, read_image_checked, warn
+from .scene_files import SceneFiles, read_bytes
 
 MAX_INCLUDE_DEPTH = 16
 MAX_FILE_BYTES = 64 << 20
@@ -31,6 +33,9 @@ _OBJECT_TAGS = {"scene", "integrator", "sensor", "film", "sampler", "rfilter", "
 _PROPERTY_TAGS = {"integer", "float", "boolean", "string", "rgb", "spectrum", "point", "vector",
                   "transform"}
 _PARAM = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
+_BSDF_TYPES = {"twosided", "normalmap", "mask", "bumpmap", "diffuse", "conductor", "roughconductor",
+               "dielectric", "roughdielectric", "thindielectric", "plastic", "roughplastic", "null"}
+_TEXTURE_TYPES = {"bitmap", "checkerboard"}
 
 
 @dataclass
@@ -48,7 +53,8 @@ class Node:
         return f"{self.file}:{self.line}"
 
     def fail(self, message: str):
-        raise SceneError(f"{self.where}: <{self.tag} type=\"{self.type}\">: {message}")
+        raise SceneError(f"{self.where}: <{self.tag} type=\"{excerpt(self.type, quote=False)}\">: "
+                         f"{message}")
 
 
 # ---- XML to nodes ------------------------------------------------------------------------
@@ -73,9 +79,9 @@ def _parse_xml(path: Path) -> ET.Element:
         raise SceneError(f"{path}: refused: the XML declares entities or external references "
                          f"({type(exc).__name__})") from None
     except ET.ParseError as exc:
-        raise SceneError(f"{path}: malformed XML: {exc}") from None
+        raise SceneError(f"{path}: malformed XML: {cause(exc)}") from None
     except (ValueError, RecursionError) as exc:
-        raise SceneError(f"{path}: malformed XML: {exc}") from None
+        raise SceneError(f"{path}: malformed XML: {cause(exc)}") from None
 
 
 class _Reader:
@@ -119,7 +125,7 @@ class _Reader:
         root = _parse_xml(path)
         if root.tag != "scene":
             raise SceneError(f"{path}:{root.attrib.get('__line__', 1)}: expected <scene> at the top, "
-                             f"got <{root.tag}>")
+                             f"got <{excerpt(root.tag, quote=False)}>")
         scene = Node("scene", "scene", int(root.attrib.get("__line__", 1)), path)
         self.fill(scene, root, path, stack + (resolved,))
         return scene
@@ -139,15 +145,17 @@ class _Reader:
                 inc = self.files.resolve(a.get("filename", ""), path, line, "included file",
                                          tuple(self.search))
                 if inc.suffix.lower() != ".xml":
-                    raise SceneError(f"{path}:{line}: only XML files can be included, got {inc.name}")
+                    raise SceneError(f"{path}:{line}: only XML files can be included, got "
+                                     f"{excerpt(inc.name)}")
                 sub = self.read_file(inc, stack)
                 node.children.extend(sub.children)
                 for k, v in sub.props.items():
                     node.props.setdefault(k, v)
             elif tag == "path":
-                folder = (path.parent / a.get("value", "")).resolve()
-                if folder.is_dir():
-                    self.search.append(folder)
+                # a folder to look in: the files found there pass the same path policy
+                folder = path.parent / a.get("value", "")
+                if os.path.isdir(folder):
+                    self.search.append(folder.resolve())
             elif tag == "alias":
                 if "id" not in a or "as" not in a:
                     raise SceneError(f"{path}:{line}: <alias> needs id and as")
@@ -161,7 +169,7 @@ class _Reader:
                 self.fill(obj, child, path, stack)
                 if obj.id:
                     if obj.id in self.ids:
-                        raise SceneError(f"{path}:{line}: the id {obj.id!r} is already used "
+                        raise SceneError(f"{path}:{line}: the id {excerpt(obj.id)} is already used "
                                          f"({self.ids[obj.id].where})")
                     self.ids[obj.id] = obj
                 node.children.append((a.get("name"), obj))
@@ -184,7 +192,7 @@ class _Reader:
                         value = a["value"]
                 node.props[name] = (tag, value, line)
             else:
-                self.notes.add(f"<{tag}>", line)
+                self.notes.add(f"<{excerpt(tag, quote=False)}>", line)
 
     def transform(self, el: ET.Element, path: Path) -> np.ndarray:
         M = np.eye(4)
@@ -217,7 +225,7 @@ class _Reader:
                                   _numbers(a.get("target", ""), where, 3),
                                   _numbers(a.get("up", "0, 1, 0"), where, 3))
                 else:
-                    self.notes.add(f"<{op.tag}> in a transform", line)
+                    self.notes.add(f"<{excerpt(op.tag, quote=False)}> in a transform", line)
                     continue
             except SceneError as exc:
                 message = str(exc)
@@ -231,11 +239,11 @@ def _numbers(text: str, where: str, n: int | None = None) -> list[float]:
     try:
         values = [float(p) for p in parts]
     except ValueError:
-        raise SceneError(f"{where}: expected numbers, got {text!r}") from None
+        raise SceneError(f"{where}: expected numbers, got {excerpt(text)}") from None
     if not all(math.isfinite(v) for v in values):
-        raise SceneError(f"{where}: expected finite numbers, got {text!r}")
+        raise SceneError(f"{where}: expected finite numbers, got {excerpt(text)}")
     if n is not None and len(values) != n:
-        raise SceneError(f"{where}: expected {n} numbers, got {text!r}")
+        raise SceneError(f"{where}: expected {n} numbers, got {excerpt(text)}")
     return values
 
 
@@ -252,7 +260,7 @@ def _xyz(a: dict, default: float, where: str) -> tuple:
             return (values[0],) * 3
         if len(values) == 3:
             return tuple(values)
-        raise SceneError(f"{where}: expected 1 or 3 numbers, got {a['value']!r}")
+        raise SceneError(f"{where}: expected 1 or 3 numbers, got {excerpt(a['value'])}")
     return tuple(_number(a[k], where, k) if k in a else default for k in "xyz")
 
 
@@ -320,6 +328,7 @@ class _Builder:
         self.r, self.scene = reader, scene
         self.materials: dict[int, int] = {}      # id(Node) -> material index
         self.textures: dict[int, m.Texture] = {}
+        self.used: set[int] = set()               # id(Node) of every BSDF and texture read
         self.has_camera = False
 
     def deref(self, item, where_line=None):
@@ -327,8 +336,8 @@ class _Builder:
             _, ident, line = item
             ident = self.r.aliases.get(ident, ident)
             if ident not in self.r.ids:
-                raise SceneError(f"{self.scene.source}:{line}: <ref id=\"{ident}\"> refers to an "
-                                 f"undefined id")
+                raise SceneError(f"{self.scene.source}:{line}: <ref id=\"{excerpt(ident, quote=False)}\"> "
+                                 f"refers to an undefined id")
             return self.r.ids[ident]
         return item
 
@@ -351,11 +360,11 @@ class _Builder:
         if kind == "int":
             number = _number(value, where, name)
             if tag not in ("integer", "float") or number != int(number):
-                raise SceneError(f"{where}: {name}: expected an <integer>, got {value!r}")
+                raise SceneError(f"{where}: {name}: expected an <integer>, got {excerpt(value)}")
             return int(number)
         if kind == "bool":
             if str(value).lower() not in ("true", "false"):
-                raise SceneError(f"{where}: {name}: expected true or false, got {value!r}")
+                raise SceneError(f"{where}: {name}: expected true or false, got {excerpt(value)}")
             return str(value).lower() == "true"
         if kind == "string":
             return str(value)
@@ -386,7 +395,7 @@ class _Builder:
             if len(values) == 1:
                 values *= 3
             if len(values) != 3:
-                raise SceneError(f"{where}: {name}: expected 1 or 3 numbers, got {value!r}")
+                raise SceneError(f"{where}: {name}: expected 1 or 3 numbers, got {excerpt(value)}")
             return tuple(values)
         if tag == "spectrum":
             if ":" not in value:
@@ -399,7 +408,8 @@ class _Builder:
                 try:
                     lam, val = (float(x) for x in item.split(":"))
                 except ValueError:
-                    raise SceneError(f"{where}: {name}: expected wavelength:value pairs, got {item!r}") from None
+                    raise SceneError(f"{where}: {name}: expected wavelength:value pairs, got "
+                                     f"{excerpt(item)}") from None
                 pairs.append((lam, val))
             pairs.sort()
             if len(pairs) < 2 or not all(math.isfinite(a) and math.isfinite(b) for a, b in pairs):
@@ -422,6 +432,7 @@ class _Builder:
 
     # -- plugins ----------------------------------------------------------------------------
     def texture(self, node: Node) -> m.Texture:
+        self.used.add(id(node))
         if id(node) in self.textures:
             return self.textures[id(node)]
         M = np.eye(3)
@@ -438,7 +449,7 @@ class _Builder:
             wrap = self.prop(node, "wrap_mode", "string", "repeat")
             if filt not in ("bilinear", "nearest") or wrap not in ("repeat", "mirror", "clamp"):
                 node.fail(f"filter_type must be bilinear or nearest and wrap_mode repeat, mirror or "
-                          f"clamp; got {filt!r}, {wrap!r}")
+                          f"clamp; got {excerpt(filt)}, {excerpt(wrap)}")
             tex = m.Texture("bitmap", image=image, uv_transform=M, filter=filt, wrap=wrap,
                             name=node.id or path.name)
         elif node.type == "checkerboard":
@@ -449,7 +460,7 @@ class _Builder:
                 if isinstance(c, m.Texture):
                     node.fail("nested textures inside a checkerboard are not supported")
         else:
-            self.r.notes.add(f"texture type {node.type!r} (grey 0.5 used)", node.line)
+            self.r.notes.add(f"texture type {excerpt(node.type)} (grey 0.5 used)", node.line)
             tex = m.Texture("checkerboard", color0=(0.5,) * 3, color1=(0.5,) * 3)
         self.textures[id(node)] = tex
         return tex
@@ -460,8 +471,9 @@ class _Builder:
                                     what, tuple(self.r.search))
         try:
             return path, read_image_checked(path)
-        except Exception as exc:
-            raise SceneError(f"{node.where}: cannot read {what} {path.name!r} ({exc})") from None
+        except SceneError as exc:
+            raise SceneError(f"{node.where}: cannot read {what} {excerpt(path.name)} "
+                             f"({cause(exc, path)})") from None
 
     def alpha(self, node: Node) -> tuple[float, float]:
         if "alpha_u" in node.props or "alpha_v" in node.props:
@@ -483,6 +495,7 @@ class _Builder:
         return index
 
     def bsdf(self, node: Node, two_sided: bool = False) -> m.Material:
+        self.used.add(id(node))
         t, name = node.type, node.id or ""
         if t == "twosided":
             inner = [obj for _, obj in self.objects(node, "bsdf")]
@@ -564,8 +577,20 @@ class _Builder:
             if message.startswith(str(node.file)):
                 raise
             node.fail(message)
-        self.r.notes.add(f"bsdf type {t!r} (grey diffuse used)", node.line)
+        self.r.notes.add(f"bsdf type {excerpt(t)} (grey diffuse used)", node.line)
         return m.Material("diffuse", reflectance=(0.5,) * 3, two_sided=two_sided, name=name)
+
+    def unused(self, node: Node) -> None:
+        """Note the unknown types of a BSDF or texture that nothing refers to (and of those
+        nested in it): ignored, as the unknown ones that are used are replaced."""
+        known = _BSDF_TYPES if node.tag == "bsdf" else _TEXTURE_TYPES
+        if id(node) in self.used:
+            return
+        if node.type not in known:
+            self.r.notes.add(f"{node.tag} type {excerpt(node.type)} (not used by any shape)", node.line)
+        for _, child in node.children:
+            if isinstance(child, Node) and child.tag in ("bsdf", "texture"):
+                self.unused(child)
 
     def shape(self, node: Node) -> None:
         t = node.type
@@ -574,7 +599,7 @@ class _Builder:
             node.fail("Mitsuba's .serialized meshes are not supported (convert the mesh to PLY "
                       "or OBJ)")
         if t not in ("obj", "ply", "rectangle", "cube", "sphere", "disk"):
-            self.r.notes.add(f"shape type {t!r}", node.line)
+            self.r.notes.add(f"shape type {excerpt(t)}", node.line)
             return
         bsdfs = [obj for _, obj in self.objects(node, "bsdf")]
         if bsdfs:
@@ -585,7 +610,7 @@ class _Builder:
         emission = None
         for _, em in self.objects(node, "emitter"):
             if em.type != "area":
-                node.fail(f"a shape can only carry an area emitter, got {em.type!r}")
+                node.fail(f"a shape can only carry an area emitter, got {excerpt(em.type)}")
             radiance = self.color(em, "radiance", (1.0,) * 3, emitter=True)
             if isinstance(radiance, m.Texture):
                 em.fail("textured radiance is not supported")
@@ -600,7 +625,7 @@ class _Builder:
             path = self.r.files.resolve(self.prop(node, "filename", "string", ""), node.file, node.line,
                                         "mesh file", tuple(self.r.search))
             if path.suffix.lower() != f".{t}":
-                node.fail(f"expected a .{t} file, got {path.name}")
+                node.fail(f"expected a .{t} file, got {excerpt(path.name)}")
             mesh = read_mesh(path)
             shape.vertices, shape.triangles, shape.normals, shape.uvs = \
                 mesh.vertices, mesh.triangles, mesh.normals, mesh.uvs
@@ -660,11 +685,11 @@ class _Builder:
         elif t == "area":
             self.r.notes.add("an area emitter outside a shape", node.line)
         else:
-            self.r.notes.add(f"emitter type {t!r}", node.line)
+            self.r.notes.add(f"emitter type {excerpt(t)}", node.line)
 
     def sensor(self, node: Node) -> None:
         if node.type not in ("perspective", "thinlens"):
-            self.r.notes.add(f"sensor type {node.type!r} (a default camera is used)", node.line)
+            self.r.notes.add(f"sensor type {excerpt(node.type)} (a default camera is used)", node.line)
             return
         if self.has_camera:
             self.r.notes.add("more than one sensor (the first is used)", node.line)
@@ -699,7 +724,7 @@ class _Builder:
             kind = {"independent": "independent", "stratified": "stratified", "multijitter": "stratified",
                     "ldsampler": "sobol", "orthogonal": "sobol"}.get(sampler.type)
             if kind is None:
-                self.r.notes.add(f"sampler type {sampler.type!r} (sobol used)", sampler.line)
+                self.r.notes.add(f"sampler type {excerpt(sampler.type)} (sobol used)", sampler.line)
                 kind = "sobol"
             spp = self.prop(sampler, "sample_count", "int", 4)
             seed = self.prop(sampler, "seed", "int", 0)
@@ -709,7 +734,7 @@ class _Builder:
 
     def film(self, node: Node) -> None:
         if node.type not in ("hdrfilm", "specfilm"):
-            self.r.notes.add(f"film type {node.type!r}", node.line)
+            self.r.notes.add(f"film type {excerpt(node.type)}", node.line)
         width, height = self.prop(node, "width", "int", 768), self.prop(node, "height", "int", 576)
         film = m.Film(width=1, height=1)
         try:
@@ -729,7 +754,7 @@ class _Builder:
                 if "radius" in rf.props:
                     film.filter_radius = self.prop(rf, "radius", "float")
             else:
-                self.r.notes.add(f"rfilter type {rf.type!r} (gaussian used)", rf.line)
+                self.r.notes.add(f"rfilter type {excerpt(rf.type)} (gaussian used)", rf.line)
         if "crop_width" in node.props or "crop_offset_x" in node.props:
             self.r.notes.add("film crop windows", node.line)
         self.scene.film = film
@@ -738,15 +763,15 @@ class _Builder:
         t = node.type
         if t in ("aov", "moment", "stokes"):
             inner = [obj for _, obj in self.objects(node, "integrator")]
-            self.r.notes.add(f"integrator {t!r} (the nested integrator is used)", node.line)
+            self.r.notes.add(f"integrator {excerpt(t)} (the nested integrator is used)", node.line)
             if inner:
                 return self.integrator(inner[0])
             t = "path"
         if t == "volpath" or t == "volpathmis" or t == "prb":
-            self.r.notes.add(f"integrator {t!r} (path used)", node.line)
+            self.r.notes.add(f"integrator {excerpt(t)} (path used)", node.line)
             t = "path"
         if t not in ("path", "direct"):
-            self.r.notes.add(f"integrator {t!r} (path used)", node.line)
+            self.r.notes.add(f"integrator {excerpt(t)} (path used)", node.line)
             t = "path"
         # Mitsuba's own rules, whatever glrender's defaults: throughput roulette from rr_depth
         # (its default 5), the power heuristic, uniform light selection
@@ -801,7 +826,11 @@ def load_mitsuba(path, **params) -> m.Scene:
         elif obj.tag in ("bsdf", "texture"):
             pass                # used through <ref>
         else:
-            reader.notes.add(f"<{obj.tag} type=\"{obj.type}\">", obj.line)
+            reader.notes.add(f"<{excerpt(obj.tag, quote=False)} type=\"{excerpt(obj.type, quote=False)}\">",
+                              obj.line)
+    for _, obj in root.children:
+        if isinstance(obj, Node) and obj.tag in ("bsdf", "texture"):
+            b.unused(obj)
     unused = sorted(set(params) - reader.used)
     if unused:
         warn(f"{path}: parameters given but not used: {', '.join(unused)}")

@@ -29,9 +29,10 @@ import numpy as np
 
 from ...errors import SceneError
 from .. import model as m
-from .diagnostics import Notes, SceneFiles, read_bytes, read_image_checked, warn
+from .diagnostics import Notes, cause, excerpt, read_image_checked, warn
 from .meshes import MeshData, finish_mesh
 from .pbr import metallic_roughness_material
+from .scene_files import MissingFile, SceneFiles, read_bytes
 
 MAX_FILE_BYTES = 1 << 31
 FAST_PATH_BYTES = 1 << 16     # files above this try the bulk parser first
@@ -101,7 +102,8 @@ def _floats(parts, lo: int, hi: int, path, lineno: int, what: str) -> list[float
     try:
         return [float(x) for x in parts[1:1 + hi]]
     except ValueError:
-        raise SceneError(f"{path}:{lineno}: {what}: expected numbers, got {' '.join(parts[1:])!r}") from None
+        raise SceneError(f"{path}:{lineno}: {what}: expected numbers, got "
+                         f"{excerpt(' '.join(parts[1:]))}") from None
 
 
 def _read_text(path: Path) -> str:
@@ -356,7 +358,7 @@ def read_obj(path, files: SceneFiles | None = None, read_materials: bool = True)
             for token in parts[1:]:
                 fields = token.split("/")
                 if len(fields) > 3 or not fields[0]:
-                    raise SceneError(f"{path}:{lineno}: malformed face vertex {token!r}")
+                    raise SceneError(f"{path}:{lineno}: malformed face vertex {excerpt(token)}")
                 ids = []
                 for k, (text_id, count) in enumerate(zip(fields + ["", ""], (len(pos), len(tex), len(nrm)))):
                     if k >= len(fields) or text_id == "":
@@ -365,19 +367,21 @@ def read_obj(path, files: SceneFiles | None = None, read_materials: bool = True)
                     try:
                         i = int(text_id)
                     except ValueError:
-                        raise SceneError(f"{path}:{lineno}: malformed face vertex {token!r}") from None
+                        raise SceneError(f"{path}:{lineno}: malformed face vertex {excerpt(token)}") from None
                     if i < 0:
                         i += count
                         if i < 0:
-                            raise SceneError(f"{path}:{lineno}: relative index {text_id} reaches before "
+                            raise SceneError(f"{path}:{lineno}: relative index "
+                                             f"{excerpt(text_id, quote=False)} reaches before "
                                              f"the first {('vertex', 'texture coordinate', 'normal')[k]}")
                     elif i == 0:
-                        raise SceneError(f"{path}:{lineno}: index 0 in {token!r} (OBJ counts from 1)")
+                        raise SceneError(f"{path}:{lineno}: index 0 in {excerpt(token)} (OBJ counts from 1)")
                     else:
                         i -= 1
                         if i >= count:
                             if i >= 1 << 62:
-                                raise SceneError(f"{path}:{lineno}: index {text_id} in {token!r} "
+                                raise SceneError(f"{path}:{lineno}: index "
+                                                 f"{excerpt(text_id, quote=False)} in {excerpt(token)} "
                                                  f"is out of range")
                             late_positive = True   # checked against the final count below
                     ids.append(i)
@@ -404,7 +408,7 @@ def read_obj(path, files: SceneFiles | None = None, read_materials: bool = True)
         elif key in ("s", "vp"):
             pass
         else:
-            notes.add(f"'{key}'", lineno)
+            notes.add(excerpt(key), lineno)
     notes.emit()
     if not cv:
         raise SceneError(f"{path}: no faces found")
@@ -430,22 +434,29 @@ def read_obj(path, files: SceneFiles | None = None, read_materials: bool = True)
 
 
 def _read_materials(obj: ObjFile, mtl_files, path: Path, files: SceneFiles, read_materials: bool):
+    """The MTL files of ``mtllib`` statements: a missing one is a warning (its materials
+    become grey diffuse), one the path policy refuses an error."""
     if read_materials:
         for name, lineno in mtl_files:
-            for mtl in _mtl_names(name, path):
-                try:
-                    mtl_path = files.resolve(mtl, path, lineno, "material library")
-                except SceneError as exc:
-                    warn(f"{exc} (its materials become grey diffuse)")
-                    continue
+            for mtl_path in _mtl_paths(name, path, lineno, files):
                 obj.materials.update(read_mtl(mtl_path, files))
 
 
-def _mtl_names(rest: str, referrer: Path) -> list[str]:
+def _mtl_paths(rest: str, referrer: Path, lineno: int, files: SceneFiles) -> list[Path]:
     """``mtllib`` takes several names, but some exporters write one name with spaces."""
-    if (referrer.parent / rest).is_file():
-        return [rest]
-    return rest.split()
+    names = [rest]
+    if len(rest.split()) > 1:
+        try:
+            return [files.resolve(rest, referrer, lineno, "material library")]
+        except MissingFile:
+            names = rest.split()
+    paths = []
+    for name in names:
+        try:
+            paths.append(files.resolve(name, referrer, lineno, "material library"))
+        except MissingFile as exc:
+            warn(f"{exc} (its materials become grey diffuse)")
+    return paths
 
 
 _MAP_OPTION_ARGS = {"-blendu": 1, "-blendv": 1, "-bm": 1, "-boost": 1, "-cc": 1, "-clamp": 1,
@@ -505,7 +516,8 @@ def _texture_map(parts, path: Path, lineno: int, files: SceneFiles,
         else:
             image = read_image_checked(image_path)
     except Exception as exc:
-        raise SceneError(f"{path}:{lineno}: cannot read texture {name!r} ({exc})") from None
+        raise SceneError(f"{path}:{lineno}: cannot read texture {excerpt(name)} "
+                         f"({cause(exc, image_path)})") from None
     # options act on OBJ's uv (v up); in the flipped convention v' = 1 - v they become
     # v' -> s_v v' + (1 - s_v - o_v)
     M = np.array([[scale[0], 0.0, offset[0]], [0.0, scale[1], 1.0 - scale[1] - offset[1]],
@@ -526,10 +538,10 @@ def read_mtl(path: Path, files: SceneFiles) -> dict[str, MtlMaterial]:
             cur = out[name] = MtlMaterial(name, lineno)
             continue
         if cur is None:
-            raise SceneError(f"{path}:{lineno}: {key!r} before the first newmtl")
+            raise SceneError(f"{path}:{lineno}: {excerpt(key)} before the first newmtl")
         if key in ("Kd", "Ks", "Ke", "Tf"):
             if len(parts) > 1 and parts[1] in ("spectral", "xyz"):
-                notes.add(f"'{key} {parts[1]}'", lineno)
+                notes.add(excerpt(f"{key} {parts[1]}"), lineno)
                 continue
             values = _floats(parts, 1, 3, path, lineno, key)
             rgb = tuple(values) if len(values) == 3 else (values[0],) * 3
@@ -549,7 +561,8 @@ def read_mtl(path: Path, files: SceneFiles) -> dict[str, MtlMaterial]:
         elif key in ("Pr", "Pm"):
             value = _floats(parts, 1, 1, path, lineno, key)[0]
             if not 0.0 <= value <= 1.0:
-                raise SceneError(f"{path}:{lineno}: {key}: expected a number in [0, 1], got {parts[1]}")
+                raise SceneError(f"{path}:{lineno}: {key}: expected a number in [0, 1], got "
+                                 f"{excerpt(parts[1], quote=False)}")
             setattr(cur, key, value)
         elif key == "map_Kd":
             cur.map_Kd = _texture_map(parts, path, lineno, files)
@@ -560,7 +573,7 @@ def read_mtl(path: Path, files: SceneFiles) -> dict[str, MtlMaterial]:
         elif key == "Ka":
             pass    # ambient colour: no meaning in a physically based renderer
         else:
-            notes.add(f"'{key}'", lineno)
+            notes.add(excerpt(key), lineno)
     notes.emit()
     return out
 
@@ -612,7 +625,7 @@ def load_obj_scene(path, **params) -> m.Scene:
         if not (obj.tri_material == k).any():
             continue
         if name not in obj.materials and name != "default":
-            warn(f"{path}: material {name!r} is not defined in the material libraries; "
+            warn(f"{path}: material {excerpt(name)} is not defined in the material libraries; "
                  f"using grey diffuse")
         mat, emission = obj_material(obj.materials.get(name), name)
         mat_ids[k] = scene.add_material(mat)

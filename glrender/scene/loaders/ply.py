@@ -17,8 +17,9 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import SceneError
-from .diagnostics import read_bytes
+from .diagnostics import excerpt
 from .meshes import MeshData, finish_mesh
+from .scene_files import read_bytes
 
 _TYPES = {
     "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1",
@@ -27,12 +28,15 @@ _TYPES = {
     "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",
 }
 MAX_HEADER_BYTES = 1 << 16
+MAX_ELEMENTS = 256
 _UV_NAMES = (("u", "v"), ("s", "t"), ("texture_u", "texture_v"), ("texture_s", "texture_t"))
 
 
 class _Element:
     def __init__(self, name: str, count: int):
         self.name, self.count = name, count
+        self.shown = excerpt(name)          # for messages
+        self.names: set[str] = set()
         self.props: list[tuple] = []   # (name, dtype) or (name, count dtype, item dtype)
 
     @property
@@ -56,16 +60,18 @@ def _header(data: bytes, path: Path):
         where = f"{path}:{lineno}"
         if parts[0] == "format":
             if len(parts) < 2 or parts[1] not in ("ascii", "binary_little_endian", "binary_big_endian"):
-                raise SceneError(f"{where}: unknown PLY format {' '.join(parts[1:])!r}")
+                raise SceneError(f"{where}: unknown PLY format {excerpt(' '.join(parts[1:]))}")
             fmt = parts[1]
         elif parts[0] == "element":
             try:
                 count = int(parts[2])
             except (IndexError, ValueError):
-                raise SceneError(f"{where}: malformed element line {line.strip()!r}") from None
+                raise SceneError(f"{where}: malformed element line {excerpt(line.strip())}") from None
             if count < 0:
                 raise SceneError(f"{where}: negative element count {count}")
             elements.append(_Element(parts[1], count))
+            if len(elements) > MAX_ELEMENTS:
+                raise SceneError(f"{where}: more than {MAX_ELEMENTS} elements")
         elif parts[0] == "property":
             if not elements:
                 raise SceneError(f"{where}: property before any element")
@@ -75,9 +81,14 @@ def _header(data: bytes, path: Path):
                 else:
                     elements[-1].props.append((parts[2], _TYPES[parts[1]]))
             except (IndexError, KeyError):
-                raise SceneError(f"{where}: malformed property line {line.strip()!r}") from None
+                raise SceneError(f"{where}: malformed property line {excerpt(line.strip())}") from None
+            name = elements[-1].props[-1][0]
+            if name in elements[-1].names:
+                raise SceneError(f"{where}: property {excerpt(name)} is declared twice in element "
+                                 f"{elements[-1].shown}")
+            elements[-1].names.add(name)
         else:
-            raise SceneError(f"{where}: unexpected header line {line.strip()!r}")
+            raise SceneError(f"{where}: unexpected header line {excerpt(line.strip())}")
     if fmt is None:
         raise SceneError(f"{path}: the header has no format line")
     return fmt, elements, body_start
@@ -89,12 +100,15 @@ def read_ply(path) -> MeshData:
     fmt, elements, start = _header(data, path)
     names = [e.name for e in elements]
     if "vertex" not in names or "face" not in names:
-        raise SceneError(f"{path}: expected 'vertex' and 'face' elements, found {', '.join(names) or 'none'}")
+        raise SceneError(f"{path}: expected 'vertex' and 'face' elements, found "
+                         f"{excerpt(', '.join(names), quote=False) or 'none'}")
     if fmt == "ascii":
         values = _read_ascii(data[start:], elements, path)
     else:
         values = _read_binary(data, start, elements, path, "<" if fmt.endswith("little_endian") else ">")
     vert = values["vertex"]
+    if vert is None:
+        raise SceneError(f"{path}: vertices with list properties are not supported")
     for axis in "xyz":
         if axis not in vert:
             raise SceneError(f"{path}: vertices have no '{axis}' property")
@@ -137,11 +151,15 @@ def _index_prop(element: _Element):
 def _read_binary(data: bytes, offset: int, elements, path: Path, order: str) -> dict:
     out = {"vertex": None, "face": None}
     for el in elements:
+        if el.fixed and not el.props:
+            if el.name == "vertex":
+                out["vertex"] = {}          # (no coordinates: an error below)
+            continue
         if el.fixed:
             dtype = np.dtype([(name, order + t) for name, t in el.props])
             need = el.count * dtype.itemsize
             if offset + need > len(data):
-                raise SceneError(f"{path}: element '{el.name}' declares {el.count} records of "
+                raise SceneError(f"{path}: element {el.shown} declares {el.count} records of "
                                  f"{dtype.itemsize} bytes; the file ends {offset + need - len(data)} "
                                  f"bytes short (truncated or corrupt)")
             arr = np.frombuffer(data, dtype, el.count, offset)
@@ -152,7 +170,7 @@ def _read_binary(data: bytes, offset: int, elements, path: Path, order: str) -> 
         # an element with lists: every record holds at least its fixed part and counts
         minimum = sum(np.dtype(p[1]).itemsize for p in el.props)
         if offset + el.count * minimum > len(data):
-            raise SceneError(f"{path}: element '{el.name}' declares {el.count} records of at least "
+            raise SceneError(f"{path}: element {el.shown} declares {el.count} records of at least "
                              f"{minimum} bytes; the file has {len(data) - offset} left (truncated or corrupt)")
         faces, offset = _binary_lists(data, offset, el, path, order)
         if el.name == "face":
@@ -171,8 +189,11 @@ def _binary_lists(data: bytes, offset: int, el: _Element, path: Path, order: str
         if offset + count_t.itemsize > len(data):
             raise SceneError(f"{path}: the face data is truncated")
         n = int(np.frombuffer(data, count_t, 1, offset)[0])
-        rec = np.dtype([("n", count_t), ("i", item_t, (n,))]) if n > 0 else None
-        if rec is not None and offset + el.count * rec.itemsize <= len(data):
+        # the record size from the count the file declares, checked before numpy sees it
+        size = count_t.itemsize + n * item_t.itemsize
+        fits = n > 0 and offset + el.count * size <= len(data)
+        rec = np.dtype([("n", count_t), ("i", item_t, (n,))]) if fits else None
+        if rec is not None:
             arr = np.frombuffer(data, rec, el.count, offset)
             if np.all(arr["n"] == n):
                 return _fan_uniform(arr["i"].reshape(el.count, n)), offset + el.count * rec.itemsize
@@ -185,11 +206,11 @@ def _binary_lists(data: bytes, offset: int, el: _Element, path: Path, order: str
                 continue
             count_t, item_t = np.dtype(order + p[1]), np.dtype(order + p[2])
             if offset + count_t.itemsize > len(data):
-                raise SceneError(f"{path}: element '{el.name}' is truncated")
+                raise SceneError(f"{path}: element {el.shown} is truncated")
             n = int(np.frombuffer(data, count_t, 1, offset)[0])
             offset += count_t.itemsize
             if n < 0 or offset + n * item_t.itemsize > len(data):
-                raise SceneError(f"{path}: element '{el.name}' is truncated (a list of {n} items "
+                raise SceneError(f"{path}: element {el.shown} is truncated (a list of {n} items "
                                  f"runs past the end of the file)")
             items = np.frombuffer(data, item_t, n, offset)
             offset += n * item_t.itemsize
@@ -204,7 +225,7 @@ def _read_ascii(body: bytes, elements, path: Path) -> dict:
     pos = 0
     for el in elements:
         if el.count * max(len(el.props), 1) > len(tokens) - pos:
-            raise SceneError(f"{path}: element '{el.name}' declares {el.count} records; the file "
+            raise SceneError(f"{path}: element {el.shown} declares {el.count} records; the file "
                              f"has {len(tokens) - pos} values left (truncated or corrupt)")
         if el.fixed:
             n = len(el.props)
@@ -213,7 +234,7 @@ def _read_ascii(body: bytes, elements, path: Path) -> dict:
             try:
                 arr = np.array(block, np.float64).reshape(el.count, n)
             except ValueError:
-                raise SceneError(f"{path}: element '{el.name}' holds a value that is not a number") from None
+                raise SceneError(f"{path}: element {el.shown} holds a value that is not a number") from None
             if el.name == "vertex":
                 out["vertex"] = {name: arr[:, k] for k, (name, _) in enumerate(el.props)}
             continue
@@ -236,13 +257,13 @@ def _read_ascii(body: bytes, elements, path: Path) -> dict:
                         continue
                     n = int(tokens[pos])
                     if n < 0 or pos + 1 + n > len(tokens):
-                        raise SceneError(f"{path}: element '{el.name}' is truncated")
+                        raise SceneError(f"{path}: element {el.shown} is truncated")
                     items = np.array(tokens[pos + 1:pos + 1 + n], np.int64)
                     pos += 1 + n
                     if p is index_prop:
                         lists.append(items)
-        except (ValueError, IndexError):
-            raise SceneError(f"{path}: element '{el.name}' is malformed or truncated") from None
+        except (ValueError, IndexError, OverflowError):
+            raise SceneError(f"{path}: element {el.shown} is malformed or truncated") from None
         if el.name == "face":
             out["face"] = _fan(lists) if index_prop is not None else None
     return out

@@ -19,7 +19,8 @@ import numpy as np
 
 from ...errors import SceneError
 from .. import model as m
-from .diagnostics import SceneFiles, warn
+from .diagnostics import cause, excerpt, read_image_checked, warn
+from .scene_files import MissingFile, SceneFiles, read_bytes
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -27,6 +28,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 MAX_INCLUDE_DEPTH = 16
+MAX_FILE_BYTES = 64 << 20
 
 
 class _Ctx:
@@ -36,7 +38,7 @@ class _Ctx:
         self.textures: dict[str, m.Texture] = {}
 
     def fail(self, key: str, message: str):
-        raise SceneError(f"{self.path}: {key}: {message}")
+        raise SceneError(f"{self.path}: {excerpt(key, 120, quote=False)}: {message}")
 
     # -- typed getters ----------------------------------------------------------------
     def table(self, value, key: str) -> dict:
@@ -83,17 +85,17 @@ class _Ctx:
     def file(self, value, key: str) -> Path:
         name = self.string(value, key)
         try:
-            return self.files.resolve(name, self.path, what="file")
-        except SceneError:
-            self.fail(key, f"no such file {name!r} (relative to {self.path.parent})")
+            return self.files.resolve(name, self.path, what="file", field=excerpt(key, 120, quote=False))
+        except MissingFile:
+            self.fail(key, f"no such file {excerpt(name)} (relative to {self.path.parent})")
 
     def spectrum(self, value, key: str):
         """A colour field: a number, 3 numbers, a texture table, or the name of a texture
         of the [textures] section."""
         if isinstance(value, str):
             if value not in self.textures:
-                self.fail(key, f"no texture named {value!r} (defined: "
-                          f"{', '.join(self.textures) or 'none'})")
+                self.fail(key, f"no texture named {excerpt(value)} (defined: "
+                          f"{excerpt(', '.join(self.textures), quote=False) or 'none'})")
             return self.textures[value]
         if isinstance(value, dict):
             return _texture(self, key, value)
@@ -101,14 +103,14 @@ class _Ctx:
 
 
 def _show(value) -> str:
-    text = repr(value) if not isinstance(value, str) else f'"{value}"'
-    return text if len(text) <= 60 else text[:57] + "..."
+    """A value from the file, for a message: escaped and cut (diagnostics.excerpt)."""
+    return f'"{excerpt(value, 58, quote=False)}"' if isinstance(value, str) else excerpt(value, 60)
 
 
 def _check_keys(ctx: _Ctx, table: dict, key: str, allowed: set[str]):
     for name in table:
         if name not in allowed:
-            where = f"{key}.{name}" if key else name
+            where = f"{key}.{name}" if key else str(name)
             ctx.fail(where, f"unknown field (expected one of {', '.join(sorted(allowed))})")
 
 
@@ -141,7 +143,7 @@ def _transform(ctx: _Ctx, value, key: str) -> np.ndarray:
         elif name == "look_at":
             T = _look_at(ctx, arg, f"{k}.look_at")
         else:
-            ctx.fail(k, f"unknown transform {name!r} (expected translate, rotate, scale, matrix, look_at)")
+            ctx.fail(k, f"unknown transform {excerpt(name)} (expected translate, rotate, scale, matrix, look_at)")
         M = T @ M
     return M
 
@@ -272,14 +274,13 @@ def _texture(ctx, key: str, t) -> m.Texture:
         ou, ov = ctx.vector(t.get("uv_offset", [0.0, 0.0]), f"{key}.uv_offset", 2)
         tex.uv_transform = np.array([[su, 0, ou], [0, sv, ov], [0, 0, 1]], np.float64)
     if kind == "bitmap":
-        from .diagnostics import read_image_checked
-
         path = ctx.file(t.get("file"), f"{key}.file")
         raw = ctx.boolean(t.get("raw", False), f"{key}.raw")
         try:
             image = read_image_checked(path)
-        except Exception as exc:
-            ctx.fail(f"{key}.file", f"cannot read image {path.name!r} ({exc})")
+        except SceneError as exc:
+            ctx.fail(f"{key}.file", f"cannot read image {excerpt(path.name)} "
+                     f"({cause(exc, path)})")
         if raw and path.suffix.lower() in (".png", ".jpg", ".jpeg"):
             from ...film.io import linear_to_srgb
 
@@ -375,8 +376,8 @@ def _shape(ctx, i: int, t, materials: dict[str, int], scene: m.Scene) -> list[m.
     kind = ctx.string(t.get("type"), f"{key}.type", ("rectangle", "cube", "sphere", "disk", "mesh"))
     mat_name = ctx.string(t.get("material"), f"{key}.material")
     if mat_name not in materials:
-        ctx.fail(f"{key}.material", f"no material named {mat_name!r} (defined: "
-                 f"{', '.join(materials) or 'none'})")
+        ctx.fail(f"{key}.material", f"no material named {excerpt(mat_name)} (defined: "
+                 f"{excerpt(', '.join(materials), quote=False) or 'none'})")
     shape = m.Shape(kind=kind, material=materials[mat_name], name=str(t.get("name", f"shape {i}")))
     if "transform" in t:
         shape.world_from_object = _transform(ctx, t["transform"], f"{key}.transform")
@@ -396,7 +397,7 @@ def _shape(ctx, i: int, t, materials: dict[str, int], scene: m.Scene) -> list[m.
         path = ctx.file(t.get("file"), f"{key}.file")
         from .mesh_files import read_mesh
 
-        mesh = read_mesh(path)
+        mesh = read_mesh(path, ctx.files)
         shape.vertices, shape.triangles, shape.normals, shape.uvs = \
             mesh.vertices, mesh.triangles, mesh.normals, mesh.uvs
     if kind == "disk":
@@ -438,9 +439,12 @@ def _light(ctx, i: int, t) -> m.Light:
     if kind == "constant":
         light.radiance = ctx.color(t.get("radiance", [1, 1, 1]), f"{key}.radiance")
     if kind == "envmap":
-        from ...film.io import read_image
-
-        light.image = read_image(ctx.file(t.get("file"), f"{key}.file"))
+        path = ctx.file(t.get("file"), f"{key}.file")
+        try:
+            light.image = read_image_checked(path)
+        except SceneError as exc:
+            ctx.fail(f"{key}.file", f"cannot read image {excerpt(path.name)} "
+                     f"({cause(exc, path)})")
         light.scale = ctx.number(t.get("scale", 1.0), f"{key}.scale", 0)
         if "transform" in t:
             light.world_from_light = _transform(ctx, t["transform"], f"{key}.transform")
@@ -454,15 +458,13 @@ _PARAM = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
 
 def _read(path: Path) -> dict:
     try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SceneError(f"{path}: no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
+        text = read_bytes(path, MAX_FILE_BYTES).decode("utf-8")
+    except UnicodeDecodeError as exc:
         raise SceneError(f"{path}: cannot read ({exc})") from None
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{path}: invalid TOML: {exc}") from None
+        raise SceneError(f"{path}: invalid TOML: {cause(exc)}") from None
     except RecursionError:
         raise SceneError(f"{path}: invalid TOML: nested too deeply") from None
 
@@ -486,7 +488,7 @@ def _convert(value, default, ctx: _Ctx, name: str):
     except (ValueError, tomllib.TOMLDecodeError):
         if default is None:
             return value
-        ctx.fail(f"params.{name}", f"expected a value like {default!r}, got {value!r}")
+        ctx.fail(f"params.{name}", f"expected a value like {_show(default)}, got {_show(value)}")
     return value
 
 
@@ -630,10 +632,10 @@ def _animation(ctx: _Ctx, t, scene: m.Scene):
         name = ctx.string(e.get("shape"), f"{key}.shape")
         found = [j for j, shape in enumerate(scene.shapes) if shape.name == name]
         if len(found) != 1:
-            ctx.fail(f"{key}.shape", f"names {len(found)} shapes ({name!r}); key exactly one "
+            ctx.fail(f"{key}.shape", f"names {len(found)} shapes ({excerpt(name)}); key exactly one "
                      f"shape, by a unique name")
         if found[0] in shapes:
-            ctx.fail(f"{key}.shape", f"{name!r} is keyed twice")
+            ctx.fail(f"{key}.shape", f"{excerpt(name)} is keyed twice")
         shapes[found[0]] = track(e.get("keys"), f"{key}.keys", False)
     try:
         return Animation(fps, frames, camera, shapes)
