@@ -116,8 +116,11 @@ def cmd_sampling(args) -> int:
     from ..errors import UsageError
     from ..sampling.plots import write_sampling_plots
 
+    from ..film.io import check_writable
+
     if args.samples < 1000:
         raise UsageError(f"--samples {args.samples}: the chi-square tests need at least 1000")
+    check_writable(args.out, "sampling plots", "--out", folder=True)
     write_sampling_plots(args.out, seed=args.seed, sample_count=args.samples)
     print(Path(args.out).resolve())
     return 0
@@ -154,10 +157,12 @@ AOVs of formats without layers go beside the image as OUT-STEM.NAME.pfm (.npy fo
 The render runs in passes of a few samples per pixel. --time stops at a budget in
 whole passes. Ctrl-C (SIGINT) or SIGTERM stops after the current dispatch (well under
 a second), writes the image so far and a checkpoint, and exits with 130 or 143; a
-second Ctrl-C quits without writing. --resume continues from the checkpoint: the
-final image is bitwise the one an uninterrupted render gives (same device); options
-not given are taken from the checkpoint, and a checkpoint of another scene or other
-settings is refused."""
+second Ctrl-C quits without writing. The image so far never replaces one already at
+OUT: it goes beside it, as OUT-STEM.partial.EXT. --resume continues from the
+checkpoint: the final image is bitwise the one an uninterrupted render gives (same
+device); options not given are taken from the checkpoint, and a checkpoint of another
+scene or other settings is refused. A render without --resume does not start while
+its checkpoint is there (--overwrite replaces it)."""
 
 RENDER_EPILOG = """\
 examples:
@@ -182,7 +187,7 @@ def _add_device(parser: argparse.ArgumentParser) -> None:
 
 def _add_render(sub) -> None:
     from ..film.tonemap import TONE_CURVES
-    from .options import AOV_NAMES
+    from .options import AOV_NAMES, add_search_path
     from ..render.params import STRATEGIES
     from ..scene.model import INTEGRATORS, SAMPLER_KINDS
 
@@ -241,6 +246,7 @@ def _add_render(sub) -> None:
                         "the same pixels of a full render bitwise")
     g.add_argument("-D", dest="define", action="append", default=[], metavar="KEY=VALUE",
                    help="set the scene parameter $KEY (repeatable)")
+    add_search_path(g)
     g = p.add_argument_group("outputs")
     g.add_argument("--aov", default=None, metavar=",".join(AOV_NAMES),
                    help="also write these arbitrary output variables: first-hit albedo, "
@@ -273,6 +279,9 @@ def _add_render(sub) -> None:
                    help="write a checkpoint every SECONDS of rendering and at exit")
     g.add_argument("--resume", action="store_true",
                    help="continue from the checkpoint (bitwise the same final image)")
+    g.add_argument("--overwrite", action="store_true",
+                   help="start afresh even though the checkpoint is there, replacing it "
+                        "(without --resume or --overwrite a render refuses to start)")
     g = p.add_argument_group("cluster (pip install 'glrender[distributed]'; docs/scale-out.md)")
     g.add_argument("--workers", type=int, default=None, metavar="N",
                    help="render on a local Dask cluster of N worker processes")
@@ -335,6 +344,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     from .preview import add_preview_parser   # glrender preview (glrender/preview/)
     add_preview_parser(sub)
+    from .options import add_search_path      # every command that loads a scene file
+    add_search_path(sub.choices["preview"])
     return parser
 
 
@@ -352,7 +363,11 @@ def main(argv: list[str] | None = None) -> int:
         warnings.showwarning = _show_warning
     signals = args.signals = StopSignals().install()
     try:
-        return int(args.func(args) or 0)
+        from ..scene.loaders.scene_files import search_path
+        from .options import search_folders
+
+        with search_path(search_folders(getattr(args, "search_path", None))):
+            return int(args.func(args) or 0)
     except GlrenderError as exc:
         if debug:
             import traceback
@@ -377,6 +392,14 @@ def main(argv: list[str] | None = None) -> int:
         import os
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+    except OSError as exc:   # a file the system would not let us read or write
+        if debug:
+            import traceback
+
+            traceback.print_exc()
+        where = f"{exc.filename}: " if exc.filename is not None else ""
+        print(f"glrender: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 2
     finally:
         signals.uninstall()
 

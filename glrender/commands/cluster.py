@@ -1,6 +1,7 @@
 """``glrender render`` on a Dask cluster: ``--workers N``, ``--scheduler ADDRESS``, ``--frames A:B``.
 
-Everything is checked before the cluster starts (options, outputs, scene file); the
+Everything is checked before the cluster starts (options, every output path written to by
+a probe, the checkpoint, scene file); the
 scene is loaded here once (its errors and warnings read as in a single-process render),
 then sent to the workers. Outputs are written when the whole frame is merged, so an
 error or an interrupt leaves no partial image; Ctrl-C (or SIGTERM) writes a checkpoint
@@ -19,7 +20,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from ..errors import UsageError
-from ..distributed.merge import Partial
+from ..distributed.merge import Partial, band_layout
 
 UNSUPPORTED = (("time", "--time"), ("checkpoint_every", "--checkpoint-every"))
 
@@ -50,7 +51,7 @@ def run_distributed(args, signals) -> int:
     from .. import __version__
     from .options import (FIRST_HIT_AOVS, check_options, check_scene_file, parse_aovs,
                           parse_defines)
-    from .outputs import write_outputs, write_stats
+    from .outputs import check_checkpoint, write_outputs, write_stats
     from .photon_options import photon_options
     from ..render.job import JobOptions, UnitsJob
     from ..scene.animation import frame_range
@@ -87,6 +88,7 @@ def run_distributed(args, signals) -> int:
     outputs = _outputs(args, frames, args.output)
     first = outputs[frames[0]]
     ckpt_path = Path(args.checkpoint) if args.checkpoint else Path(str(first) + ".ckpt")
+    check_checkpoint(args, ckpt_path)
     if args.workers is None and args.scheduler is None:
         args.workers = 1
     scene = replace(scene, film=scene.film.resized(args.width, args.height))
@@ -112,6 +114,10 @@ def run_distributed(args, signals) -> int:
     unit_size, unit_from, calibration = args.unit_size, "option", None
     if unit_size is None and args.resume:
         unit_size, unit_from = units_job.checkpoint_unit_size(), "checkpoint"
+        if unit_size < MIN_UNIT_SIZE:
+            raise UsageError(f"{ckpt_path}: the checkpoint's unit size {unit_size} is below "
+                             f"{MIN_UNIT_SIZE} pixel-samples: render without --resume to start "
+                             f"afresh")
 
     # -- cluster -----------------------------------------------------------------------------
     for name in ("distributed", "distributed.nanny", "distributed.scheduler",
@@ -137,7 +143,8 @@ def run_distributed(args, signals) -> int:
                 f"{calibration['key']}, {calibration['cache']})")
         plan = cl.make_plan(width, height, settings, unit_size, frames)
         jid = cl.job_id(job, plan)
-        done = units_job.resume(jid, Partial) if args.resume else {}
+        done = units_job.resume(jid, Partial, lambda frame, band: band_layout(
+            plan, frame, band, settings.aovs)) if args.resume else {}
         n_workers = len(client.scheduler_info().get("workers", {}))
         say(f"glrender: rendering {scene_path} ({width}x{height}, {settings.sampler.spp} spp, "
             f"{len(frames) if frames != [None] else 'one'} frame{'s' if len(frames) > 1 else ''}, "

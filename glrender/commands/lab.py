@@ -57,8 +57,11 @@ def add_lab_parsers(sub, cmd_lab, cmd_compare) -> None:
 
 
 def run_lab_command(args) -> int:
+    from ..film.io import check_writable
     from ..lab import run
     from ..gl.context import default_context
+
+    check_writable(args.out, "lab report", "--out", folder=True)
 
     def progress(name):
         if not args.quiet:

@@ -131,3 +131,24 @@ def check_memory(width: int, height: int, aovs: bool, on_host_device: bool) -> N
         raise UsageError(f"a {width}x{height} image needs about {need / 2**30:.1f} GiB of memory "
                          f"for its buffers, more than the {have / 2**30:.1f} GiB available: render "
                          f"fewer pixels (--width/--height){' or without --aov' if aovs else ''}")
+
+
+def add_search_path(parser) -> None:
+    """``--search-path DIR`` (repeatable), for the commands that load scene files."""
+    parser.add_argument("--search-path", dest="search_path", action="append", default=[],
+                        metavar="DIR",
+                        help="a folder besides the scene file's own that the files a scene "
+                             "refers to (includes, meshes, textures, ...) may come from "
+                             "(repeatable); references leading anywhere else are refused")
+
+
+def search_folders(items) -> list[Path]:
+    """The ``--search-path`` folders, each checked to be one."""
+    folders = []
+    for item in items or ():
+        folder = Path(item)
+        if not folder.is_dir():
+            what = "is not a folder" if folder.exists() else "no such folder"
+            raise UsageError(f"--search-path {item}: {what}")
+        folders.append(folder)
+    return folders

@@ -1,5 +1,5 @@
 """What the render commands write besides the render itself: the image and its AOV side files,
-the denoised image's name, and the statistics file."""
+the names of the denoised and of a partial image, and the statistics file."""
 from __future__ import annotations
 
 import json
@@ -16,6 +16,31 @@ def aov_sidecar(output: Path, name: str) -> Path:
 def denoised_path(output: Path) -> Path:
     """Where --denoise writes the denoised image: OUT.denoised.EXT beside OUT.EXT."""
     return output.with_name(f"{output.stem}.denoised{output.suffix}")
+
+
+def check_checkpoint(args, path: Path) -> None:
+    """Before any work: the checkpoint ``path`` can be written (and --stats), and a render
+    without --resume does not replace one that is there unless --overwrite says so."""
+    from ..errors import UsageError
+    from ..film.io import check_writable
+    from ..render.checkpoint import describe_checkpoint
+
+    check_writable(path, "checkpoint", "--checkpoint" if args.checkpoint else None)
+    if args.stats is not None:
+        check_writable(args.stats, "statistics", "--stats")
+    overwrite = getattr(args, "overwrite", False)
+    if args.resume and overwrite:
+        raise UsageError("--resume and --overwrite: give one (continue the checkpoint, or "
+                         "replace it with a new render)")
+    if not args.resume and not overwrite and path.exists():
+        raise UsageError(f"{path}: {describe_checkpoint(path)} is there: continue it with "
+                         f"--resume, or start afresh with --overwrite (which replaces it)")
+
+
+def partial_path(output: Path) -> Path:
+    """Where a stopped render writes its image when ``output`` already holds one:
+    OUT-STEM.partial.EXT beside OUT.EXT (a partial image never replaces a complete one)."""
+    return output.with_name(f"{output.stem}.partial{output.suffix}")
 
 
 def write_outputs(film, output: Path, aov_names: list[str], args,

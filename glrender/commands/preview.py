@@ -98,16 +98,12 @@ def _check(args) -> None:
     need("--threads", args.threads, lambda v: v >= 1, "a positive number of threads")
 
 
-def _folder(path: str, option: str, create: bool) -> Path:
-    folder = Path(path)
-    if create:
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise UsageError(f"{option} {path}: cannot create the folder ({exc.strerror or exc})") from None
-    if not folder.is_dir():
-        raise UsageError(f"{option} {path}: no such folder (create it first)")
-    return folder
+def _folder(path: str, option: str, what: str) -> Path:
+    """The folder of ``option``, created if missing and probed (a file written there and
+    removed), before the window opens."""
+    from ..film.io import check_writable
+
+    return check_writable(path, what, option, folder=True)
 
 
 def scene_name(path: Path) -> str:
@@ -128,8 +124,8 @@ def run_preview(args) -> int:
     params = parse_defines(args.define)
     scene_path = Path(args.scene)
     check_scene_file(scene_path)
-    screenshots = _folder(args.screenshot_dir, "--screenshot-dir", create=True)
-    record = _folder(args.record, "--record", create=True) if args.record else None
+    screenshots = _folder(args.screenshot_dir, "--screenshot-dir", "screenshots")
+    record = _folder(args.record, "--record", "recorded frames") if args.record else None
     # the window first: without a display this fails before the scene is loaded
     name = scene_name(scene_path)
     ctx = create_window_context(512, 512, f"glrender - {name}", device=args.device,

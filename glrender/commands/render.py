@@ -1,10 +1,15 @@
 """The ``glrender render`` command: options -> scene, job (glrender.render.job), outputs, stats.
 
-Everything a user can get wrong is checked before the render starts (output format and
-folder, scene file, option values, memory), so a mistake costs no render time.
+Everything a user can get wrong is checked before the render starts (output format, every
+output path written to by a probe, scene file, option values, the checkpoint and the
+options it saved, memory), so a mistake costs no render time. A new render does not replace
+a checkpoint that is there (unless --overwrite), and a stopped render's image does not
+replace a complete one (it goes beside it, OUT-STEM.partial.EXT).
 """
 from __future__ import annotations
 
+import argparse
+import math
 import signal
 import sys
 import time
@@ -15,7 +20,7 @@ import numpy as np
 from ..errors import DeviceError, UsageError
 from .options import (AOV_NAMES, FIRST_HIT_AOVS, RESUMABLE, check_memory, check_options,
                       check_scene_file, parse_aovs, parse_crop, parse_defines)
-from .outputs import write_outputs, write_stats
+from .outputs import check_checkpoint, partial_path, write_outputs, write_stats
 
 
 def _denoise(film, job, say) -> tuple[np.ndarray, dict]:
@@ -62,10 +67,68 @@ def _strategy_depth(options: dict, scene) -> int:
     if integrator != "bdpt":
         raise UsageError(f"--strategy-images: only the bdpt integrator has strategies (s, t), "
                          f"not {integrator} (add --integrator bdpt)")
+    from ..film.io import check_writable
+
+    check_writable(folder, "strategy images", "--strategy-images", folder=True)
     if depth is None:
         max_depth = options.get("max_depth", scene.integrator.max_depth)
         depth = DEFAULT_DEPTH if max_depth < 0 else min(DEFAULT_DEPTH, max_depth)
     return int(depth)
+
+
+def _saved_kinds() -> dict:
+    """What each option a checkpoint saves holds, as the command line parses it: a type,
+    or a tuple of the choices."""
+    from ..render.params import STRATEGIES
+    from ..scene.model import INTEGRATORS, SAMPLER_KINDS
+
+    kinds: dict = dict.fromkeys(("spp", "seed", "max_depth", "width", "height", "rr_depth",
+                                 "light_samples", "split", "strategy_depth",
+                                 "photons_per_iteration", "iterations", "caustic_photons",
+                                 "knn"), int)
+    kinds.update(dict.fromkeys(("clamp", "initial_radius", "alpha", "radius"), float))
+    kinds.update(rr=str, strategy_images=str, crop=str | list, final_gather=bool,
+                 sampler=tuple(SAMPLER_KINDS), integrator=tuple(INTEGRATORS),
+                 strategy=tuple(STRATEGIES), kernel=("uniform", "cone", "epanechnikov"))
+    return kinds
+
+
+def _saved_ok(kind, value) -> bool:
+    if kind in (int, bool):
+        return type(value) is kind              # JSON's: not a bool for an int, nor 4.0
+    if kind is float:
+        return type(value) in (int, float) and math.isfinite(value)
+    if isinstance(kind, tuple):
+        return isinstance(value, str) and value in kind
+    return isinstance(value, kind)
+
+
+def _saved_options(args, ckpt, resumable) -> dict:
+    """The options ``ckpt`` saved that a resume takes back, each checked as the command
+    line checks it (its type or choices, then :func:`check_options`); one line naming the
+    checkpoint and the option refuses a value it would not take."""
+    import json
+
+    kinds = _saved_kinds()
+    fresh = "render without --resume to start afresh"
+    saved = {k: v for k, v in ckpt.meta.get("options", {}).items() if k in resumable}
+    for name, value in saved.items():
+        kind = kinds.get(name, object)
+        if not _saved_ok(kind, value):
+            want = ("one of " + ", ".join(kind) if isinstance(kind, tuple) else
+                    {int: "an integer", float: "a finite number", bool: "true",
+                     str: "text"}.get(kind, "X0,Y0,X1,Y1"))
+            shown = json.dumps(value)
+            shown = shown if len(shown) <= 40 else shown[:37] + "..."
+            raise UsageError(f"{ckpt.path}: the checkpoint's option {name} is {shown}, "
+                             f"expected {want}: {fresh}")
+    merged = argparse.Namespace(**{**vars(args), **{k: v for k, v in saved.items()
+                                                    if getattr(args, k, None) is None}})
+    try:
+        check_options(merged)
+    except UsageError as exc:
+        raise UsageError(f"{ckpt.path}: the checkpoint's option {exc}: {fresh}") from None
+    return saved
 
 
 def _resumed(args, ckpt, params: dict, aov_names: list) -> tuple[dict, dict, list]:
@@ -76,8 +139,8 @@ def _resumed(args, ckpt, params: dict, aov_names: list) -> tuple[dict, dict, lis
     resumable = RESUMABLE + PHOTON_OPTIONS
     options = {k: getattr(args, k) for k in resumable if getattr(args, k, None) is not None}
     if ckpt is not None:
-        saved = ckpt.meta.get("options", {})
-        options = {**{k: v for k, v in saved.items() if k in resumable}, **options}
+        saved = _saved_options(args, ckpt, resumable)
+        options = {**saved, **options}
         if not args.define:
             params = dict(ckpt.meta.get("params", {}))
         if args.aov is None:
@@ -136,6 +199,8 @@ def _write(args, job, film, output: Path, aov_names: list, options: dict, say) -
     if getattr(args, "denoise", False):
         with job.timings("denoise"):
             denoised, denoise_info = _denoise(film, job, say)
+    if job.stopped == "interrupted" and output.exists():
+        output = partial_path(output)       # a partial image never replaces one that is there
     with job.timings("write"):
         written = write_outputs(film, output, aov_names, args, denoised)
         if job.settings.strategy_depth:
@@ -147,10 +212,13 @@ def _write(args, job, film, output: Path, aov_names: list, options: dict, say) -
     return {"outputs": written, "denoise": denoise_info}
 
 
-def _summary(say, outcome, signals, budget: float | None, ckpt_path: Path) -> int:
+def _summary(say, outcome, signals, budget: float | None, ckpt_path: Path, output: Path) -> int:
     """The last line (what was rendered, how fast, where it went) and the exit code."""
     film, run = outcome.film, outcome.run
     written = outcome.outputs.get("outputs", [])
+    image = f"image -> {', '.join(written)}"
+    if written and written[0] != str(output):
+        image = f"partial image -> {', '.join(written)} ({output}, already there, is kept)"
     rate = outcome.samples_per_second
     speed = f"{rate / 1e6:.2f} Mpaths/s" if rate else "no new samples"
     if run.stopped == "interrupted":
@@ -159,7 +227,7 @@ def _summary(say, outcome, signals, budget: float | None, ckpt_path: Path) -> in
             say(f"glrender: stopped by {name} before the first pass: nothing written")
         else:
             say(f"glrender: stopped by {name} at {film.spp} spp ({speed}, "
-                f"{film.nonfinite_total} non-finite samples): image -> {', '.join(written)}; "
+                f"{film.nonfinite_total} non-finite samples): {image}; "
                 f"checkpoint -> {ckpt_path} (continue with --resume)")
         return 128 + signals.received
     why = f" (time budget {budget:g} s)" if run.stopped == "time" else ""
@@ -174,7 +242,7 @@ def run_render(args, signals) -> int:
     :class:`~glrender.commands.cli.StopSignals`. Returns the exit code."""
     from .. import __version__, load
     from ..drivers import create_driver
-    from ..film.io import check_folder, check_output
+    from ..film.io import check_output
     from ..render.checkpoint import load_checkpoint
     from ..render.job import Job, JobOptions, Timings
     from .cluster import run_distributed, uses_cluster
@@ -198,11 +266,7 @@ def run_render(args, signals) -> int:
     scene_path = Path(args.scene)
     check_scene_file(scene_path)
     ckpt_path = Path(args.checkpoint) if args.checkpoint else Path(str(output) + ".ckpt")
-    for path, what in ((ckpt_path, "checkpoint"), (args.stats, "statistics")):
-        if path is not None:
-            check_folder(path, what)
-            if Path(path).is_dir():
-                raise UsageError(f"{path}: is a folder, expected a file name for the {what}")
+    check_checkpoint(args, ckpt_path)
     ckpt = load_checkpoint(ckpt_path) if args.resume else None
     options, params, aov_names = _resumed(args, ckpt, params, aov_names)
 
@@ -234,4 +298,4 @@ def run_render(args, signals) -> int:
         outcome = job.run(lambda film: _write(args, job, film, output, aov_names, options, say))
     if args.stats:
         write_stats(Path(args.stats), outcome.stats)
-    return _summary(say, outcome, signals, args.time, ckpt_path)
+    return _summary(say, outcome, signals, args.time, ckpt_path, output)

@@ -46,6 +46,20 @@ def from_state(state: dict, pixels: int, aovs: bool, samples, seconds: float = 0
     return Partial(sums, squares, aov, tuple(samples), seconds, sums_splat)
 
 
+def band_layout(plan, frame, band: int, aovs: bool) -> dict | None:
+    """The arrays of band ``band`` of ``frame`` once every unit of it is merged under
+    ``plan`` (a :class:`~glrender.distributed.plan.Plan`): {"sums", "squares", "aov",
+    "splat": shape (None: absent), "samples": its range}; None when the plan has no such
+    band. What a checkpoint's band must hold to be resumed."""
+    if frame not in plan.frames or type(band) is not int or not 0 <= band < len(plan.bands):
+        return None
+    n = plan.width * plan.band_height(band)
+    return {"sums": (n, 4, 4), "squares": (n, 3, 4),
+            "aov": (n, accum.AOV_CHANNELS, 4) if aovs else None,
+            "splat": (plan.width * plan.height, 3) if plan.whole_frame else None,
+            "samples": (0, plan.spp)}
+
+
 def merge(a: Partial, b: Partial) -> Partial:
     """The partial of ``a``'s samples and the next ones, ``b``'s: exact sums."""
     if a.samples[1] != b.samples[0]:

@@ -1,5 +1,8 @@
 """Image files by extension: PNG/JPEG (tonemapped 8-bit), PFM, EXR (with layers), Radiance
-HDR, NPY. Every write is atomic: a temporary file in the same folder, then a rename."""
+HDR, NPY. Every write is atomic: a temporary file in the same folder, then a rename; a write
+that fails raises :class:`WriteError` naming the file and the system's reason, and leaves
+the old file as it was. :func:`check_writable` is the one check, before any work, that a
+file or folder can be written there."""
 from __future__ import annotations
 
 import os
@@ -60,7 +63,11 @@ def write_exr(path: Path, image: np.ndarray, aovs: dict | None = None, half: boo
             channels[f"{name}.{'Z' if name == 'depth' else 'Y'}"] = np.ascontiguousarray(arr)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     with OpenEXR.File(header, channels) as f:
-        f.write(str(path))
+        try:
+            f.write(str(path))
+        except RuntimeError as exc:     # OpenEXR's error for a failed write (a full disk, ...)
+            why = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+            raise OSError(f"OpenEXR: {why}") from exc
 
 
 def read_exr(path: Path) -> np.ndarray:
@@ -111,6 +118,15 @@ def _output_format(path: Path) -> str:
     return ext
 
 
+class WriteError(UsageError):
+    """A file could not be written (a full disk, a permission, a folder gone): the message
+    names the file and the system's reason; the file that was there is intact."""
+
+
+def _why(exc: OSError) -> str:
+    return exc.strerror or str(exc) or type(exc).__name__
+
+
 def check_folder(path, what: str = "image") -> Path:
     """The folder ``path`` goes into, or an error saying why it cannot."""
     path = Path(path)
@@ -124,9 +140,49 @@ def check_folder(path, what: str = "image") -> Path:
     return folder
 
 
+def check_writable(path, what: str, option: str | None = None, *, folder: bool = False) -> Path:
+    """Fail early, before any work, unless the ``what`` can be written at ``path``: a file
+    (its folder exists, is a folder and takes a new file; ``path`` is not a folder) or, with
+    ``folder``, a folder of files (created with its parents when missing). The probe is
+    real: a temporary file created beside it and removed again, so permissions, read-only
+    file systems, quotas and pseudo file systems (``/proc``, where ``os.access`` answers yes
+    to root) are all caught. ``option`` (``--stats``, ...) opens the message and names what
+    to change."""
+    path = Path(path)
+    name = f"{option} {path}" if option else str(path)
+    fix = f"choose another {option}" if option else "choose another path"
+    if folder:
+        if path.exists() and not path.is_dir():
+            raise UsageError(f"{name}: is a file, expected a folder for the {what}")
+        try:
+            path.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise UsageError(f"{name}: cannot create the folder for the {what} ({_why(exc)}); "
+                             f"{fix}") from None
+        where = path
+    else:
+        try:
+            where = check_folder(path, what)
+        except UsageError as exc:
+            raise UsageError(f"{option} {exc}" if option else str(exc)) from None
+        if path.is_dir():
+            raise UsageError(f"{name}: is a folder, expected a file name for the {what}")
+        if path.exists() and not path.is_file():
+            raise UsageError(f"{name}: is not a regular file (a device, a pipe or a socket), "
+                             f"expected a file name for the {what}")
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".glrender-probe-", dir=where)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise UsageError(f"{name}: cannot write to the folder {where} ({_why(exc)}); "
+                         f"{fix}") from None
+    return path
+
+
 def check_output(path) -> Path:
-    """Fail early (before a render) if ``path`` cannot be written: unknown extension, a
-    missing or read-only folder, a folder in the way."""
+    """Fail early (before a render) if the image ``path`` cannot be written: unknown
+    extension, EXR without its package, then :func:`check_writable`."""
     path = Path(path)
     ext = _output_format(path)
     if ext == ".exr":
@@ -135,28 +191,22 @@ def check_output(path) -> Path:
         except ImportError:
             raise UsageError(f"{path}: EXR output needs the OpenEXR package: "
                              f"pip install 'glrender[exr]' (or write .pfm)") from None
-    folder = check_folder(path)
-    if path.is_dir():
-        raise UsageError(f"{path}: is a folder, expected an image file name")
-    try:  # a real probe: permissions, read-only file systems, quotas
-        fd, probe = tempfile.mkstemp(prefix=".glrender-probe-", dir=folder)
-        os.close(fd)
-        os.unlink(probe)
-    except OSError as exc:
-        raise UsageError(f"{path}: cannot write to the folder {folder} "
-                         f"({exc.strerror or exc}); choose another -o") from None
-    return path
+    return check_writable(path, "image", "-o")
 
 
 def atomic_write(path, write) -> None:
     """``write(tmp)`` into a temporary file beside ``path``, then rename it over ``path``:
-    an interrupted or failed write never leaves a broken file."""
+    an interrupted or failed write never leaves a broken file, and the file that was there
+    stays as it was. A failure of the system (:class:`OSError`: a full disk, a permission,
+    a folder gone; writers turn their library's I/O errors into one) is a
+    :class:`WriteError` naming ``path``; other exceptions pass through."""
     path = Path(path)
-    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part" + path.suffix,
-                                dir=path.parent if str(path.parent) else ".")
-    os.close(fd)
-    tmp = Path(name)
+    tmp = None
     try:
+        fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part" + path.suffix,
+                                    dir=path.parent if str(path.parent) else ".")
+        os.close(fd)
+        tmp = Path(name)
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)  # as open() would create it, not mkstemp's 0600
@@ -165,10 +215,13 @@ def atomic_write(path, write) -> None:
             os.fsync(f.fileno())
         os.replace(tmp, path)
     except OSError as exc:
-        raise UsageError(f"{path}: cannot write ({exc.strerror or exc})") from None
+        raise WriteError(f"{path}: cannot write ({_why(exc)})") from exc
     finally:
-        if tmp.exists():
-            tmp.unlink()
+        if tmp is not None:
+            try:
+                tmp.unlink()
+            except OSError:
+                pass            # renamed into place, or the folder is gone
 
 
 def write_image(path, image: np.ndarray, aovs: dict | None = None, exposure: float = 0.0,

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..film.io import WriteError
 from ..film.tonemap import TONE_CURVES
 from ..render.params import STRATEGIES
 from .. import integrators
@@ -467,11 +468,17 @@ class PreviewApp:
         return paths
 
     def _record(self) -> None:
+        """The frame shown to --record's folder; a frame that cannot be written ends the
+        recording (said in one line), never the preview."""
         from PIL import Image
 
         self._recorded += 1
         path = self.options.record_dir / f"frame-{self._recorded:06d}.png"
-        Image.fromarray(self._view_image()).save(path, compress_level=1)
+        try:
+            Image.fromarray(self._view_image()).save(path, compress_level=1)
+        except OSError as exc:
+            self.say(f"recording stopped: {path}: cannot write ({exc.strerror or exc})")
+            self.options = replace(self.options, record_dir=None)
 
     # -- frame loop ------------------------------------------------------------------------
     def _draw(self) -> None:
@@ -517,7 +524,10 @@ class PreviewApp:
                 self._build()
             if self._screenshot_wanted:
                 self._screenshot_wanted = False
-                self.screenshot()
+                try:
+                    self.screenshot()
+                except WriteError as exc:     # a full disk ends no preview
+                    self.say(f"screenshot not saved: {exc}")
             rendered = False
             if not self.paused and not self.progressive.done:
                 before = self.progressive.samples_added

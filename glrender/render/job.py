@@ -9,11 +9,14 @@ the cluster worker use. From a scene and its :class:`JobOptions` it
   driver through the factory it is given (:func:`make_driver`);
 - continues a checkpoint (``resume``: refused for another scene or other settings);
 - runs :class:`RenderJob`'s passes, drawing the progress bar and calling ``on_pass``,
-  writing a checkpoint every ``checkpoint_every`` seconds;
+  writing a checkpoint every ``checkpoint_every`` seconds (one that cannot be written is
+  warned of once, and the render goes on);
 - hands the film to the caller's ``outputs`` while the driver still holds the
   accumulation, writes the last checkpoint (always after a stop) and gathers the
   statistics (``--stats``, ``film.stats``): timings, samples, samples/s, memory, and the
-  driver's own entries;
+  driver's own entries. When ``outputs`` cannot write its files (a
+  :class:`~glrender.film.io.WriteError`), the checkpoint is written all the same, so no
+  sample is lost, and the error says where they are kept;
 - renders ``--denoise``'s seen-emission pass for a film (:meth:`Job.seen_emission`): the
   job's settings at the film's sample count, its crop, its driver's scene data.
 
@@ -41,7 +44,7 @@ for every caller): the driver table sits above the drivers, which this module is
   answers True the pass in progress is undone and the run ends, the accumulation at a
   whole pass, ready for a checkpoint;
 - ``checkpoint()`` is called after the pass that ends ``checkpoint_every`` seconds after
-  the last one.
+  the last one; it returns False when it could not write one (not counted).
 """
 from __future__ import annotations
 
@@ -56,8 +59,10 @@ from typing import Any, Callable, Iterator, Protocol
 from .. import integrators
 from ..errors import UsageError
 from ..film import Film
-from .checkpoint import (Checkpoint, band_checkpoint_unit_size, check_resumable,
-                         load_band_checkpoint, save_band_checkpoint, save_checkpoint)
+from ..film.io import WriteError
+from .checkpoint import (BandLayout, Checkpoint, band_checkpoint_unit_size,
+                         load_band_checkpoint, restore_checkpoint, save_band_checkpoint,
+                         save_checkpoint)
 from .driver import RenderDriver
 from .emission_pass import render_seen_emission
 from .noise import crop_band, crop_rows, mean_relative_stderr
@@ -143,10 +148,10 @@ class RenderJob:
                 self.progress(r.spp_done, now - start)
             if self.checkpoint is not None and self.checkpoint_every is not None and \
                     now - last_checkpoint >= self.checkpoint_every and r.spp_done < self.spp_target:
-                self.checkpoint()
+                written = self.checkpoint()
                 last_checkpoint = clock()
                 result.checkpoint_seconds += last_checkpoint - now
-                result.checkpoints += 1
+                result.checkpoints += written is not False
         result.spp_done = r.spp_done
         result.seconds = clock() - start
         result.pass_seconds_max = max(result.pass_seconds, default=0.0)
@@ -253,6 +258,10 @@ class Job:
         self.timings = options.timings
         self.started = time.perf_counter() if options.started is None else options.started
         self.say = options.say or (lambda text: None)
+        #: how the last run ended ("complete", "time", "interrupted"), known before
+        #: ``outputs`` is called (a stopped run's image is partial)
+        self.stopped: str | None = None
+        self._checkpoint_failed = False
         self.settings = job_settings(scene, options)
         spec = integrators.get(self.settings.integrator.kind)
         open_ended = options.spp is None and options.seconds is not None and spec.open_ended
@@ -302,13 +311,12 @@ class Job:
         return pilot
 
     def _resume(self, ckpt: Checkpoint) -> int:
-        check_resumable(ckpt, self.driver)
-        self.driver.restore(ckpt.state)
+        spp = restore_checkpoint(ckpt, self.driver)
         if ckpt.meta.get("device") != self.ctx.renderer:
             warnings.warn(f"{ckpt.path} was rendered on {ckpt.meta.get('device')!r}, this run on "
                           f"{self.ctx.renderer!r}: the image will not be bitwise the same as one "
                           f"uninterrupted render", stacklevel=1)
-        return self.driver.spp_done
+        return spp
 
     # -- the render -------------------------------------------------------------------------
     @property
@@ -344,6 +352,19 @@ class Job:
             save_checkpoint(self.options.checkpoint, self.driver, **record,
                             spp_target=self.spp_target)
 
+    def _periodic_checkpoint(self) -> bool:
+        """A checkpoint between passes; one that cannot be written is warned of (the first
+        time, in one line) and the render goes on. Whether it was written."""
+        try:
+            self.write_checkpoint()
+            return True
+        except WriteError as exc:
+            if not self._checkpoint_failed:
+                warnings.warn(f"{exc}: the render goes on, trying again every "
+                              f"{self.options.checkpoint_every:g} s", stacklevel=1)
+            self._checkpoint_failed = True
+            return False
+
     def run(self, outputs: Callable[[Film], dict[str, Any]] | None = None) -> JobOutcome:
         """Passes until the target, the time budget or a stop; then ``outputs(film)`` (the
         caller's files; the entries it returns join the statistics) when the film has
@@ -371,7 +392,7 @@ class Job:
 
         keep = o.keep_checkpoint and o.checkpoint is not None
         job = RenderJob(r, self.target, seconds=o.seconds, stop=o.stop,
-                        checkpoint=self.write_checkpoint if keep else None,
+                        checkpoint=self._periodic_checkpoint if keep else None,
                         checkpoint_every=o.checkpoint_every, progress=after_pass)
         try:
             result = job.run()
@@ -381,6 +402,7 @@ class Job:
             if bar is not None:
                 bar.close()
         self.timings["render"] = result.render_seconds
+        self.stopped = result.stopped
 
         film = self.film()
         new_samples = (result.spp_done - result.spp_start) * r.width * r.band_height
@@ -388,7 +410,10 @@ class Job:
         outcome = JobOutcome(film, result, rate)
         if film.spp > 0:
             if outputs is not None:
-                outcome.outputs = outputs(film)
+                try:
+                    outcome.outputs = outputs(film)
+                except WriteError as exc:
+                    raise _kept(exc, o.checkpoint, self.write_checkpoint) from exc
             if o.checkpoint is not None and (result.stopped == "interrupted" or o.keep_checkpoint):
                 self.write_checkpoint()
                 outcome.checkpoint = str(o.checkpoint)
@@ -453,6 +478,19 @@ class Job:
         self.release()
 
 
+def _kept(error: WriteError, checkpoint: Path | None, write: Callable[[], None]) -> WriteError:
+    """``error`` (an output that could not be written) after keeping the render in
+    ``checkpoint`` with ``write``: the error to raise, saying where the samples are."""
+    if checkpoint is None:
+        return error
+    try:
+        write()
+    except WriteError as again:
+        return WriteError(f"{error}, nor the checkpoint ({again}): the render is lost")
+    return WriteError(f"{error}; the render is kept in {checkpoint}: when the file can be "
+                      f"written, --resume writes it")
+
+
 # -- a render whose samples run elsewhere, in units ------------------------------------------
 
 class UnitsResult(Protocol):
@@ -497,11 +535,13 @@ class UnitsJob:
         units)."""
         return band_checkpoint_unit_size(self.options.checkpoint)
 
-    def resume(self, job_id: str, make_band: Callable[..., Any]) -> dict:
+    def resume(self, job_id: str, make_band: Callable[..., Any],
+               expect: BandLayout | None = None) -> dict:
         """The finished bands of ``options.checkpoint`` (refused unless it holds ``job_id``,
-        the same scene, settings and plan), made by ``make_band(sums, squares, aov,
+        the same scene, settings and plan, and unless each band's arrays are those
+        ``expect(frame, band)`` describes), made by ``make_band(sums, squares, aov,
         samples, splat=...)``."""
-        bands = load_band_checkpoint(self.options.checkpoint, job_id, make_band)
+        bands = load_band_checkpoint(self.options.checkpoint, job_id, make_band, expect)
         self.resumed_bands = len(bands)
         return bands
 
@@ -542,7 +582,12 @@ class UnitsJob:
                 outcome.checkpoint = str(o.checkpoint)
             return outcome
         if outputs is not None:
-            outcome.outputs = outputs(units.films)
+            try:
+                outcome.outputs = outputs(units.films)
+            except WriteError as exc:     # the bands are kept for --resume
+                raise _kept(exc, o.checkpoint,
+                            lambda: self.write_checkpoint(units.bands, job_id, units.plan)) \
+                    from exc
         if o.keep_checkpoint and o.checkpoint is not None:
             self.write_checkpoint(units.bands, job_id, units.plan)
             outcome.checkpoint = str(o.checkpoint)

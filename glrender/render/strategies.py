@@ -95,6 +95,7 @@ def write(folder: Path, images: dict[tuple[int, int], tuple[np.ndarray, np.ndarr
     the render) and ``strategies.npz`` (the float images, keys w_S_T and u_S_T) in folder."""
     from PIL import Image
 
+    from ..film.io import atomic_write
     from ..film.tonemap import tonemap
 
     folder.mkdir(parents=True, exist_ok=True)
@@ -106,10 +107,15 @@ def write(folder: Path, images: dict[tuple[int, int], tuple[np.ndarray, np.ndarr
     for which, name in ((0, "weighted"), (1, "unweighted")):
         grid = pyramid({st: pair[which] for st, pair in images.items()}, depth, encode)
         path = folder / f"{name}.png"
-        Image.fromarray(grid).save(path)
+        atomic_write(path, lambda tmp, grid=grid: Image.fromarray(grid).save(tmp, format="PNG"))
         written.append(str(path))
     arrays = {f"{p}_{s}_{t}": pair[i].astype(np.float32) for (s, t), pair in images.items()
               for i, p in enumerate("wu")}
-    np.savez_compressed(folder / "strategies.npz", **arrays)
+
+    def write_arrays(tmp: Path) -> None:
+        with open(tmp, "wb") as f:
+            np.savez_compressed(f, **arrays)
+
+    atomic_write(folder / "strategies.npz", write_arrays)
     written.append(str(folder / "strategies.npz"))
     return written

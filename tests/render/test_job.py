@@ -247,3 +247,53 @@ def test09_units_bar(scene, monkeypatch):
         progress(3, 4, 2_000_000, 1.0)
     assert terminal.getvalue() == ("\r[######################........] 3/4 units  2.00 Msamples/s  "
                                    "0:01 elapsed\033[K\n")
+
+
+def test10_a_write_that_fails_keeps_the_samples(scene, gl_ctx, tmp_path, monkeypatch):
+    """A periodic checkpoint that cannot be written is warned of once and the render goes
+    on; outputs that cannot be written leave the render in the checkpoint (the error says
+    where), for the job and for a render of units alike."""
+    from glrender.film.io import WriteError
+    from glrender.render import checkpoint
+    from glrender.render import job as job_module
+
+    path, calls = tmp_path / "job.ckpt", []
+    save = checkpoint.save_checkpoint
+
+    def flaky(*args, **kwargs):         # the first two meet a full disk
+        calls.append(1)
+        if len(calls) <= 2:
+            raise WriteError(f"{path}: cannot write (No space left on device)")
+        return save(*args, **kwargs)
+
+    monkeypatch.setattr(job_module, "save_checkpoint", flaky)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        outcome = run(scene, spp=16, seed=5, settings=PASS, ctx=gl_ctx, checkpoint=path,
+                      checkpoint_every=1e-9, keep_checkpoint=True)
+    assert [str(w.message) for w in caught] == [
+        f"{path}: cannot write (No space left on device): the render goes on, trying again "
+        f"every 1e-09 s"]
+    assert outcome.stopped == "complete" and outcome.run.checkpoints == 1   # 3 tried, 1 written
+    assert load_checkpoint(path).spp_done == 16                             # and at the end
+
+    def full(film):
+        raise WriteError("out.exr: cannot write (No space left on device)")
+
+    path.unlink()
+    with Job(scene, JobOptions(spp=16, seed=5, settings=PASS, ctx=gl_ctx, checkpoint=path),
+             create_driver) as job:
+        with pytest.raises(WriteError, match=rf"^out\.exr: cannot write \(No space left on "
+                                             rf"device\); the render is kept in {path}: "):
+            job.run(full)
+    assert load_checkpoint(path).spp_done == 16
+    with Job(scene, JobOptions(spp=4, seed=5, ctx=gl_ctx), create_driver) as job:
+        with pytest.raises(WriteError, match=r"^out\.exr: cannot write \([^)]+\)$"):
+            job.run(full)                       # no checkpoint asked for: nothing to say
+
+    units_path = tmp_path / "units.ckpt"
+    units_job = UnitsJob(scene, JobOptions(spp=8, seed=4, checkpoint=units_path))
+    with pytest.raises(WriteError, match=rf"the render is kept in {units_path}"):
+        units_job.finish(units(), "j1", full)
+    (band,) = units_job.resume("j1", Band).values()
+    np.testing.assert_array_equal(band.sums, units().bands[(None, 0)].sums)
