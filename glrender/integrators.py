@@ -51,8 +51,18 @@ class IntegratorSpec:
     #: (what the preview's title shows)
     uses_strategy: bool = True
     uses_depth: bool = True
+    #: the most segments one of its paths may have, whatever the depth asks (the
+    #: integrators' kUnboundedDepthCap, bdpt's kBdptDepthCap: fixed loop bounds and vertex
+    #: arrays); None where paths are short by construction
+    depth_cap: int | None = 256
+    #: it counts the paths its cap cut short (Film.truncated, --stats truncated_paths)
+    counts_truncation: bool = False
     #: one line for --help and the docs
     summary: str = ""
+
+    def cap_binds(self, max_depth: int) -> bool:
+        """Whether the depth cap can end paths at ``max_depth`` (-1: unbounded)."""
+        return self.depth_cap is not None and (max_depth < 0 or max_depth > self.depth_cap)
 
 
 _REGISTRY: dict[str, IntegratorSpec] = {}
@@ -86,17 +96,19 @@ def running_on(driver: str) -> tuple[str, ...]:
 
 
 register(IntegratorSpec("path", "integrators/path.glsl", splitting=True, seen_emission_pass=True,
+                        counts_truncation=True,
                         summary="unidirectional path tracing with next-event estimation and MIS"))
 register(IntegratorSpec("direct", "integrators/direct.glsl",
-                        uses_depth=False,
+                        uses_depth=False, depth_cap=None,
                         summary="direct lighting only, by light, BSDF or MIS sampling"))
 register(IntegratorSpec("ao", "integrators/ao.glsl", emission_aov=False, uses_strategy=False,
-                        uses_depth=False,
+                        uses_depth=False, depth_cap=None,
                         summary="ambient occlusion: the unoccluded fraction of a cosine lobe"))
 register(IntegratorSpec("lighttrace", "integrators/lighttrace.glsl", splatting=True,
-                        emission_aov=False,
+                        emission_aov=False, counts_truncation=True,
                         summary="light tracing: paths from the lights connected to the lens"))
 register(IntegratorSpec("bdpt", "integrators/bdpt.glsl", splatting=True, strategies=True,
+                        depth_cap=16, counts_truncation=True,
                         summary="bidirectional path tracing, every strategy weighted by MIS"))
 register(IntegratorSpec("sppm", None, driver="sppm",
                         emission_aov=False, distributed=False, open_ended=False,

@@ -222,7 +222,8 @@ def _add_render(sub) -> None:
                         "the balance or power heuristic")
     g.add_argument("--max-depth", type=int, default=None, metavar="N",
                    help="path segments: 1 = emitters seen directly, 2 = direct light, "
-                        "-1 = unbounded")
+                        "-1 = unbounded, up to a cap: 256 segments, bdpt 16 (the summary line "
+                        "and --stats count the paths a cap cut short)")
     g.add_argument("--rr", default=None, metavar="throughput|fixed:Q|off",
                    help="Russian roulette of path, lighttrace and bdpt: survive with "
                         "min(throughput, 0.95) (default), with a fixed probability Q, or never "

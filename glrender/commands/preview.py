@@ -48,7 +48,8 @@ def add_preview_parser(sub) -> None:
     g.add_argument("--strategy", choices=tuple(STRATEGIES), default=None,
                    help="first direct-lighting strategy (default: the scene's; key M switches)")
     g.add_argument("--max-depth", type=int, default=None, metavar="N",
-                   help="first max depth: path segments, -1 unbounded (keys [ and ] change it)")
+                   help="first max depth: path segments, -1 unbounded up to a cap of 256, bdpt 16 "
+                        "(keys [ and ] change it)")
     g.add_argument("--sampler", choices=SAMPLER_KINDS, default=None,
                    help="sample generator (default: the scene's)")
     g.add_argument("--seed", type=int, default=None, metavar="S", help="seed (default: the scene's)")

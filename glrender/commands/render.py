@@ -199,15 +199,21 @@ def _write(args, job, film, output: Path, aov_names: list, options: dict, say) -
     if getattr(args, "denoise", False):
         with job.timings("denoise"):
             denoised, denoise_info = _denoise(film, job, say)
-    if job.stopped == "interrupted" and output.exists():
-        output = partial_path(output)       # a partial image never replaces one that is there
+    partial = job.stopped == "interrupted"
+    stale = partial_path(output)
+    if partial and output.exists():
+        output = stale                      # a partial image never replaces one that is there
     with job.timings("write"):
         written = write_outputs(film, output, aov_names, args, denoised)
+        if not partial and stale.is_file():
+            stale.unlink()                  # the complete image supersedes an earlier partial one
         if job.settings.strategy_depth:
             from ..render import strategies
 
-            written += strategies.write(Path(options["strategy_images"]),
-                                        job.driver.strategy_images(), job.settings.strategy_depth,
+            folder = Path(options["strategy_images"])
+            if partial and folder.is_dir() and any(folder.iterdir()):
+                folder = partial_path(folder)   # nor partial strategy images complete ones
+            written += strategies.write(folder, job.driver.strategy_images(), job.settings.strategy_depth,
                                         exposure=args.exposure, curve=args.tonemap, srgb=args.srgb)
     return {"outputs": written, "denoise": denoise_info}
 
@@ -227,12 +233,12 @@ def _summary(say, outcome, signals, budget: float | None, ckpt_path: Path, outpu
             say(f"glrender: stopped by {name} before the first pass: nothing written")
         else:
             say(f"glrender: stopped by {name} at {film.spp} spp ({speed}, "
-                f"{film.nonfinite_total} non-finite samples): {image}; "
+                f"{film.nonfinite_total} non-finite samples{outcome.truncation_note}): {image}; "
                 f"checkpoint -> {ckpt_path} (continue with --resume)")
         return 128 + signals.received
     why = f" (time budget {budget:g} s)" if run.stopped == "time" else ""
     say(f"glrender: {film.spp} spp in {run.render_seconds:.2f} s{why} ({speed}), "
-        f"{film.nonfinite_total} non-finite samples -> {', '.join(written)}"
+        f"{film.nonfinite_total} non-finite samples{outcome.truncation_note} -> {', '.join(written)}"
         + (f"; checkpoint -> {outcome.checkpoint}" if outcome.checkpoint else ""))
     return 0
 
@@ -268,6 +274,9 @@ def run_render(args, signals) -> int:
     ckpt_path = Path(args.checkpoint) if args.checkpoint else Path(str(output) + ".ckpt")
     check_checkpoint(args, ckpt_path)
     ckpt = load_checkpoint(ckpt_path) if args.resume else None
+    from .photon_options import OPTIONS as PHOTON_OPTIONS
+
+    given = {name for name in PHOTON_OPTIONS if getattr(args, name, None) is not None}
     options, params, aov_names = _resumed(args, ckpt, params, aov_names)
 
     # -- scene, device, job ----------------------------------------------------------------
@@ -276,7 +285,15 @@ def run_render(args, signals) -> int:
     scene.film = scene.film.resized(options.get("width"), options.get("height"))
     # --denoise guides the denoiser with the albedo and normal AOVs
     first_hit = any(n in FIRST_HIT_AOVS for n in aov_names) or getattr(args, "denoise", False)
-    settings = _settings(args, options, scene, first_hit)
+    try:
+        settings = _settings(args, options, scene, first_hit)
+    except UsageError as exc:
+        # a photon option the checkpoint saved (not given again) is named as the checkpoint's
+        saved = ckpt.meta.get("options", {}) if ckpt is not None else {}
+        if ckpt is None or not any(n in saved and n not in given for n in PHOTON_OPTIONS):
+            raise
+        raise UsageError(f"{ckpt.path}: the checkpoint's option {exc}: "
+                         f"render without --resume to start afresh") from None
     ctx = _context(args, timings)
     check_memory(scene.film.width, scene.film.height, first_hit, ctx.is_llvmpipe)
     job_options = JobOptions(

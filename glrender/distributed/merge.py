@@ -116,4 +116,5 @@ class FrameImage:
             image = (self.splat.astype(np.float64) / (SPLAT_SCALE * paths)).astype(np.float32)
             mean += image.reshape(h, w, 3)
         return Film(mean=mean, m2=m2.reshape(h, w, 3), count=count.reshape(h, w),
-                    nonfinite=dropped.reshape(h, w), spp=spp, aovs=aovs, sampler=sampler)
+                    nonfinite=dropped.reshape(h, w), spp=spp, aovs=aovs, sampler=sampler,
+                    truncated=accum.truncated(self.sums).reshape(h, w))

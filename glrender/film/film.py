@@ -18,6 +18,9 @@ class Film:
     - ``m2``: (H, W, 3) the sum of squared deviations from the mean per pixel.
     - ``count``: (H, W) finite samples per pixel; ``nonfinite``: dropped samples
       (non-finite, or with a component of 2^30 or more: glrender.render.accum).
+    - ``truncated``: (H, W) paths a depth cap cut short where they would have gone on
+      (max depth -1: every integrator stops at 256 segments, bdpt at 16; bdpt counts its
+      camera and light subpaths); None where the integrator does not count them.
     - ``variance``: per-*sample* variance m2 / (count - 1). Under stratified or
       Sobol' sampling samples are not independent and this overstates the error of
       the mean (it is an upper bound); tests take error bars from independent seeds.
@@ -34,6 +37,7 @@ class Film:
     spp: int
     aovs: dict[str, np.ndarray] = field(default_factory=dict)
     loop_counts: np.ndarray | None = None
+    truncated: np.ndarray | None = None
     sampler: str = "independent"
     stats: dict[str, Any] = field(default_factory=dict)
 
@@ -63,6 +67,11 @@ class Film:
         """Samples dropped in the whole image because they were NaN or infinite."""
         return int(self.nonfinite.sum())
 
+    @property
+    def truncated_total(self) -> int:
+        """Paths a depth cap cut short in the whole image (0 where not counted)."""
+        return 0 if self.truncated is None else int(self.truncated.astype(np.int64).sum())
+
     def aov(self, name: str) -> np.ndarray:
         """An arbitrary output by name: ``"variance"`` (always), and with ``aovs=True``
         ``"albedo"`` (H, W, 3, first-hit reflectance), ``"normal"`` (H, W, 3, world-space
@@ -84,11 +93,12 @@ class Film:
         as a new film, every array and AOV cut alike."""
         rows, cols = slice(y0, y1), slice(x0, x1)
         loops = None if self.loop_counts is None else self.loop_counts[rows, cols].copy()
+        truncated = None if self.truncated is None else self.truncated[rows, cols].copy()
         return replace(self, mean=self.mean[rows, cols].copy(), m2=self.m2[rows, cols].copy(),
                        count=self.count[rows, cols].copy(),
                        nonfinite=self.nonfinite[rows, cols].copy(),
                        aovs={k: v[rows, cols].copy() for k, v in self.aovs.items()},
-                       loop_counts=loops)
+                       loop_counts=loops, truncated=truncated)
 
     def save(self, path: str | os.PathLike[str], *, exposure: float = 0.0, curve: str = "clamp",
              srgb: bool = True, half: bool = False) -> None:

@@ -7,7 +7,7 @@ disjoint sample ranges (passes, dispatches, units of a distributed render) add u
 the same bits as one accumulation of all of them: :func:`add` is that addition.
 
 Per pixel (``Renderer.state()``): ``sums`` (N, 4, 4) words — the sums of r, g, b and
-(finite count, dropped count, 0, 0); ``squares`` (N, 3, 4) — the sums of squares;
+(finite count, dropped count, truncated paths, 0); ``squares`` (N, 3, 4) — the sums of squares;
 ``aov`` (N, 10, 4) — the sums of albedo rgb, normal xyz, depth and seen emission rgb
 (AOV renders; :func:`aov_images` names them).
 :func:`statistics` turns them into the mean, M2 and counts a :class:`Film` holds, in
@@ -83,6 +83,12 @@ def aov_images(means: np.ndarray, height: int, width: int) -> dict[str, np.ndarr
     a = np.asarray(means, np.float32).reshape(height, width, AOV_CHANNELS)
     return {"albedo": a[..., 0:3].copy(), "normal": a[..., 3:6].copy(),
             "depth": a[..., 6].copy(), "emission": a[..., 7:10].copy()}
+
+
+def truncated(sums: np.ndarray) -> np.ndarray:
+    """(N,) uint32: per pixel, the paths a depth cap cut short (the counts word's third
+    entry; see ``integrators/integrator_common.glsl``, g_truncated_paths)."""
+    return np.asarray(sums, np.uint32).reshape(-1, 4, 4)[:, 3, 2].copy()
 
 
 def statistics(sums: np.ndarray, squares: np.ndarray, aov: np.ndarray | None = None):

@@ -168,8 +168,8 @@ class Accumulation:
         ``loop_counts``, the debug counters as its loop counts."""
         h = self.band_height
         aov = self._words(self.aov) if self.aovs else None
-        mean, m2, count, dropped, aov_means = accum.statistics(
-            self._words(self.sums), self._words(self.squares), aov)
+        sums = self._words(self.sums)
+        mean, m2, count, dropped, aov_means = accum.statistics(sums, self._words(self.squares), aov)
         mean = mean.reshape(h, self.width, 3)
         aovs = {}
         if aov_means is not None:
@@ -179,6 +179,7 @@ class Accumulation:
             mean += self.splat_image(paths)[first:first + h]
         return Film(mean=mean, m2=m2.reshape(h, self.width, 3), count=count.reshape(h, self.width),
                     nonfinite=dropped.reshape(h, self.width), spp=spp, aovs=aovs,
+                    truncated=accum.truncated(sums).reshape(h, self.width),
                     loop_counts=self.debug_counters() if loop_counts else None, sampler=sampler)
 
     def debug_counters(self) -> np.ndarray:

@@ -242,10 +242,19 @@ class JobOutcome:
     checkpoint: str | None = None           # the checkpoint written at the end
     outputs: dict[str, Any] = field(default_factory=dict)   # what ``outputs`` returned
     stats: dict[str, Any] | None = None
+    #: the depth cap (segments) that could end this render's paths: max depth unbounded or
+    #: beyond the integrator's cap (IntegratorSpec.depth_cap); None otherwise
+    depth_cap: int | None = None
 
     @property
     def stopped(self) -> str:
         return self.run.stopped
+
+    @property
+    def truncation_note(self) -> str:
+        """'' or ', N paths cut at the C-segment cap' for the summary line."""
+        n = self.film.truncated_total
+        return f", {n} paths cut at the {self.depth_cap}-segment cap" if n and self.depth_cap else ""
 
 
 class Job:
@@ -407,7 +416,9 @@ class Job:
         film = self.film()
         new_samples = (result.spp_done - result.spp_start) * r.width * r.band_height
         rate = new_samples / result.render_seconds if result.render_seconds > 0 else None
-        outcome = JobOutcome(film, result, rate)
+        spec = integrators.get(self.settings.integrator.kind)
+        cap = spec.depth_cap if spec.cap_binds(self.settings.integrator.max_depth) else None
+        outcome = JobOutcome(film, result, rate, depth_cap=cap)
         if film.spp > 0:
             if outputs is not None:
                 try:
@@ -457,6 +468,7 @@ class Job:
                 "planned_spp": plan.spp, "predicted_error": plan.predicted_error()},
             "samples_per_second": outcome.samples_per_second,
             "nonfinite_samples": film.nonfinite_total,
+            "depth_cap": outcome.depth_cap, "truncated_paths": film.truncated_total,
             "mean_relative_stderr": mean_relative_stderr(film),
             "stderr_is_upper_bound": s.sampler.kind != "independent",
             "mean": [float(v) for v in film.mean.reshape(-1, 3).mean(0)],
@@ -609,6 +621,7 @@ class UnitsJob:
             "samples_per_second": outcome.samples_per_second,
             "bytes_to_client": units.bytes_to_client,
             "nonfinite_samples": int(sum(f.nonfinite_total for f in units.films.values())),
+            "truncated_paths": int(sum(f.truncated_total for f in units.films.values())),
         }
         stats.update(outcome.outputs)
         return stats

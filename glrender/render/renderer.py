@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, replace
-from typing import Any, Callable
+from typing import Any, Callable, cast
 
 import numpy as np
 
@@ -37,7 +37,7 @@ from . import strategies
 from .accumulation import SPLAT_SCALE, Accumulation
 from .params import shader_defines
 
-BDPT_DEPTH_CAP = 16     # kBdptDepthCap: bdpt's longest path (integrators/bdpt_vertex.glsl)
+BDPT_DEPTH_CAP = cast(int, integrators.get("bdpt").depth_cap)   # kBdptDepthCap (integrators/bdpt_vertex.glsl)
 
 
 @dataclass

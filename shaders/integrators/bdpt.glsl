@@ -110,6 +110,7 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
         n += 1;
         // from here the pending vertices are prev (index n - 2) and v (n - 1)
         bool stop = n >= max_vertices;
+        if (stop && kBdptDepthCapped) g_truncated_paths += 1u;   // cut by kBdptDepthCap
         BsdfSample bs;
         vec3 wi = vec3(0.0);
         if (!stop) {

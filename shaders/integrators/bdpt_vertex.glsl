@@ -20,6 +20,7 @@
 // unbounded depth is capped there) need max_depth + 1 camera vertices.
 const int kBdptDepthCap = 16;
 const int kBdptMaxSegments = (kMaxDepth < 0 || kMaxDepth > kBdptDepthCap) ? kBdptDepthCap : kMaxDepth;
+const bool kBdptDepthCapped = kMaxDepth < 0 || kMaxDepth > kBdptDepthCap;   // the cap may cut paths
 const int kBdptVertices = kBdptMaxSegments + 1;
 
 const uint kVertexCamera = 0u;

@@ -17,6 +17,11 @@
 // paths long before (survival <= 0.95 per bounce: 0.95^256 < 2e-6).
 const int kUnboundedDepthCap = 256;
 
+// Paths this invocation cut short at a depth cap (kUnboundedDepthCap when max_depth is
+// unbounded; bdpt's kBdptDepthCap) where they would have gone on. The render kernel adds
+// it to the pixel's counts word, which --stats reports as truncated_paths.
+uint g_truncated_paths = 0u;
+
 // First-hit arbitrary outputs, averaged over the pixel's samples by the kernel.
 // `emission` is the part of the sample's radiance emitted by what the camera ray
 // sees (an area light or the environment, through delta surfaces for the path

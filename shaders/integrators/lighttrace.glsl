@@ -68,7 +68,10 @@ void light_trace(inout SamplerState s) {
                     splat_film(c.film, beta * f * c.importance);
             }
         }
-        if (segments + 2 > max_segments) break;
+        if (segments + 2 > max_segments) {
+            if (kMaxDepth < 0) g_truncated_paths += 1u;   // the cap, not the scene's depth
+            break;
+        }
 
         // Sample the adjoint BSDF to continue the path
         BsdfSample bs = bsdf_sample(b, wo, u_choice.y, u_bsdf, true);

@@ -133,7 +133,10 @@ bool path_segment(inout PathState st, inout SamplerState s) {
     }
 
     // Possibly stop: the next segment would exceed the maximum depth
-    if (depth + 1 >= max_segments) return false;
+    if (depth + 1 >= max_segments) {
+        if (kMaxDepth < 0) g_truncated_paths += 1u;   // the cap, not the scene's depth
+        return false;
+    }
 
     Bsdf b = bsdf_from_material(hit.material, hit.uv);
     // only the emission seen directly or through delta surfaces

@@ -7,7 +7,7 @@
 // pixel's samples of this pass (integrators/pixel.glsl) into exact fixed-point sums
 // (film/accum.glsl), so the image is bitwise the same however the samples are split into
 // passes, dispatches or sample ranges added elsewhere. Non-finite samples are dropped and
-// counted. The accumulation may hold a band of tile rows only (a unit of a distributed
+// counted, and so are paths a depth cap cut short (counts.z). The accumulation may hold a band of tile rows only (a unit of a distributed
 // render).
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -34,6 +34,7 @@ void main() {
         acc.sq[c] = accum_sq[3u * idx + c];
     }
     acc.counts = accum_sum[4u * idx + 3u].xy;
+    uint truncated = accum_sum[4u * idx + 3u].z;   // paths cut short by a depth cap
     for (int c = 0; c < int(kAovChannels); ++c) acc.aov[c] = kAovs ? accum_aov[kAovChannels * idx + c] : uvec4(0u);
     accumulator_clear(acc);
     integrator_pixel(pixel, pixel_hash, u_params.samples.x, u_params.samples.y, acc);
@@ -42,7 +43,7 @@ void main() {
         accum_sum[4u * idx + c] = acc.sum[c];
         accum_sq[3u * idx + c] = acc.sq[c];
     }
-    accum_sum[4u * idx + 3u] = uvec4(acc.counts, 0u, 0u);
+    accum_sum[4u * idx + 3u] = uvec4(acc.counts, truncated + g_truncated_paths, 0u);
     if (kAovs) {
         for (int c = 0; c < int(kAovChannels); ++c) accum_aov[kAovChannels * idx + c] = acc.aov[c];
     }

@@ -118,6 +118,8 @@ SETUPS = {
                                        settings={"width": -8, "height": 8}),
     "option": lambda made, tmp: crafted(made, tmp / "c.ckpt", options={"spp": "many"}),
     "option range": lambda made, tmp: crafted(made, tmp / "c.ckpt", options={"max_depth": 0}),
+    "photon option range": lambda made, tmp: crafted(made, tmp / "c.ckpt",
+                                                      options={"integrator": "photon", "knn": 100}),
     "record": lambda made, tmp: crafted(made, tmp / "c.ckpt", params=["roughness"]),
     "band checkpoint": lambda made, tmp: band_checkpoint(made, tmp / "out.npy.ckpt"),
     "not an image": lambda made, tmp: (tmp / "n.png").write_text("hello"),
@@ -204,6 +206,9 @@ ROWS = {
     "saved option range": Row(RESUME,
                               r"c\.ckpt: the checkpoint's option --max-depth 0: expected -1",
                               setup=("option range",), absent=["out.npy"]),
+    "saved photon option range": Row(RESUME, r"c\.ckpt: the checkpoint's option --knn 100: "
+                                     r"expected an integer in \[1, 64\]",
+                                     setup=("photon option range",), absent=["out.npy"]),
     "record": Row(RESUME,
                   r"c\.ckpt: the checkpoint's params is \[\"roughness\"\], expected an object",
                   setup=("record",), absent=["out.npy"]),
@@ -395,3 +400,30 @@ def test08_overwrite_starts_afresh(tmp_path, made):
     assert r.returncode == 0, r.stderr
     assert load_checkpoint(ckpt).spp_done == 3
     assert "--overwrite" in glrender("render", "--help").stdout
+
+
+def test09_a_complete_image_removes_an_earlier_partial_one(tmp_path):
+    out, stale = tmp_path / "out.npy", tmp_path / "out.partial.npy"
+    np.save(stale, np.zeros((8, 8, 3), np.float32))
+    r = glrender("render", CORNELL, "-o", out, *SMALL, "--quiet")
+    assert r.returncode == 0, r.stderr
+    assert out.is_file() and not stale.exists()
+
+
+def test10_partial_strategy_images_never_replace_complete_ones(tmp_path):
+    out, folder = tmp_path / "out.npy", tmp_path / "strategies"
+    size = ["--width", 16, "--height", 16, "--integrator", "bdpt", "--strategy-images", folder,
+            "--strategy-depth", 3]
+    first = glrender("render", CORNELL, "-o", out, *size, "--spp", 2, "--quiet")
+    assert first.returncode == 0, first.stderr
+    complete = {p.name: p.read_bytes() for p in folder.iterdir()}
+    assert "strategies.npz" in complete
+    (tmp_path / "out.npy.ckpt").unlink(missing_ok=True)
+    running = Running("render", CORNELL, "-o", out, *size, "--spp", 1 << 20, "--seed", 9)
+    running.wait_for("glrender: rendering")
+    time.sleep(0.5)
+    running.proc.send_signal(signal.SIGINT)
+    assert running.wait() == 130, running.stderr
+    assert {p.name: p.read_bytes() for p in folder.iterdir()} == complete
+    partial = tmp_path / "strategies.partial"
+    assert sorted(p.name for p in partial.iterdir()) == sorted(complete)

@@ -48,7 +48,8 @@ def test01_bdpt_matches_path(gl_ctx, all_tests, name, heuristic):
     extra = all_tests - block_tests(scene, block)
     bd = renders(scene, "bdpt", spp_bdpt, SEEDS_BDPT, strategy=heuristic)
     if name == "enclosure":
-        # closed form: L = Le / (1 - albedo) = 2 (bdpt stops at 16 segments: 2 (1 - 2^-16))
+        # closed form: L = Le / (1 - albedo) = 2 (bdpt stops at 16 segments: 2 (1 - 2^-16);
+        # tests/render/test_depth_cap.py counts the subpaths its cap cuts)
         ref, ref_se = np.full(bd.shape[1:], 2.0), None
     else:
         paths = renders(scene, "path", spp_path, SEEDS_PATH)

@@ -189,7 +189,7 @@ class Plan:
 def units(complete=True, bands=1):
     band = Band(np.arange(32, dtype=np.uint32).reshape(2, 4, 4),
                 np.ones((2, 3, 4), np.uint32), None, (0, 8))
-    return SimpleNamespace(films={None: SimpleNamespace(nonfinite_total=2)} if complete else {},
+    return SimpleNamespace(films={None: SimpleNamespace(nonfinite_total=2, truncated_total=0)} if complete else {},
                            bands={(None, b): band for b in range(bands)}, complete=complete,
                            seconds=0.5, unit_seconds=0.8, bytes_to_client=100, plan=Plan())
 
@@ -224,12 +224,13 @@ def test08_units_job_checkpoints_and_stats(scene, tmp_path):
     assert list(stats) == ["glrender", "outputs", "cluster", "workers", "width", "height",
                            "integrator", "sampler", "seed", "spp", "frames", "resumed_bands",
                            "seconds", "samples_per_second", "bytes_to_client",
-                           "nonfinite_samples"]
+                           "nonfinite_samples", "truncated_paths"]
     assert stats["outputs"] == ["1 film"] and stats["resumed_bands"] == 1
     assert (stats["width"], stats["spp"], stats["seed"], stats["frames"]) == (16, 8, 4, None)
     assert list(stats["seconds"]) == ["render", "units", "total"]
     assert stats["samples_per_second"] == Plan.pixel_samples / 0.5
     assert stats["nonfinite_samples"] == 2 and stats["bytes_to_client"] == 100
+    assert stats["truncated_paths"] == 0
     assert job(stats=False).finish(units(), "j1").stats is None
 
 
