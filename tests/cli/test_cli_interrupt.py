@@ -15,14 +15,22 @@ from glrender.render.checkpoint import load_checkpoint
 
 # 12.6 M paths: 1.6-3 s on 2 llvmpipe threads, long enough to interrupt in the middle
 ARGS = ["--width", 64, "--height", 48, "--spp", 4096, "--seed", 11]
+# The splatting integrators (their light paths land anywhere on the film, in 64-bit
+# fixed-point sums): ~3 s each at these sizes, so the signal comes in the middle too
+SPLATTING = {"bdpt": ["--width", 32, "--height", 24, "--spp", 1024, "--seed", 11, "--integrator", "bdpt"],
+             "lighttrace": ["--width", 32, "--height", 24, "--spp", 2048, "--seed", 11,
+                            "--integrator", "lighttrace"]}
+RUNS = {"path": ARGS, **SPLATTING}
 
 
-@pytest.fixture(scope="module")
-def uninterrupted(tmp_path_factory):
+@pytest.fixture(scope="module", params=list(RUNS))
+def uninterrupted(request, tmp_path_factory):
+    """(integrator, its arguments, the image of the whole render)."""
+    args = RUNS[request.param]
     out = tmp_path_factory.mktemp("ref") / "ref.exr"
-    r = glrender("render", CORNELL, "-o", out, *ARGS, "--quiet")
+    r = glrender("render", CORNELL, "-o", out, *args, "--quiet")
     assert r.returncode == 0, r.stderr
-    return read_exr_layers(out)
+    return request.param, args, read_exr_layers(out)
 
 
 def interrupt(tmp_path, signum, *extra, after=0.4, args=ARGS):
@@ -45,7 +53,11 @@ def interrupt(tmp_path, signum, *extra, after=0.4, args=ARGS):
 
 @pytest.mark.slow
 def test01_sigint_then_resume_equals_uninterrupted(tmp_path, uninterrupted):
-    run, rc, seconds, stats, out = interrupt(tmp_path, signal.SIGINT)
+    """Every integrator that renders in the kernel's passes: the path tracer, and bdpt and
+    lighttrace, whose splats the checkpoint keeps too."""
+    integrator, args, reference = uninterrupted
+    spp = args[args.index("--spp") + 1]
+    run, rc, seconds, stats, out = interrupt(tmp_path, signal.SIGINT, args=args)
     assert rc == 130, run.stderr
     # the current dispatch (~0.1 s) finishes, then image + checkpoint are written
     assert seconds < 1.0
@@ -53,19 +65,21 @@ def test01_sigint_then_resume_equals_uninterrupted(tmp_path, uninterrupted):
     assert f"stopped by SIGINT at {stats['spp']} spp" in run.stderr
     assert str(out) in run.stderr and str(ckpt) in run.stderr and "--resume" in run.stderr
     assert stats["stopped"] == "interrupted" and stats["signal"] == "SIGINT"
-    assert 0 < stats["spp"] < 4096 and stats["spp"] % stats["samples_per_pass"] == 0
+    assert stats["integrator"] == integrator
+    assert 0 < stats["spp"] < spp and stats["spp"] % stats["samples_per_pass"] == 0
     assert load_checkpoint(ckpt).spp_done == stats["spp"]
     partial = read_exr_layers(out)["RGB"]
-    assert partial.max() > 0.1 and not np.array_equal(partial, uninterrupted["RGB"])
+    assert partial.max() > 0.1 and not np.array_equal(partial, reference["RGB"])
 
     resumed = glrender("render", CORNELL, "-o", out, "--resume", "--stats", tmp_path / "r.json")
     assert resumed.returncode == 0, resumed.stderr
     assert f"resuming {ckpt} at {stats['spp']} spp" in resumed.stderr
     rstats = json.loads((tmp_path / "r.json").read_text())
-    assert rstats["resumed_from_spp"] == stats["spp"] and rstats["spp"] == 4096
+    assert rstats["resumed_from_spp"] == stats["spp"] and rstats["spp"] == spp
+    assert rstats["integrator"] == integrator
     final = read_exr_layers(out)
-    np.testing.assert_array_equal(final["RGB"], uninterrupted["RGB"])
-    np.testing.assert_array_equal(final["variance"], uninterrupted["variance"])
+    np.testing.assert_array_equal(final["RGB"], reference["RGB"])
+    np.testing.assert_array_equal(final["variance"], reference["variance"])
 
 
 def test02_sigterm_with_periodic_checkpoints(tmp_path):
