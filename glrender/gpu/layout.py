@@ -27,8 +27,12 @@ RENDER_PARAMS = np.dtype([
     ("scene_sphere", *_V4),
     ("ao_distance", "<f4"),
     ("sample_clamp", "<f4"),
-    ("unused", "<f4", 2),
+    ("camera_projection", "<u4"),   # CAMERA_PROJECTIONS
+    ("unused", "<f4"),
 ])
+
+# RenderParams.camera_projection: kCamera* in camera/camera.glsl
+CAMERA_PROJECTIONS = {"perspective": 0, "orthographic": 1}
 
 MATERIAL = np.dtype([
     ("color0", "<f4", 3),

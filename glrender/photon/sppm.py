@@ -39,7 +39,7 @@ from ..gpu import codegen
 from ..gpu import bindings
 from ..render import accum
 from ..render.accumulation import SPLAT_SCALE, TILE
-from ..render.renderer import (RenderSettings, Renderer, camera_tangents,
+from ..render.renderer import (RenderSettings, Renderer, pixel_footprint,
                                settings_from_scene)
 from ..scene import model as m
 from . import layout as pl
@@ -141,8 +141,7 @@ class SppmRenderer:
         center, radius = self.base.packed.sphere_bounds
         cam = self.scene.camera.world_from_camera
         dist = max(float(np.linalg.norm(np.asarray(center) - cam[:3, 3])), 1e-3 * radius)
-        _, ty = camera_tangents(self.scene.camera, self.width, self.height)
-        return DEFAULT_RADIUS_PIXELS * 2 * ty * dist / self.height
+        return DEFAULT_RADIUS_PIXELS * pixel_footprint(self.scene.camera, self.width, self.height, dist)
 
     def _compile(self) -> None:
         p = self.base.packed

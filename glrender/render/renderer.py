@@ -108,20 +108,50 @@ def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: i
                           strategy_depth=int(strategy_depth))
 
 
-def camera_tangents(camera: m.Camera, width: int, height: int) -> tuple[float, float]:
-    """tan of the half field of view along x and y (Mitsuba's fov_axis rules)."""
-    t = math.tan(math.radians(camera.fov) / 2)
-    axis = camera.fov_axis
+def _half_extents(half: float, fov_axis: str, width: int, height: int) -> tuple[float, float]:
+    """Half the film's extent along x and y from ``half`` along ``fov_axis`` (Mitsuba's
+    rules: the other axis follows the film's aspect ratio)."""
+    axis = fov_axis
     if axis == "smaller":
         axis = "x" if width <= height else "y"
     elif axis == "larger":
         axis = "x" if width >= height else "y"
     if axis == "x":
-        return t, t * height / width
+        return half, half * height / width
     if axis == "y":
-        return t * width / height, t
+        return half * width / height, half
     diag = math.hypot(width, height)
-    return t * width / diag, t * height / diag
+    return half * width / diag, half * height / diag
+
+
+def camera_tangents(camera: m.Camera, width: int, height: int) -> tuple[float, float]:
+    """tan of the half field of view along x and y (Mitsuba's fov_axis rules) of a
+    perspective camera."""
+    return _half_extents(math.tan(math.radians(camera.fov) / 2), camera.fov_axis, width, height)
+
+
+def camera_screen(camera: m.Camera, width: int, height: int) -> tuple[float, float]:
+    """Half the film's extent along camera x and y: on the plane z = 1 for a perspective
+    camera (the tangents of the half angles), in camera-space units for an orthographic one."""
+    if camera.orthographic:
+        return _half_extents(camera.half_extent, camera.fov_axis, width, height)
+    return camera_tangents(camera, width, height)
+
+
+def pixel_footprint(camera: m.Camera, width: int, height: int, distance: float) -> float:
+    """The height of one pixel's footprint at ``distance`` along the camera's axis."""
+    _, sy = camera_screen(camera, width, height)
+    return 2 * sy * (1.0 if camera.orthographic else distance) / height
+
+
+def check_camera(camera: m.Camera, integrator: str) -> None:
+    """Refuses a camera the integrator cannot render through: light paths that connect to
+    the lens need one that a point of the scene can see, which an orthographic camera (one
+    direction for every ray) is not."""
+    if camera.orthographic and integrators.get(integrator).lens_connections:
+        raise UsageError(f"camera: an orthographic camera cannot be rendered by {integrator}, whose "
+                         f"light paths connect to a lens point (every orthographic ray has one "
+                         f"direction); use {', '.join(n for n in integrators.names() if not integrators.get(n).lens_connections)}")
 
 
 class Renderer:
@@ -144,6 +174,7 @@ class Renderer:
                              f"({', '.join(sorted(overrides))}), not both")
         self.scene = scene
         self.settings = settings or settings_from_scene(scene, **overrides)
+        check_camera(scene.camera, self.settings.integrator.kind)
         if share is not None:
             share = getattr(share, "base", share)     # SPPM's renderer holds the scene in .base
             shared_ctx: Context = share.ctx
@@ -395,6 +426,7 @@ class Renderer:
         scene's film and cannot change here."""
         if not isinstance(camera, m.Camera):
             raise UsageError(f"set_camera: expected a glrender Camera, got {type(camera).__name__}")
+        check_camera(camera, self.settings.integrator.kind)
         self.scene.camera = camera
         self.reset()
 
@@ -416,9 +448,10 @@ class Renderer:
         close = cam.world_from_camera_close if cam.world_from_camera_close is not None \
             else cam.world_from_camera
         prm["camera_close"] = close.T
-        tx, ty = camera_tangents(cam, self.width, self.height)
-        prm["camera_screen"] = (tx, ty, cam.aperture_radius, cam.focus_distance)
+        sx, sy = camera_screen(cam, self.width, self.height)
+        prm["camera_screen"] = (sx, sy, cam.aperture_radius, cam.focus_distance)
         prm["camera_clip"][:2] = (cam.near_clip, cam.far_clip)
+        prm["camera_projection"] = layout.CAMERA_PROJECTIONS[cam.kind]
         sh = scene.shutter
         prm["shutter"][:3] = (sh.open, sh.close, 1.0 if sh.function == "tent" else 0.0)
         prm["filter_params"] = (film.radius, film.gaussian_stddev, film.mitchell_b, film.mitchell_c)

@@ -282,31 +282,53 @@ class Light:
 
 
 # -- camera, film, settings ------------------------------------------------------------------------
+CAMERA_KINDS = ("perspective", "orthographic")
+
+
 @dataclass
 class Camera:
-    """Perspective camera; a thin lens when ``aperture_radius`` > 0.
+    """A perspective camera (a thin lens when ``aperture_radius`` > 0) or an orthographic one.
 
     ``world_from_camera``: 4x4, camera space looks along +z with +y up and +x to the image's
-    left (build it with :func:`look_at`); ``fov`` in degrees along ``fov_axis``;
-    ``aperture_radius``, ``focus_distance``, ``near_clip``, ``far_clip`` in scene units.
+    left (build it with :func:`look_at`); ``aperture_radius``, ``focus_distance``,
+    ``near_clip``, ``far_clip`` in scene units.
     ``world_from_camera_close``: the transform at the shutter's close (motion blur).
+    ``kind``: ``perspective`` sees ``fov`` degrees along ``fov_axis``; ``orthographic`` sends
+    every ray along camera +z from the plane z = 0, and sees ``half_extent`` camera-space
+    units on either side of the axis along ``fov_axis`` (glTF's xmag / ymag; Mitsuba's
+    orthographic sensor is ``half_extent`` 1 along x, its to_world scale applied by
+    ``world_from_camera``). The other axis follows the film's aspect ratio, as the field of
+    view's does. An orthographic camera has no lens (``aperture_radius`` must be 0).
     """
 
     world_from_camera: np.ndarray = field(default_factory=lambda: look_at((0, 0, 5), (0, 0, 0), (0, 1, 0)))
     world_from_camera_close: Optional[np.ndarray] = None
-    fov: float = 40.0                 # degrees, along fov_axis
+    fov: float = 40.0                 # degrees, along fov_axis (perspective)
     fov_axis: str = "x"               # x | y | smaller | larger | diagonal
     aperture_radius: float = 0.0
     focus_distance: float = 1.0
     near_clip: float = 1e-2
     far_clip: float = 1e4
+    kind: str = "perspective"         # perspective | orthographic
+    half_extent: float = 1.0          # camera-space units, along fov_axis (orthographic)
 
     def __post_init__(self) -> None:
+        if self.kind not in CAMERA_KINDS:
+            raise SceneError(f"camera.kind: expected perspective or orthographic, got {self.kind!r}")
         if self.fov_axis not in ("x", "y", "smaller", "larger", "diagonal"):
             raise SceneError(f"camera.fov_axis: expected x, y, smaller, larger or diagonal, "
                              f"got {self.fov_axis!r}")
         if not 0.0 < self.fov < 180.0:
             raise SceneError(f"camera.fov: expected degrees in (0, 180), got {self.fov}")
+        if not 0.0 < self.half_extent < math.inf:
+            raise SceneError(f"camera.half_extent: expected a positive length, got {self.half_extent}")
+        if self.kind == "orthographic" and self.aperture_radius > 0:
+            raise SceneError(f"camera: an orthographic camera has no lens, but aperture_radius is "
+                             f"{self.aperture_radius} (give 0, or a perspective camera for depth of field)")
+
+    @property
+    def orthographic(self) -> bool:
+        return self.kind == "orthographic"
 
 
 FILTERS = ("box", "tent", "gaussian", "mitchell")

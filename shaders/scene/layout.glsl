@@ -11,7 +11,8 @@
 layout(std140, binding = UBO_RENDER_PARAMS) uniform RenderParams {
     mat4 camera_open;      // world_from_camera at shutter open (Mitsuba camera frame: +z forward, +x left)
     mat4 camera_close;     // world_from_camera at shutter close
-    vec4 camera_screen;    // x: tan(fov_x / 2), y: tan(fov_y / 2), z: lens radius, w: focus distance
+    vec4 camera_screen;    // x, y: half the film's extent along camera x, y (perspective: on the plane z = 1, tan(fov / 2);
+                           // orthographic: in camera units), z: lens radius, w: focus distance
     vec4 camera_clip;      // x: near clip, y: far clip
     vec4 shutter;          // x: open, y: close, z: shutter function (0 box, 1 tent)
     vec4 filter_params;    // x: radius in pixels, y: gaussian stddev, z: Mitchell B, w: Mitchell C
@@ -22,7 +23,8 @@ layout(std140, binding = UBO_RENDER_PARAMS) uniform RenderParams {
     vec4 scene_sphere;     // bounding sphere of the scene: centre xyz, radius w
     float ao_distance;     // the ambient-occlusion integrator's reach
     float sample_clamp;    // a sample's largest RGB component is scaled down to it (0: off)
-    vec2 unused;
+    uint camera_projection;  // kCameraPerspective or kCameraOrthographic (camera/camera.glsl)
+    float unused;
 } u_params;
 
 // ---- storage blocks (std430) ---------------------------------------------------

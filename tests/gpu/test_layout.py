@@ -49,7 +49,8 @@ void main() {
     put(k, u_params.camera_clip); put(k, u_params.shutter); put(k, u_params.filter_params);
     put(k, u_params.image); put(k, u_params.samples); put(k, u_params.dispatch); put(k, u_params.counts);
     put(k, u_params.scene_sphere);
-    put(k, vec4(u_params.ao_distance, u_params.sample_clamp, u_params.unused));
+    put(k, uvec4(floatBitsToUint(u_params.ao_distance), floatBitsToUint(u_params.sample_clamp),
+                 u_params.camera_projection, floatBitsToUint(u_params.unused)));
 }
 """
 

@@ -1,6 +1,11 @@
 """The camera's integrals one by one: the shutter's time density (camera/camera.glsl
-sample_shutter_time) run on the device against its closed form, and a motion-blurred
-edge against the shutter function's cumulative distribution."""
+sample_shutter_time) run on the device against its closed form, a motion-blurred edge
+against the shutter function's cumulative distribution, and the orthographic projection's
+pixel footprints against the exact coverage of a quad (and refused where light paths must
+reach a lens)."""
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -10,6 +15,9 @@ from glrender.render.params import shader_defines
 from glrender.scene import model as m
 from glrender.testing.chi2 import ChiSquareTest, LineDomain
 from glrender.testing.harness import run_glsl
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "cli"))
+from cli_run import glrender as glrender_cli, one_error_line  # noqa: E402
 
 
 def shutter_pdf(function, t):
@@ -99,3 +107,68 @@ def test02_motion_blurred_edge_is_the_shutter_cdf(gl_ctx, function):
     want = shutter_cdf(function, (2.0 - x) / 4.0).mean(axis=1)
     p = np.array([binomtest(int(k), n, min(max(q, 1e-12), 1 - 1e-12)).pvalue for k, q in zip(lit, want)])
     assert p.min() >= sidak_alpha(1e-3, w), (lit / n, want, p)
+
+
+def orthographic_quad(width=40, height=20):
+    """An orthographic camera 4 units above an emitting rectangle (radiance 1) of 1.46 x 0.74
+    whose edges fall inside pixels: the view is 4 x 2 units (half_extent 2 along x), so a
+    pixel is 0.1 units wide."""
+    scene = m.Scene(film=m.Film(width=width, height=height, filter="box"), source="<orthographic quad>",
+                    integrator=m.Integrator(max_depth=1))
+    scene.camera = m.Camera(world_from_camera=m.look_at((0, 0, 4), (0, 0, 0), (0, 1, 0)),
+                            kind="orthographic", half_extent=2.0, fov_axis="x")
+    black = scene.add_material(m.Material("diffuse", reflectance=(0, 0, 0)))
+    scene.shapes.append(m.Shape("rectangle", material=black, emission=m.Emission((1.0,) * 3),
+                                world_from_object=m.translate((0.012, -0.031, 0)) @ np.diag([0.73, 0.37, 1, 1])))
+    return scene
+
+
+def test03_orthographic_pixels_see_the_quad_s_exact_coverage(gl_ctx):
+    """A pixel of an orthographic camera sees a fixed 0.1 x 0.1 square of the plane, so its
+    value is the fraction of that square the quad covers (the camera's +x is the world's -x
+    here). Each sample is 0 or 1: an exact binomial test per pixel, Sidak over the 800
+    pixels (alpha 1e-3). At 1024 spp an edge moved by a tenth of a pixel (a 1% error of the
+    view's size at the quad's edges) fails its row or column of pixels (sigma <= 0.016)."""
+    from scipy.stats import binomtest
+
+    from glrender.testing.stats import sidak_alpha
+
+    scene = orthographic_quad()
+    n = 1024
+    lit = glrender.render(scene, spp=n, seed=5, sampler="independent").mean[..., 0] * n
+    np.testing.assert_array_equal(lit, np.round(lit))
+    # pixel (row j, column i) covers world x in -2 + 0.1 [i, i + 1] (the image's left, camera
+    # +x, is world -x looking down), y in 1 - 0.1 [j + 1, j]
+    xs = -2.0 + 0.1 * np.arange(41)
+    ys = 1.0 - 0.1 * np.arange(21)
+    x0, x1, y0, y1 = 0.012 - 0.73, 0.012 + 0.73, -0.031 - 0.37, -0.031 + 0.37
+    cover_x = np.clip(np.minimum(xs[1:], x1) - np.maximum(xs[:-1], x0), 0, None) / 0.1
+    cover_y = np.clip(np.minimum(ys[:-1], y1) - np.maximum(ys[1:], y0), 0, None) / 0.1
+    want = np.round(cover_y[:, None] * cover_x[None, :], 9)      # 1 - 1e-16 is 1
+    # 16 x 9 pixels touched, every edge inside a pixel: the border's 46 pixels are partly covered
+    assert (want > 0).sum() == 16 * 9 and ((want > 0) & (want < 1)).sum() == 2 * (16 + 9) - 4
+    p = np.array([binomtest(int(k), n, min(max(q, 1e-12), 1 - 1e-12)).pvalue
+                  for k, q in zip(lit.ravel(), want.ravel())])
+    assert p.min() >= sidak_alpha(1e-3, p.size), (np.argwhere(p < sidak_alpha(1e-3, p.size)), lit / n)
+
+
+@pytest.mark.parametrize("integrator", ["bdpt", "lighttrace"])
+def test04_light_paths_cannot_reach_an_orthographic_camera(gl_ctx, integrator):
+    """bdpt's and lighttrace's connections to the lens need a camera a scene point can see
+    from many directions: refused in one line that names the camera and the integrator."""
+    with pytest.raises(glrender.UsageError) as info:
+        glrender.render(orthographic_quad(), spp=1, integrator=integrator)
+    line = str(info.value)
+    assert line.startswith("camera: an orthographic camera") and integrator in line and "\n" not in line
+
+
+def test05_command_line_refuses_in_one_line(tmp_path):
+    """The scene file's orthographic camera and --integrator lighttrace: exit 2, one line,
+    before any kernel is compiled."""
+    scene = tmp_path / "o.toml"
+    scene.write_text('[camera]\nkind = "orthographic"\nhalf_extent = 2\n[materials.black]\ntype = "diffuse"\n'
+                     'reflectance = [0, 0, 0]\n[[shapes]]\ntype = "rectangle"\nmaterial = "black"\n'
+                     'emission = { radiance = [1, 1, 1] }\n')
+    line = one_error_line(glrender_cli("render", scene, "-o", tmp_path / "o.pfm", "--integrator", "lighttrace"))
+    assert "camera: an orthographic camera cannot be rendered by lighttrace" in line
+    assert not (tmp_path / "o.pfm").exists()

@@ -2,7 +2,7 @@
 
 Read: the node hierarchy (matrix or TRS), meshes instanced by several nodes (the
 arrays are shared), triangle / strip / fan primitives with POSITION, NORMAL and
-TEXCOORD_0, metallic-roughness materials, perspective cameras and
+TEXCOORD_0, metallic-roughness materials, perspective and orthographic cameras and
 KHR_lights_punctual. Materials map onto the renderer's BSDFs by the metallic-roughness
 rule of :mod:`.pbr` (docs/scene-format.md), with KHR_materials_transmission and
 KHR_materials_ior (default 1.5); emissive factor times KHR_materials_emissive_strength
@@ -586,9 +586,16 @@ _FLIP_XZ = np.diag([-1.0, 1.0, -1.0, 1.0])
 
 def _camera(g: _Gltf, index, M: np.ndarray, scene: m.Scene) -> m.Camera | None:
     cam = g.item("cameras", index, "camera")
-    if cam.get("type") != "perspective":
-        g.notes.add(f"{excerpt(cam.get('type'), quote=False)} cameras")
+    kind = cam.get("type")
+    if kind not in ("perspective", "orthographic"):
+        g.notes.add(f"{excerpt(kind, quote=False)} cameras")
         return None
+    # remove scale from the node transform, keep rotation and position
+    R = M[:3, :3] / np.maximum(np.linalg.norm(M[:3, :3], axis=0), 1e-30)
+    W = np.eye(4)
+    W[:3, :3], W[:3, 3] = R, M[:3, 3]
+    if kind == "orthographic":
+        return _orthographic_camera(g, f"cameras[{index}].orthographic", cam, W, scene)
     p = g.table(cam.get("perspective"), f"cameras[{index}].perspective")
     yfov = _floats([p.get("yfov", 0.8)], 1, g, f"cameras[{index}].perspective.yfov")[0]
     if not 0 < yfov < math.pi:
@@ -596,16 +603,38 @@ def _camera(g: _Gltf, index, M: np.ndarray, scene: m.Scene) -> m.Camera | None:
     aspect = p.get("aspectRatio")
     if isinstance(aspect, (int, float)) and not isinstance(aspect, bool) and 0.05 < aspect < 20:
         scene.film.width = max(1, int(round(scene.film.height * aspect)))
-    # remove scale from the node transform, keep rotation and position
-    R = M[:3, :3] / np.maximum(np.linalg.norm(M[:3, :3], axis=0), 1e-30)
-    W = np.eye(4)
-    W[:3, :3], W[:3, 3] = R, M[:3, 3]
     znear = p.get("znear", 0.01)
     zfar = p.get("zfar", 1e4)
     near = float(znear) if isinstance(znear, (int, float)) and znear > 0 else 0.01
     far = float(zfar) if isinstance(zfar, (int, float)) and zfar > near else 1e4
     return m.Camera(world_from_camera=W @ _FLIP_XZ, fov=math.degrees(yfov), fov_axis="y",
                     near_clip=near, far_clip=far)
+
+
+def _orthographic_camera(g: _Gltf, where: str, cam: dict, W: np.ndarray, scene: m.Scene) -> m.Camera:
+    """xmag and ymag are the view's half width and half height (the glTF projection maps
+    [-xmag, xmag] x [-ymag, ymag] to the viewport): ymag is the camera's half extent along
+    y, and the film's width follows xmag / ymag as it follows a perspective aspectRatio.
+    All four properties are required by the glTF specification."""
+    o = g.table(cam.get("orthographic"), where)
+    values = {}
+    for key in ("xmag", "ymag", "znear", "zfar"):
+        if key not in o:
+            g.fail(f"{where}.{key}", "missing (an orthographic camera needs xmag, ymag, znear and zfar)")
+        values[key] = _floats([o[key]], 1, g, f"{where}.{key}")[0]
+    for key in ("xmag", "ymag"):
+        if not values[key] > 0:
+            g.fail(f"{where}.{key}", f"expected a positive half width, got {values[key]}")
+    if not values["znear"] >= 0:
+        g.fail(f"{where}.znear", f"expected a distance >= 0, got {values['znear']}")
+    if not values["zfar"] > values["znear"]:
+        g.fail(f"{where}.zfar", f"expected a distance above znear ({values['znear']}), got {values['zfar']}")
+    aspect = values["xmag"] / values["ymag"]
+    if not 0.05 < aspect < 20:
+        g.fail(f"{where}.xmag", f"xmag / ymag = {aspect:.4g}: expected an aspect ratio in (0.05, 20)")
+    scene.film.width = max(1, int(round(scene.film.height * aspect)))
+    return m.Camera(world_from_camera=W @ _FLIP_XZ, kind="orthographic", half_extent=values["ymag"],
+                    fov_axis="y", near_clip=values["znear"], far_clip=values["zfar"])
 
 
 def _light(g: _Gltf, ldef, M: np.ndarray, where: str) -> m.Light | None:

@@ -688,7 +688,7 @@ class _Builder:
             self.r.notes.add(f"emitter type {excerpt(t)}", node.line)
 
     def sensor(self, node: Node) -> None:
-        if node.type not in ("perspective", "thinlens"):
+        if node.type not in ("perspective", "thinlens", "orthographic"):
             self.r.notes.add(f"sensor type {excerpt(node.type)} (a default camera is used)", node.line)
             return
         if self.has_camera:
@@ -698,6 +698,16 @@ class _Builder:
         M = self.prop(node, "to_world", "transform", np.eye(4))
         cam.world_from_camera = M
         try:
+            if node.type == "orthographic":
+                # Mitsuba's orthographic sensor sees [-1, 1] along camera x (the film's aspect
+                # ratio sets y) and takes its size from to_world's scale, which
+                # world_from_camera keeps
+                cam.kind, cam.half_extent = "orthographic", 1.0
+                for key in ("fov", "focal_length", "fov_axis", "aperture_radius", "focus_distance"):
+                    if key in node.props:
+                        node.fail(f"an orthographic sensor has no {key} (its to_world scale sets the view's size)")
+                if abs(np.linalg.det(M[:3, :3])) < 1e-12:
+                    node.fail("to_world: an orthographic sensor needs an invertible transform (its scale is the view's size)")
             cam.fov = self.prop(node, "fov", "float", 39.3077)
             cam.fov_axis = self.prop(node, "fov_axis", "string", "x")
             if "focal_length" in node.props and "fov" not in node.props:

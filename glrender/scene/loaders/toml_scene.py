@@ -177,9 +177,23 @@ def _film(ctx, t) -> m.Film:
 
 def _camera(ctx, t) -> m.Camera:
     t = ctx.table(t, "camera")
-    _check_keys(ctx, t, "camera", {"fov", "fov_axis", "look_at", "transform", "transform_close",
-                                   "aperture_radius", "focus_distance", "near_clip", "far_clip"})
+    _check_keys(ctx, t, "camera", {"kind", "fov", "fov_axis", "half_extent", "look_at", "transform",
+                                   "transform_close", "aperture_radius", "focus_distance",
+                                   "near_clip", "far_clip"})
     c = m.Camera()
+    c.kind = ctx.string(t.get("kind", c.kind), "camera.kind", m.CAMERA_KINDS)
+    # each kind's own keys: another kind's are refused, not ignored
+    foreign = {"orthographic": {"fov": "its view is half_extent wide on either side of the axis",
+                                "aperture_radius": "it has no lens", "focus_distance": "it has no lens"},
+               "perspective": {"half_extent": "its view is set by fov (or give kind = \"orthographic\")"}}
+    for key, why in foreign[c.kind].items():
+        if key in t:
+            article = "an" if c.kind == "orthographic" else "a"
+            ctx.fail(f"camera.{key}", f"{article} {c.kind} camera has no {key}: {why}")
+    if "half_extent" in t:
+        c.half_extent = ctx.number(t["half_extent"], "camera.half_extent", 0)
+        if not c.half_extent > 0:
+            ctx.fail("camera.half_extent", f"expected a positive length, got {c.half_extent}")
     if "look_at" in t and "transform" in t:
         ctx.fail("camera", "give look_at or transform, not both")
     if "look_at" in t:
