@@ -42,9 +42,10 @@ class IntegratorSpec:
     #: its emission AOV follows delta surfaces to the emitter behind them, and it renders
     #: that seen emission alone (emission_only: the seen-emission pass of a denoised render)
     seen_emission_pass: bool = False
-    #: it connects light-path vertices to a lens point (camera/importance.glsl
-    #: camera_connect): a camera whose rays share one direction (orthographic) is refused
-    lens_connections: bool = False
+    #: its image comes from light-path vertices connected to a lens point alone
+    #: (camera/importance.glsl camera_connect): a camera whose rays share one direction
+    #: (orthographic) cannot be rendered (bdpt drops those strategies and keeps the others)
+    needs_lens: bool = False
     #: a cluster can render it (glrender.distributed)
     distributed: bool = True
     #: a time budget without a sample count renders until the budget ends (sppm: its
@@ -108,10 +109,10 @@ register(IntegratorSpec("ao", "integrators/ao.glsl", emission_aov=False, uses_st
                         uses_depth=False, depth_cap=None,
                         summary="ambient occlusion: the unoccluded fraction of a cosine lobe"))
 register(IntegratorSpec("lighttrace", "integrators/lighttrace.glsl", splatting=True,
-                        emission_aov=False, counts_truncation=True, lens_connections=True,
+                        emission_aov=False, counts_truncation=True, needs_lens=True,
                         summary="light tracing: paths from the lights connected to the lens"))
 register(IntegratorSpec("bdpt", "integrators/bdpt.glsl", splatting=True, strategies=True,
-                        depth_cap=16, counts_truncation=True, lens_connections=True,
+                        depth_cap=16, counts_truncation=True,
                         summary="bidirectional path tracing, every strategy weighted by MIS"))
 register(IntegratorSpec("sppm", None, driver="sppm",
                         emission_aov=False, distributed=False, open_ended=False,

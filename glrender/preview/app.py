@@ -26,7 +26,7 @@ from ..drivers import create_driver
 from ..photon import PhotonSettings
 from ..render.driver import RenderDriver
 from ..render.job import JobOptions, job_settings, make_driver
-from ..render.renderer import camera_tangents
+from ..render.renderer import camera_screen
 from ..scene import model as m
 from .camera import CameraController
 from .display import VIEWS, Display, DisplaySettings, fit_viewport
@@ -356,8 +356,10 @@ class PreviewApp:
         if pdx or pdy:
             width, height = glfw.get_window_size(win)
             view = fit_viewport((self.renderer.width, self.renderer.height), (width, height))
-            _, tan_y = camera_tangents(c.camera(), self.renderer.width, self.renderer.height)
-            c.pan(pdx, pdy, view[3] / tan_y)
+            cam = c.camera()
+            _, screen_y = camera_screen(cam, self.renderer.width, self.renderer.height)
+            # an orthographic view is 2 screen_y units high at every distance
+            c.pan(pdx, pdy, view[3] / screen_y * (c.distance if cam.orthographic else 1.0))
             moved = True
         if self._scroll:
             c.zoom(self._scroll)

@@ -145,13 +145,14 @@ def pixel_footprint(camera: m.Camera, width: int, height: int, distance: float) 
 
 
 def check_camera(camera: m.Camera, integrator: str) -> None:
-    """Refuses a camera the integrator cannot render through: light paths that connect to
-    the lens need one that a point of the scene can see, which an orthographic camera (one
-    direction for every ray) is not."""
-    if camera.orthographic and integrators.get(integrator).lens_connections:
+    """Refuses a camera the integrator cannot render through: an integrator whose image is
+    made of connections to the lens (lighttrace) needs a lens that a point of the scene can
+    see, which an orthographic camera (one direction for every ray) does not have."""
+    if camera.orthographic and integrators.get(integrator).needs_lens:
+        able = ", ".join(n for n in integrators.names() if not integrators.get(n).needs_lens)
         raise UsageError(f"camera: an orthographic camera cannot be rendered by {integrator}, whose "
                          f"light paths connect to a lens point (every orthographic ray has one "
-                         f"direction); use {', '.join(n for n in integrators.names() if not integrators.get(n).lens_connections)}")
+                         f"direction); use {able}")
 
 
 class Renderer:

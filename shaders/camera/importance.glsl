@@ -9,11 +9,15 @@
 // A thin lens sampled uniformly by area gives the same expression per lens point
 // (the lens pdf cancels the importance's 1 / lens area). Rigid camera matrices only:
 // distances in camera space are taken as world distances.
+// An orthographic camera's rays have one direction (a delta in direction): no scene
+// point can be connected to it, and its rays have no density per solid angle (0 here,
+// which the MIS ratios count as 1, pbrt's remap0; bdpt marks its camera vertex delta).
 #include "common/constants.glsl"
 #include "common/params.glsl"
 #include "scene/layout.glsl"
 #include "sampling/disk.glsl"
 #include "camera/filter.glsl"
+#include "camera/camera.glsl"
 
 // A connection from a scene point to the lens.
 struct CameraConnection {
@@ -37,6 +41,7 @@ mat4 world_from_camera_at(float tau) {
 // point (thin lens, uniform by area; ignored for a pinhole).
 CameraConnection camera_connect(vec3 x, vec2 u_lens, float tau) {
     CameraConnection c = CameraConnection(vec3(0.0), vec3(0.0, 0.0, 1.0), 0.0, vec2(0.0), 0.0, 0.0, false);
+    if (u_params.camera_projection == kCameraOrthographic) return c;
     mat4 m = world_from_camera_at(tau);
     vec3 x_cam = (inverse(m) * vec4(x, 1.0)).xyz;
     float lens_radius = u_params.camera_screen.z;
@@ -66,8 +71,10 @@ CameraConnection camera_connect(vec3 x, vec2 u_lens, float tau) {
 }
 
 // The solid-angle density of a camera ray along the world direction d from the lens,
-// the film taken as a whole (1 / (W H a cos^3 theta)); 0 outside the field of view.
+// the film taken as a whole (1 / (W H a cos^3 theta)); 0 outside the field of view, and
+// for an orthographic camera (a delta direction).
 float camera_pdf_dir(vec3 d, float tau) {
+    if (u_params.camera_projection == kCameraOrthographic) return 0.0;
     vec3 d_cam = transpose(mat3(world_from_camera_at(tau))) * d;
     if (!(d_cam.z > 0.0)) return 0.0;
     vec2 tangents = u_params.camera_screen.xy;

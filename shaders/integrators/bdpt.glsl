@@ -6,7 +6,8 @@
 // from the camera vertex, as the path tracer does); t = 1, a light subpath vertex
 // connected to the lens and splatted onto the film (integrators/splat.glsl); s, t >= 2,
 // a visibility ray between the two subpaths' ends. (s, t) = (1, 1), the lens connected
-// to a sampled light point, is left out: s = 0, t = 2 sees the lights. Each is
+// to a sampled light point, is left out: s = 0, t = 2 sees the lights. An orthographic
+// camera has no t = 1 strategies (its vertex is a delta, camera_connect finds no lens). Each is
 // weighted by bdpt_mis_weight (balance or power heuristic, kStrategy); kernels built
 // for strategy images also keep each one's own image (integrators/strategy_images.glsl).
 // max_depth counts the segments of a path (s + t - 1), at most kBdptDepthCap (the
@@ -302,6 +303,8 @@ vec3 bdpt_sample(uvec2 pixel, inout SamplerState s, inout Aov aov) {
     vec3 axis = normalize(world_from_camera_at(c.time)[2].xyz);
     vec3 lens = c.o - (u_params.camera_clip.x / max(dot(c.d, axis), 1e-6)) * c.d;
     g_camera[0] = vertex_point(kVertexCamera, lens, vec3(0.0), vec3(c.weight));
+    // an orthographic camera's direction is a delta: no strategy ends on its vertex (t = 1)
+    if (u_params.camera_projection == kCameraOrthographic) vertex_set_delta(g_camera[0], true);
     int n_camera = random_walk(false, 1, c.o, c.d, c.t_max, vec3(c.weight), camera_pdf_dir(c.d, c.time),
                                kBdptMaxSegments + 1, s, aov);
 
