@@ -39,7 +39,7 @@ from ..gpu import codegen
 from ..gpu import bindings
 from ..render import accum
 from ..render.accumulation import SPLAT_SCALE, TILE
-from ..render.renderer import (RenderSettings, Renderer, pixel_footprint,
+from ..render.renderer import (RenderSettings, Renderer, camera_screen,
                                settings_from_scene)
 from ..scene import model as m
 from . import layout as pl
@@ -141,7 +141,9 @@ class SppmRenderer:
         center, radius = self.base.packed.sphere_bounds
         cam = self.scene.camera.world_from_camera
         dist = max(float(np.linalg.norm(np.asarray(center) - cam[:3, 3])), 1e-3 * radius)
-        return DEFAULT_RADIUS_PIXELS * pixel_footprint(self.scene.camera, self.width, self.height, dist)
+        _, screen_y = camera_screen(self.scene.camera, self.width, self.height)
+        reach = 1.0 if self.scene.camera.orthographic else dist   # an orthographic pixel's size is fixed
+        return DEFAULT_RADIUS_PIXELS * 2 * screen_y * reach / self.height
 
     def _compile(self) -> None:
         p = self.base.packed

@@ -138,12 +138,6 @@ def camera_screen(camera: m.Camera, width: int, height: int) -> tuple[float, flo
     return camera_tangents(camera, width, height)
 
 
-def pixel_footprint(camera: m.Camera, width: int, height: int, distance: float) -> float:
-    """The height of one pixel's footprint at ``distance`` along the camera's axis."""
-    _, sy = camera_screen(camera, width, height)
-    return 2 * sy * (1.0 if camera.orthographic else distance) / height
-
-
 def check_camera(camera: m.Camera, integrator: str) -> None:
     """Refuses a camera the integrator cannot render through: an integrator whose image is
     made of connections to the lens (lighttrace) needs a lens that a point of the scene can
