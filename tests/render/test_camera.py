@@ -123,19 +123,21 @@ def orthographic_quad(width=40, height=20):
     return scene
 
 
-def test03_orthographic_pixels_see_the_quad_s_exact_coverage(gl_ctx):
+@pytest.mark.parametrize("integrator", ["path", "bdpt"])
+def test03_orthographic_pixels_see_the_quad_s_exact_coverage(gl_ctx, integrator):
     """A pixel of an orthographic camera sees a fixed 0.1 x 0.1 square of the plane, so its
     value is the fraction of that square the quad covers (the camera's +x is the world's -x
     here). Each sample is 0 or 1: an exact binomial test per pixel, Sidak over the 800
     pixels (alpha 1e-3). At 1024 spp an edge moved by a tenth of a pixel (a 1% error of the
-    view's size at the quad's edges) fails its row or column of pixels (sigma <= 0.016)."""
+    view's size at the quad's edges) fails its row or column of pixels (sigma <= 0.016).
+    bdpt sees the quad by its s = 0 strategy alone (no t = 1 through this camera)."""
     from scipy.stats import binomtest
 
     from glrender.testing.stats import sidak_alpha
 
     scene = orthographic_quad()
     n = 1024
-    lit = glrender.render(scene, spp=n, seed=5, sampler="independent").mean[..., 0] * n
+    lit = glrender.render(scene, spp=n, seed=5, sampler="independent", integrator=integrator).mean[..., 0] * n
     np.testing.assert_array_equal(lit, np.round(lit))
     # pixel (row j, column i) covers world x in -2 + 0.1 [i, i + 1] (the image's left, camera
     # +x, is world -x looking down), y in 1 - 0.1 [j + 1, j]
