@@ -365,9 +365,11 @@ def main(argv: list[str] | None = None) -> int:
     signals = args.signals = StopSignals().install()
     try:
         from ..scene.loaders.scene_files import search_path
+        from .compile_notice import compile_notice
         from .options import search_folders
 
-        with search_path(search_folders(getattr(args, "search_path", None))):
+        with search_path(search_folders(getattr(args, "search_path", None))), \
+                compile_notice(enabled=not getattr(args, "quiet", False)):
             return int(args.func(args) or 0)
     except GlrenderError as exc:
         if debug:

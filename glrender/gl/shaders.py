@@ -25,9 +25,10 @@ import json
 import os
 import re
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterable, Mapping
+from typing import Iterable, Iterator, Mapping, Protocol
 
 import moderngl
 
@@ -251,6 +252,41 @@ COMPILE_STATS = {"programs": 0, "seconds": 0.0, "first_dispatch_seconds": 0.0}
 SHADER_LOG_ENV = "GLRENDER_SHADER_LOG"
 
 
+class CompileListener(Protocol):
+    """Told when the driver starts and stops turning a program into machine code: the
+    build (compile and link) and a compute kernel's first dispatch (where llvmpipe
+    generates its code). A command's "compiling kernels" line is one."""
+
+    def started(self) -> None: ...
+
+    def stopped(self) -> None: ...
+
+
+_LISTENERS: list[CompileListener] = []
+
+
+@contextmanager
+def compile_listener(listener: CompileListener) -> Iterator[CompileListener]:
+    """Tell ``listener`` of every build and first dispatch inside the block."""
+    _LISTENERS.append(listener)
+    try:
+        yield listener
+    finally:
+        _LISTENERS.remove(listener)
+
+
+@contextmanager
+def _compiling() -> Iterator[None]:
+    listeners = list(_LISTENERS)
+    for listener in listeners:
+        listener.started()
+    try:
+        yield
+    finally:
+        for listener in reversed(listeners):
+            listener.stopped()
+
+
 def _log_event(record: dict) -> None:
     path = os.environ.get(SHADER_LOG_ENV)
     if not path:
@@ -299,8 +335,9 @@ class ComputeKernel:
             return self._program.run(*args, **kwargs)
         self._first = False
         t0 = time.perf_counter()
-        self._program.run(*args, **kwargs)
-        self._program.ctx.finish()
+        with _compiling():
+            self._program.run(*args, **kwargs)
+            self._program.ctx.finish()
         seconds = time.perf_counter() - t0
         COMPILE_STATS["first_dispatch_seconds"] += seconds
         _log_event({"event": "first_dispatch", "key": self._key, "seconds": round(seconds, 4)})
@@ -318,7 +355,8 @@ class ComputeKernel:
 def _timed_build(build, describe=None):
     t0 = time.perf_counter()
     try:
-        return build()
+        with _compiling():
+            return build()
     finally:
         seconds = time.perf_counter() - t0
         COMPILE_STATS["programs"] += 1
