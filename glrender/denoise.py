@@ -38,10 +38,9 @@ import threading
 
 import numpy as np
 
-from .errors import UsageError
+from .errors import MissingExtra, UsageError
 
 EXTRA = "denoise"
-INSTALL_HINT = f"pip install 'glrender[{EXTRA}]'"
 QUALITIES = ("high", "balanced", "fast")
 # OIDN_QUALITY_* values of OIDN 2
 _QUALITY_CODES = {"high": 6, "balanced": 5, "fast": 4}
@@ -56,8 +55,7 @@ def load_oidn():
     try:
         import pyoidn
     except ImportError as exc:
-        raise UsageError(f"denoising needs Intel Open Image Denoise (pyoidn), which is not "
-                         f"installed: {INSTALL_HINT}") from exc
+        raise MissingExtra("denoising (Intel Open Image Denoise)", "pyoidn", EXTRA) from exc
     return pyoidn
 
 

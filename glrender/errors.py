@@ -39,3 +39,46 @@ class SceneError(GlrenderError):
 
 class UsageError(GlrenderError, ValueError):
     """A function or command was called with arguments it cannot use."""
+
+
+class MissingExtra(UsageError):
+    """An optional package is not installed. The message names the command that installs
+    glrender's extra ``extra`` into the Python that is running (see :func:`install_command`)."""
+
+    def __init__(self, needs: str, package: str, extra: str):
+        self.package, self.extra = package, extra
+        super().__init__(f"{needs} needs the {package} package, which is not installed; "
+                         f"install it with: {install_command(extra)}")
+
+
+def install_command(extra: str) -> str:
+    """The command that installs glrender's optional ``extra`` into this Python.
+
+    From a source checkout (an editable install, as ``./dev.sh`` makes), the checkout's
+    extra: ``.venv/bin/python -m pip install -e '.[preview]'``; else the published
+    package's: ``python -m pip install 'glrender[preview]'``. Paths inside the current
+    folder are shown relative to it."""
+    import os
+    import shlex
+    import sys
+    from pathlib import Path
+
+    def shown(path: str) -> str:
+        try:
+            relative = os.path.relpath(path)
+        except ValueError:
+            return path
+        return relative if not relative.startswith("..") else path
+
+    python = shown(sys.executable or "python")
+    if os.sep not in python:
+        python = "." + os.sep + python if os.path.exists(python) else python
+    root = Path(__file__).resolve().parent.parent
+    pyproject = root / "pyproject.toml"
+    try:
+        checkout = pyproject.is_file() and 'name = "glrender"' in pyproject.read_text()
+    except OSError:
+        checkout = False
+    if checkout:
+        return f"{shlex.quote(python)} -m pip install -e {shlex.quote(f'{shown(str(root))}[{extra}]')}"
+    return f"{shlex.quote(python)} -m pip install {shlex.quote(f'glrender[{extra}]')}"

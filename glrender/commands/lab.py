@@ -62,6 +62,9 @@ def run_lab_command(args) -> int:
     from ..gl.context import default_context
 
     check_writable(args.out, "lab report", "--out", folder=True)
+    from ..lab.report import pyplot
+
+    pyplot()            # without matplotlib: one line naming how to install it, before any work
 
     def progress(name):
         if not args.quiet:

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .. import integrators
-from ..errors import UsageError
+from ..errors import MissingExtra, UsageError
 from .merge import FrameImage
 from .plan import NOMINAL_UNIT_SIZE, Plan, default_unit_size
 from .worker import Job, hold, merge_partials, render_unit
@@ -30,8 +30,7 @@ def _dask():
     try:
         import distributed
     except ImportError:
-        raise UsageError("rendering on a cluster needs Dask: pip install 'glrender[distributed]'") \
-            from None
+        raise MissingExtra("rendering on a cluster", "distributed (Dask)", "distributed") from None
     return distributed
 
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import UsageError
+from ..errors import MissingExtra, UsageError
 from .tonemap import linear_to_srgb, srgb_to_linear, tonemap  # noqa: F401 (re-exported)
 
 LDR_FORMATS = (".png", ".jpg", ".jpeg")
@@ -51,7 +51,7 @@ def write_exr(path: Path, image: np.ndarray, aovs: dict | None = None, half: boo
     try:
         import OpenEXR
     except ImportError:
-        raise UsageError("EXR output needs the OpenEXR package: pip install 'glrender[exr]'") from None
+        raise MissingExtra("EXR output", "OpenEXR", "exr") from None
     dtype = np.float16 if half else np.float32
     channels = {"RGB": np.ascontiguousarray(image[..., :3], dtype)}
     for name, value in (aovs or {}).items():
@@ -74,7 +74,7 @@ def read_exr(path: Path) -> np.ndarray:
     try:
         import OpenEXR
     except ImportError:
-        raise UsageError("EXR input needs the OpenEXR package: pip install 'glrender[exr]'") from None
+        raise MissingExtra("EXR input", "OpenEXR", "exr") from None
     with OpenEXR.File(str(path)) as f:
         channels = f.channels()
         if "RGB" in channels:
@@ -96,7 +96,7 @@ def read_exr_layers(path) -> dict[str, np.ndarray]:
     try:
         import OpenEXR
     except ImportError:
-        raise UsageError("EXR input needs the OpenEXR package: pip install 'glrender[exr]'") from None
+        raise MissingExtra("EXR input", "OpenEXR", "exr") from None
     groups: dict[str, list[tuple[str, np.ndarray]]] = {}
     with OpenEXR.File(str(path), separate_channels=True) as f:
         for name, channel in f.channels().items():
@@ -189,8 +189,7 @@ def check_output(path) -> Path:
         try:
             import OpenEXR  # noqa: F401
         except ImportError:
-            raise UsageError(f"{path}: EXR output needs the OpenEXR package: "
-                             f"pip install 'glrender[exr]' (or write .pfm)") from None
+            raise MissingExtra(f"{path}: EXR output (or write .pfm)", "OpenEXR", "exr") from None
     return check_writable(path, "image", "-o")
 
 

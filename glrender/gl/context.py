@@ -27,7 +27,7 @@ from typing import Any, TypeVar
 
 import moderngl
 
-from ..errors import DeviceError
+from ..errors import DeviceError, MissingExtra
 from . import egl, mesa
 
 T = TypeVar("T")
@@ -232,7 +232,7 @@ def _glfw():
     try:
         import glfw
     except ImportError:
-        raise DeviceError("a window needs the glfw package: pip install 'glrender[preview]'") from None
+        raise MissingExtra("a window", "glfw", "preview") from None
     return glfw
 
 

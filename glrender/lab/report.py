@@ -11,17 +11,16 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import UsageError
+from ..errors import MissingExtra
 from .core import Section, Table
 
 
 def pyplot():
-    """matplotlib.pyplot on the Agg backend, or a UsageError naming the extra to install."""
+    """matplotlib.pyplot on the Agg backend, or a MissingExtra naming how to install it."""
     try:
         import matplotlib
     except ImportError as exc:   # pragma: no cover - the test extra installs it
-        raise UsageError("the estimator lab draws its figures with matplotlib: "
-                         "pip install 'glrender[lab]'") from exc
+        raise MissingExtra("the estimator lab's figures", "matplotlib", "lab") from exc
     matplotlib.use("Agg", force=True)
     import matplotlib.pyplot as plt
 

@@ -91,3 +91,32 @@ def test04_environment_device(tmp_path):
     line = one_error_line(glrender("render", CORNELL, "-o", tmp_path / "o.png", *SMALL, env=env))
     assert "GLRENDER_DEVICE" in line and "warp-drive" in line
     assert ROOT.exists()
+
+
+# Each optional extra, missing: (the command, the module made unimportable, the extra).
+MISSING_EXTRAS = [
+    (["preview", CORNELL], "glfw", "preview"),
+    (["render", CORNELL, "-o", "{tmp}/o.png", "--denoise", *SMALL], "pyoidn", "denoise"),
+    (["lab", "--out", "{tmp}/lab", "--quick"], "matplotlib", "lab"),
+    (["render", CORNELL, "-o", "{tmp}/o.exr", *SMALL], "OpenEXR", "exr"),
+    (["render", CORNELL, "-o", "{tmp}/o.png", "--workers", "2", *SMALL], "distributed", "distributed"),
+]
+_WITHOUT = ("import sys; sys.modules[sys.argv[1]] = None; "     # `import NAME` raises ImportError
+            "from glrender.commands.cli import main; sys.exit(main(sys.argv[2:]))")
+
+
+@pytest.mark.parametrize("argv, module, extra", MISSING_EXTRAS, ids=[m for _, m, _ in MISSING_EXTRAS])
+def test05_missing_extra_names_the_install_command(tmp_path, monkeypatch, argv, module, extra):
+    import subprocess
+    import sys
+
+    from glrender.errors import install_command
+
+    monkeypatch.chdir(ROOT)              # from the checkout: ".venv/bin/python ... -e '.[EXTRA]'"
+    args = [str(a).replace("{tmp}", str(tmp_path)) for a in argv]
+    r = subprocess.run([sys.executable, "-c", _WITHOUT, module, *args], capture_output=True,
+                       text=True, timeout=60)
+    line = one_error_line(r)
+    assert line.startswith("glrender: error: ") and f"needs the {module}" in line, line
+    assert line.endswith(f"install it with: {install_command(extra)}"), line
+    assert not list(tmp_path.rglob("*.png")) and not list(tmp_path.rglob("*.exr"))

@@ -25,6 +25,7 @@ import pytest
 
 import glrender
 from glrender.denoise import Denoiser, aovs_are_clean
+from glrender.errors import install_command
 from glrender.render.emission_pass import render_seen_emission
 from glrender.render.renderer import settings_from_scene
 
@@ -126,4 +127,4 @@ def test05_without_pyoidn_one_line_naming_the_extra(tmp_path, monkeypatch, capsy
     rc = main(["render", str(CORNELL), "-o", str(tmp_path / "out.exr"), "--denoise"])
     err = capsys.readouterr().err
     assert rc == 2 and not (tmp_path / "out.exr").exists()
-    assert err.count("\n") == 1 and "glrender[denoise]" in err, err
+    assert err.count("\n") == 1 and install_command("denoise") in err, err

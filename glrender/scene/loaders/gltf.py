@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import SceneError
+from ...errors import SceneError, install_command
 from .. import model as m
 from .diagnostics import Notes, cause, check_image_size, excerpt
 from .meshes import MeshData, finish_mesh
@@ -261,8 +261,8 @@ class _Gltf:
         try:
             import DracoPy
         except ImportError:
-            self.fail(where, "is Draco-compressed; decoding it needs DracoPy "
-                      "(pip install 'glrender[draco]')")
+            self.fail(where, f"is Draco-compressed; decoding it needs the DracoPy package, "
+                             f"which is not installed; install it with: {install_command('draco')}")
         if not isinstance(ext, dict):
             self.fail(where, "KHR_draco_mesh_compression must be an object")
         data, offset, length, _ = self.view(ext.get("bufferView"), where)
