@@ -18,7 +18,8 @@ included, however it ends). Elsewhere the line is written once, when it is compl
 
 Anything else written to standard output or error first ends the line
 (:func:`compile_notice` guards both streams), so the line never shares a row with the
-render's own messages or its progress bar.
+render's own messages or its progress bar. A command that fails leaves its error as its
+one line: the count not yet written is dropped (erased from a terminal).
 """
 from __future__ import annotations
 
@@ -169,6 +170,18 @@ class CompileNotice:
             self.stream.flush()
         self._counted = 0.0
 
+    def discard(self) -> None:
+        """The command failed: its error is the one line it leaves, so the count is erased
+        from the terminal and not written elsewhere."""
+        shown = self.live and self._ticker is not None and self.seconds >= self.threshold
+        ticker, self._ticker = self._ticker, None
+        if ticker is not None:
+            ticker.stop()
+        if shown:
+            self.stream.write("\r\033[K")
+            self.stream.flush()
+        self._counted, self._since = 0.0, None
+
 
 class _Guarded:
     """A text stream that ends the compile line before anything is written to it."""
@@ -215,6 +228,9 @@ def compile_notice(enabled: bool = True, **options) -> Iterator[CompileNotice | 
     try:
         with compile_listener(notice):
             yield notice
-    finally:
+    except BaseException:
         sys.stderr, sys.stdout = stderr, stdout
-        notice.close()
+        notice.discard()
+        raise
+    sys.stderr, sys.stdout = stderr, stdout
+    notice.close()

@@ -129,3 +129,14 @@ def test05_counts_up_on_a_terminal(tmp_path, monkeypatch):
     final = frames[-1].replace("\x1b[K", "")
     assert re.fullmatch(r"glrender: compiling kernels \u2026 \d+\.\d s", final), frames
     assert shown.index(final) < shown.index("glrender: rendering")
+
+
+@pytest.mark.parametrize("live", [False, True])
+def test06_a_failed_command_leaves_only_its_error(live):
+    clock, stream = _Clock(), io.StringIO()
+    _Ticker.made.clear()
+    notice = cn.CompileNotice(stream, live=live, cached=True, clock=clock, ticker=_Ticker)
+    _compile(notice, clock, 5.0)
+    notice.discard()
+    assert stream.getvalue() == ("\r\x1b[K" if live else "")
+    assert [c[0] for c in _Ticker.made[0].calls][-1] == "stop" if live else _Ticker.made == []
