@@ -21,7 +21,7 @@ import hashlib
 import math
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
 
@@ -34,6 +34,7 @@ from ..gpu import codegen
 from ..gpu import bindings
 from ..render import accum
 from ..render.accumulation import SPLAT_SCALE
+from ..render.driver import part_digests
 from ..render.renderer import Renderer
 from . import layout as pl
 from .grid import PointGrid, build_point_grid, typical_radius
@@ -317,10 +318,18 @@ class PhotonRenderer(Renderer):
     def fingerprint(self) -> str:
         """The Renderer's fingerprint with the photon maps' parameters and kernel."""
         h = hashlib.sha256(super().fingerprint().encode())
-        p = self.photon
-        h.update(repr(("photon", self.photons, p.radius, p.knn, p.kernel, p.final_gather, p.direct)).encode())
-        h.update(self._store_hash.encode())
+        for _, data in self._photon_inputs():
+            h.update(data)
         return h.hexdigest()
+
+    def fingerprint_parts(self) -> dict[str, str]:
+        return {**super().fingerprint_parts(), **part_digests(self._photon_inputs())}
+
+    def _photon_inputs(self) -> Iterator[tuple[str, bytes]]:
+        p = self.photon
+        yield "photon maps", repr(("photon", self.photons, p.radius, p.knn, p.kernel,
+                                   p.final_gather, p.direct)).encode()
+        yield "photon maps", self._store_hash.encode()
 
     # -- outputs -----------------------------------------------------------------------------
     @current

@@ -27,7 +27,7 @@ import hashlib
 import math
 import time
 from dataclasses import dataclass, field, replace
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
@@ -39,6 +39,7 @@ from ..gpu import codegen
 from ..gpu import bindings
 from ..render import accum
 from ..render.accumulation import SPLAT_SCALE, TILE
+from ..render.driver import part_digests
 from ..render.renderer import (RenderSettings, Renderer, camera_screen,
                                settings_from_scene)
 from ..scene import model as m
@@ -259,10 +260,18 @@ class SppmRenderer:
         kernels and parameters."""
         h = hashlib.sha256()
         h.update(self.base.fingerprint().encode())
-        h.update(self._kernel_hash.encode())
-        h.update(repr(("sppm", self.photons_per_iteration, self.initial_radius,
-                       float(self.sppm.alpha), self.sppm.direct, self.sppm.kernel)).encode())
+        for _, data in self._sppm_inputs():
+            h.update(data)
         return h.hexdigest()
+
+    def fingerprint_parts(self) -> dict[str, str]:
+        return {**self.base.fingerprint_parts(), **part_digests(self._sppm_inputs())}
+
+    def _sppm_inputs(self) -> Iterator[tuple[str, bytes]]:
+        yield "SPPM kernels and parameters", self._kernel_hash.encode()
+        yield "SPPM kernels and parameters", repr(
+            ("sppm", self.photons_per_iteration, self.initial_radius, float(self.sppm.alpha),
+             self.sppm.direct, self.sppm.kernel)).encode()
 
     # -- rendering ---------------------------------------------------------------------------
     def _bind(self) -> None:

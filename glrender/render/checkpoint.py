@@ -4,8 +4,9 @@ A checkpoint holds what :meth:`Renderer.state` returns (per-pixel exact fixed-po
 of the samples and their squares, sample and dropped-sample counts, sums of the first-hit
 AOVs, the next sample index) plus a JSON record:
 the renderer's fingerprint (the hash of the scene as rendered and every setting that
-decides a sample), the settings themselves (to explain a refusal), the target sample
-count and where the render came from. Continuing it with :meth:`Renderer.restore` gives
+decides a sample) and its parts' digests, the settings themselves and the files the scene
+read (to explain a refusal: which file changed, which part of the render differs), the
+target sample count and where the render came from. Continuing it with :meth:`Renderer.restore` gives
 the image of an uninterrupted render, bitwise, on the same device.
 
 The file is an uncompressed ``.npz`` (numpy's zip of arrays, read with
@@ -42,6 +43,7 @@ import numpy as np
 from ..errors import UsageError
 from ..film.io import atomic_write
 from .accumulation import TILE
+from .driver import PART_DIGITS
 
 FORMAT = "glrender-checkpoint"
 VERSION = 2     # 2: exact fixed-point sums (1: float32 Welford means)
@@ -90,6 +92,7 @@ def save_checkpoint(path, renderer, **info) -> None:
     atomically. ``info`` adds JSON fields to the record (target spp, scene, ...)."""
     state = renderer.state()
     meta = {"format": FORMAT, "version": VERSION, "fingerprint": state["fingerprint"],
+            "fingerprint_parts": _parts(renderer),
             "spp_done": int(state["spp_done"]), "spp_start": int(state.get("spp_start", 0)),
             "settings": settings_record(renderer),
             "files": dict(getattr(renderer.scene, "files", {}) or {}),
@@ -254,6 +257,11 @@ def _check_record(path: Path, meta: dict) -> None:
     fp = meta.get("fingerprint", missing)
     need("fingerprint", fp, isinstance(fp, str) and re.fullmatch("[0-9a-f]{64}", fp) is not None,
          "64 hexadecimal digits")
+    parts = meta.get("fingerprint_parts", {})         # absent from older checkpoints
+    need("fingerprint_parts", parts, isinstance(parts, dict) and len(parts) <= 32 and all(
+        isinstance(k, str) and len(k) <= 40 and k.isprintable() and isinstance(v, str)
+        and re.fullmatch(f"[0-9a-f]{{{PART_DIGITS}}}", v) is not None for k, v in parts.items()),
+        f"a table of part names and {PART_DIGITS}-digit digests")
     done = meta.get("spp_done", missing)
     need("spp_done", done, _is_int(done) and 0 <= done <= SPP_LIMIT,
          f"a whole number of samples per pixel in 0..{SPP_LIMIT}")
@@ -293,10 +301,14 @@ def _check_record(path: Path, meta: dict) -> None:
 
 
 def check_resumable(checkpoint: Checkpoint, renderer) -> None:
-    """Refuse, with the settings that differ, a checkpoint of another scene or settings,
-    and one whose input files (scene, includes, meshes, images) changed since, by name."""
-    _check_files(checkpoint, dict(getattr(renderer.scene, "files", {}) or {}))
-    if checkpoint.fingerprint == renderer.fingerprint():
+    """Refuse a checkpoint of another scene or settings, and one whose input files (scene,
+    includes, meshes, images) changed since, naming what differs: the settings and their
+    values, the files by name, and the parts of the render (geometry, materials, lights,
+    textures, ...) whose digests differ."""
+    same = checkpoint.fingerprint == renderer.fingerprint()
+    parts = _differing_parts(checkpoint, renderer, same)
+    _check_files(checkpoint, dict(getattr(renderer.scene, "files", {}) or {}), parts)
+    if same:
         return
     then, now = _flatten(checkpoint.settings), _flatten(settings_record(renderer))
     differ = [f"{_printable(key)} {_value(then.get(key))} there, {_value(now.get(key))} here"
@@ -305,8 +317,31 @@ def check_resumable(checkpoint: Checkpoint, renderer) -> None:
     if differ:
         raise UsageError(f"{checkpoint.path}: the checkpoint belongs to a render with other "
                          f"settings ({'; '.join(differ)}): {fix}")
+    what = f"its {_and(parts)} differ" if parts else "the scene or a file it uses changed since"
     raise UsageError(f"{checkpoint.path}: the checkpoint belongs to a different scene (same "
-                     f"settings, but the scene or a file it uses changed since): {fix}")
+                     f"settings, but {what}): {fix}")
+
+
+def _parts(renderer) -> dict[str, str]:
+    parts = getattr(renderer, "fingerprint_parts", None)
+    return dict(parts()) if callable(parts) else {}
+
+
+def _differing_parts(checkpoint: Checkpoint, renderer, same: bool) -> list[str] | None:
+    """The parts of the render whose digests differ ([] if none; None: the checkpoint
+    did not record them)."""
+    then = checkpoint.meta.get("fingerprint_parts") or {}
+    if same:
+        return []
+    if not then:
+        return None
+    now = _parts(renderer)
+    return [_printable(p) for p in list(now) + [p for p in then if p not in now]
+            if then.get(p) != now.get(p)]
+
+
+def _and(names: list[str]) -> str:
+    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
 
 
 def save_band_checkpoint(path, record: dict, bands: dict) -> None:
@@ -429,10 +464,11 @@ def _array(a: np.ndarray | None) -> str:
     return "none" if a is None else f"{a.dtype} of shape {tuple(a.shape)}"
 
 
-def _check_files(checkpoint: Checkpoint, now: dict) -> None:
+def _check_files(checkpoint: Checkpoint, now: dict, parts: list[str] | None = None) -> None:
     """Every file the checkpointed render read must be there with the same content. Files
     are matched by their path relative to the scene file's folder (the first one
-    recorded), so a project folder moved as a whole resumes."""
+    recorded), so a project folder moved as a whole resumes. ``parts``: the parts of the
+    render that differ (None: unknown), said after the files."""
     then = checkpoint.meta.get("files") or {}
     if not then or not now:
         return                  # a scene built in code, or a checkpoint without the record
@@ -446,12 +482,20 @@ def _check_files(checkpoint: Checkpoint, now: dict) -> None:
     changed = sorted(r for r, digest in then_rel.items() if r in now_rel and now_rel[r] != digest)
     missing = sorted(r for r in then_rel if r not in now_rel)
     fix = "render without --resume to start afresh"
+    if parts is None:
+        effect = ""
+    elif parts:
+        effect = f": the render's {_and(parts)} differ"
+    else:
+        effect = ": the scene as rendered is the same"
     for names, what in ((changed, "changed since the checkpoint was written"),
-                        (missing, "was read by the checkpointed render but not by this one")):
+                        (missing, "read by the checkpointed render but not by this one")):
         if names:
-            more = f" (and {len(names) - 1} more)" if len(names) > 1 else ""
-            path = os.path.normpath(os.path.join(base_now, names[0]))
-            raise UsageError(f"{checkpoint.path}: {_printable(path)}{more} {what}: {fix}")
+            shown = [_printable(os.path.normpath(os.path.join(base_now, n))) for n in names[:3]]
+            more = [f"{len(names) - 3} more"] if len(names) > 3 else []
+            verb = ("was " if len(names) == 1 else "were ") if what.startswith("read") else ""
+            raise UsageError(f"{checkpoint.path}: {_and(shown + more)} {verb}{what}{effect}; "
+                             f"{fix}")
 
 
 def _printable(text: str) -> str:

@@ -8,7 +8,8 @@ names in :mod:`glrender.integrators`.
 """
 from __future__ import annotations
 
-from typing import Any, Callable, Protocol, runtime_checkable
+import hashlib
+from typing import Any, Callable, Iterable, Protocol, runtime_checkable
 
 from ..film import Film
 
@@ -54,8 +55,24 @@ class RenderDriver(Protocol):
         """A digest of everything that decides the image: a checkpoint resumes only on a
         driver with the same one."""
 
+    def fingerprint_parts(self) -> dict[str, str]:
+        """The fingerprint's inputs digested part by part (:func:`part_digests`), so that a
+        refused checkpoint can name what differs."""
+
     def stats(self) -> dict[str, Any]:
         """The integrator's own entries for ``--stats`` (photon maps, radii, ...; {} if none)."""
 
     def release(self) -> None:
         """Free the device resources."""
+
+
+#: the length of a fingerprint part's digest, in hexadecimal digits
+PART_DIGITS = 16
+
+
+def part_digests(inputs: Iterable[tuple[str, bytes]]) -> dict[str, str]:
+    """{part: digest} of (part, bytes) pairs, a part's bytes hashed in their order."""
+    hashes: dict[str, Any] = {}
+    for part, data in inputs:
+        hashes.setdefault(part, hashlib.sha256()).update(data)
+    return {part: h.hexdigest()[:PART_DIGITS] for part, h in hashes.items()}

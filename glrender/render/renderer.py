@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, replace
-from typing import Any, Callable, cast
+from typing import Any, Callable, Iterator, cast
 
 import numpy as np
 
@@ -35,6 +35,7 @@ from ..scene import model as m
 from ..film import Film
 from . import strategies
 from .accumulation import SPLAT_SCALE, Accumulation
+from .driver import part_digests
 from .params import shader_defines
 
 BDPT_DEPTH_CAP = cast(int, integrators.get("bdpt").depth_cap)   # kBdptDepthCap (integrators/bdpt_vertex.glsl)
@@ -333,22 +334,39 @@ class Renderer:
         import hashlib
 
         h = hashlib.sha256()
-        h.update(repr(self._source_fingerprint).encode())
-        for arr in (self.packed.materials, self.lights_final):
-            h.update(np.ascontiguousarray(arr).tobytes())
+        for _, data in self._fingerprint_inputs():
+            h.update(data)
+        return h.hexdigest()
+
+    def fingerprint_parts(self) -> dict[str, str]:
+        """The fingerprint's inputs hashed part by part ({"geometry": digest, ...}): a
+        checkpoint records them so that a refusal can say which part differs."""
+        # the kernel's source holds a small scene's code, made from its primitives and
+        # (already a part each) its materials and lights: the primitives stand for it
+        _, defines, glsl = self._source_fingerprint
+        p = self.packed
+        source = [("kernel", repr((defines, glsl)).encode()),
+                  ("geometry", repr((p.quads, p.spheres, p.moving_meshes)).encode())]
+        return part_digests([*source, *list(self._fingerprint_inputs())[1:]])
+
+    def _fingerprint_inputs(self) -> Iterator[tuple[str, bytes]]:
+        """(part, bytes) of everything the fingerprint hashes, in its order (the first: the
+        kernel's source, a small scene's geometry code included)."""
+        yield "kernel", repr(self._source_fingerprint).encode()
+        yield "materials", np.ascontiguousarray(self.packed.materials).tobytes()
+        yield "lights", np.ascontiguousarray(self.lights_final).tobytes()
         if self.packed.mesh is not None:
             for arr in self.packed.mesh:
-                h.update(np.ascontiguousarray(arr).tobytes())
+                yield "geometry", np.ascontiguousarray(arr).tobytes()
         if self.packed.env_image is not None:
-            h.update(np.ascontiguousarray(self.packed.env_image).tobytes())
-        h.update(self.packed.textures.fingerprint())
+            yield "environment map", np.ascontiguousarray(self.packed.env_image).tobytes()
+        yield "textures", self.packed.textures.fingerprint()
         prm = self.param_block(0, 0)
         prm["image"][3], prm["counts"][3] = self.tiles_y, 0   # a band renders the same samples
         if self.settings.sampler.kind != "stratified":
             prm["samples"][2:] = 0   # the total spp decides the strata only: other samplers
                                      # may continue past it (render more samples later)
-        h.update(prm.tobytes())
-        return h.hexdigest()
+        yield "camera, film and sampler", prm.tobytes()
 
     @current
     def state(self) -> dict[str, Any]:

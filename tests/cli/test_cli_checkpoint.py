@@ -99,3 +99,27 @@ def test06_a_changed_input_file_is_refused_by_name(tmp_path):
     mesh.write_text(mesh.read_text() + "# edited\n")
     line = one_error_line(glrender("render", scene, "-o", out, "--checkpoint", ckpt, "--resume"))
     assert f"{mesh} changed since the checkpoint was written" in line
+
+
+# What a changed scene says it changed: (the edit, the parts named).
+CHANGES = [
+    ("0.570068, 0.0430135", "0.570068, 0.0430136", "materials"),       # a colour
+    ("# ", "#  ", None),                                                # a comment only
+]
+
+
+@pytest.mark.parametrize("old, new, part", CHANGES, ids=["a material", "a comment"])
+def test07_a_changed_scene_names_what_differs(tmp_path, old, new, part):
+    scene = tmp_path / "scene.toml"
+    shutil.copy(CORNELL, scene)
+    out, ckpt = tmp_path / "a.npy", tmp_path / "a.ckpt"
+    assert glrender("render", scene, "-o", out, *SMALL, "--checkpoint", ckpt).returncode == 0
+    assert set(load_checkpoint(ckpt).meta["fingerprint_parts"]) >= {
+        "kernel", "materials", "lights", "geometry", "textures", "camera, film and sampler"}
+    text = scene.read_text()
+    assert old in text
+    scene.write_text(text.replace(old, new, 1))
+    line = one_error_line(glrender("render", scene, "-o", out, "--checkpoint", ckpt, "--resume"))
+    said = f"{scene} changed since the checkpoint was written: "
+    said += f"the render's {part} differ;" if part else "the scene as rendered is the same;"
+    assert said in line and line.endswith("render without --resume to start afresh"), line
