@@ -1,5 +1,6 @@
 """Build a scene in code (Mitsuba 3's Cornell box) and sweep a parameter: the roughness of
-a metal tall box. Writes one image per value and a strip of all of them side by side.
+a metal tall box. Renders one image per value and writes them side by side, left to right
+in the order given, as one image (-o).
 
     python examples/scene_in_code.py -o sweep.png --spp 32 --size 128
 """
@@ -57,7 +58,8 @@ def cornell_box(size: int = 256, spp: int = 64) -> glrender.Scene:
 
 def main(argv: list[str] | None = None) -> list[glrender.Film]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("-o", "--output", default="sweep.png", help="the strip of all images")
+    parser.add_argument("-o", "--output", default="sweep.png",
+                        help="the one image written: every value's image side by side")
     parser.add_argument("--spp", type=int, default=32, help="samples per pixel")
     parser.add_argument("--size", type=int, default=128, help="image width and height in pixels")
     parser.add_argument("--alphas", type=float, nargs="+", default=[0.02, 0.1, 0.3],
@@ -80,7 +82,7 @@ def main(argv: list[str] | None = None) -> list[glrender.Film]:
     from glrender.film import write_image
 
     write_image(args.output, strip)
-    print(f"{len(films)} images -> {args.output}")
+    print(f"{len(films)} images side by side -> {args.output}")
     return films
 
 

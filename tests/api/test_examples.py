@@ -43,7 +43,8 @@ def test_scene_in_code_sweep(tmp_path):
     strip = read_image(out)
     assert strip.shape == (16, 32, 3)
     assert not np.array_equal(strip[:, :16], strip[:, 16:])   # the parameter changed the image
-    assert "2 images" in text
+    assert f"2 images side by side -> {out}" in text
+    assert [p.name for p in tmp_path.iterdir()] == ["sweep.npy"]  # as its docstring says
 
 
 def test_compare_integrators():
