@@ -2,17 +2,31 @@
 HDR, NPY. Every write is atomic: a temporary file in the same folder, then a rename; a write
 that fails raises :class:`WriteError` naming the file and the system's reason, and leaves
 the old file as it was. :func:`check_writable` is the one check, before any work, that a
-file or folder can be written there."""
+file or folder can be written there.
+
+Reading: :func:`read_image` reads an image's size from its header (:func:`declared_size`,
+every format) and refuses one of more than ``max_pixels`` before decoding a pixel
+(:class:`ImageTooLarge`); PIL's own decompression-bomb check, a warning at 89 million pixels
+and an error at twice that, is replaced by this one wherever PIL opens a file
+(:func:`open_pil`)."""
 from __future__ import annotations
 
 import os
 import tempfile
+import threading
+from contextlib import contextmanager
 from pathlib import Path
+from typing import IO, Iterator
 
 import numpy as np
 
 from ..errors import MissingExtra, UsageError
 from .tonemap import linear_to_srgb, srgb_to_linear, tonemap  # noqa: F401 (re-exported)
+
+#: The most pixels :func:`read_image` decodes by default, whatever the image's shape and format
+#: (a render may be far larger than a texture: scenes hold their images to a limit of their
+#: own, glrender.scene.loaders.diagnostics.MAX_TEXTURE_PIXELS).
+MAX_DECODE_PIXELS = 1 << 28
 
 LDR_FORMATS = (".png", ".jpg", ".jpeg")
 HDR_FORMATS = (".exr", ".pfm", ".npy", ".hdr")
@@ -258,12 +272,87 @@ def write_image(path, image: np.ndarray, aovs: dict | None = None, exposure: flo
     atomic_write(path, write)
 
 
-def read_image(path) -> np.ndarray:
-    """Read linear RGB float32 (H, W, 3) from .exr, .hdr, .pfm, .npy; LDR files are sRGB-decoded."""
+class ImageTooLarge(UsageError):
+    """An image whose header declares more pixels than the reader allows."""
+
+    def __init__(self, path, width: int, height: int, limit: int, what: str = "an image"):
+        self.width, self.height, self.limit = width, height, limit
+        side = int(limit ** 0.5)
+        shape = f" ({side} x {side})" if side * side == limit else ""
+        super().__init__(f"{path}: {width} x {height} pixels is more than the {limit:,}{shape} "
+                         f"{what} may have")
+
+
+_PIL_CHECK = threading.RLock()
+
+
+@contextmanager
+def open_pil(source: str | os.PathLike[str] | IO[bytes]) -> Iterator:
+    """``PIL.Image.open`` without PIL's decompression-bomb warning or error: the caller
+    checks the size (``im.size``) against its own limit before decoding, as
+    :func:`read_image` does."""
+    from PIL import Image
+
+    with _PIL_CHECK:          # PIL's limit is global: ours holds while this file is open
+        saved, Image.MAX_IMAGE_PIXELS = Image.MAX_IMAGE_PIXELS, None
+        try:
+            with Image.open(source) as im:
+                yield im
+        finally:
+            Image.MAX_IMAGE_PIXELS = saved
+
+
+def declared_size(path) -> tuple[int, int]:
+    """(width, height) an image file's header declares, read without decoding a pixel."""
+    path = Path(path)
+    ext = path.suffix.lower()
+    if ext == ".pfm":
+        with open(path, "rb") as f:
+            f.readline()
+            fields = f.readline().split()
+        if len(fields) != 2 or not all(x.isdigit() for x in fields):
+            raise UsageError(f"{path}: malformed PFM header")
+        return int(fields[0]), int(fields[1])
+    if ext == ".npy":
+        with open(path, "rb") as f:
+            try:
+                fmt = np.lib.format
+                major = fmt.read_magic(f)[0]
+                header = fmt.read_array_header_1_0 if major == 1 else fmt.read_array_header_2_0
+                shape = header(f, max_header_size=1 << 16)[0]
+            except (ValueError, OSError, SyntaxError, TypeError) as exc:
+                raise UsageError(f"{path}: not a numpy array file ({exc})") from None
+        if len(shape) < 2:
+            raise UsageError(f"{path}: an array of shape {shape}, expected (height, width, 3)")
+        return int(shape[1]), int(shape[0])
+    if ext == ".exr":
+        try:
+            import OpenEXR
+        except ImportError:
+            raise MissingExtra("EXR input", "OpenEXR", "exr") from None
+        with OpenEXR.File(str(path), header_only=True) as f:
+            lo, hi = f.header()["dataWindow"]
+        return int(hi[0]) - int(lo[0]) + 1, int(hi[1]) - int(lo[1]) + 1
+    if ext == ".hdr":
+        from .radiance_hdr import read_header
+
+        with open(path, "rb") as f:
+            return read_header(path, f.read(1 << 20))[:2]
+    with open_pil(path) as im:
+        return im.size
+
+
+def read_image(path, max_pixels: int = MAX_DECODE_PIXELS, what: str = "an image") -> np.ndarray:
+    """Read linear RGB float32 (H, W, 3) from .exr, .hdr, .pfm, .npy; LDR files are
+    sRGB-decoded. An image of more than ``max_pixels`` is refused from its header
+    (:class:`ImageTooLarge`, saying ``what`` may have at most that many)."""
     path = Path(path)
     ext = path.suffix.lower()
     if not path.exists():
         raise UsageError(f"{path}: no such file")
+    width, height = declared_size(path)
+    if width * height > max_pixels:
+        raise ImageTooLarge(path, width, height, max_pixels, what)
     if ext == ".pfm":
         return read_pfm(path)
     if ext == ".npy":
@@ -274,11 +363,9 @@ def read_image(path) -> np.ndarray:
         from .radiance_hdr import read_hdr
 
         return read_hdr(path)
-    from PIL import Image
-
     if ext == ".png" and _png_depth_and_colour(path) in ((16, 2), (16, 6)):
         return _read_png_rgb16(path)
-    with Image.open(path) as im:
+    with open_pil(path) as im:
         if im.mode in ("I;16", "I;16L", "I;16B", "I"):     # 16-bit grey (PNG, TIFF)
             grey = np.asarray(im, np.float64) / 65535.0
             return np.repeat(srgb_to_linear(np.clip(grey, 0.0, 1.0))[..., None], 3, axis=-1) \

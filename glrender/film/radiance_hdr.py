@@ -15,7 +15,6 @@ import numpy as np
 
 from ..errors import UsageError
 
-MAX_PIXELS = 1 << 28
 
 
 def _fail(path, message):
@@ -48,10 +47,9 @@ def _decode_rle_scanline(data: bytes, pos: int, width: int, path, row: int) -> t
     return out.T, pos
 
 
-def read_hdr(path) -> np.ndarray:
-    """Linear RGB float32 (H, W, 3), top row first."""
-    path = Path(path)
-    data = path.read_bytes()
+def read_header(path, data: bytes) -> tuple[int, int, list[str], int]:
+    """(width, height, the resolution line's fields, the offset of the first scanline) from
+    the start of a Radiance file's ``data``; the size is not checked against any limit."""
     if not (data.startswith(b"#?RADIANCE") or data.startswith(b"#?RGBE")):
         _fail(path, "not a Radiance HDR file (expected '#?RADIANCE' or '#?RGBE' on line 1)")
     end = data.find(b"\n\n")
@@ -72,12 +70,26 @@ def read_hdr(path) -> np.ndarray:
         n0, n1 = int(parts[1]), int(parts[3])
     except ValueError:
         _fail(path, f"malformed resolution line {data[pos:nl]!r}")
-    if n0 <= 0 or n1 <= 0 or n0 * n1 > MAX_PIXELS:
-        _fail(path, f"image size {n0} x {n1} is not in 1 .. {MAX_PIXELS} pixels")
+    if n0 <= 0 or n1 <= 0:
+        _fail(path, f"image size {n0} x {n1}: expected positive sizes")
+    height, width = (n0, n1) if parts[0][1] == "Y" else (n1, n0)
+    return width, height, parts, nl + 1
+
+
+def read_hdr(path, max_pixels: int | None = None) -> np.ndarray:
+    """Linear RGB float32 (H, W, 3), top row first; an image of more than ``max_pixels``
+    (default: glrender.film.io.MAX_DECODE_PIXELS) is refused from its header."""
+    from .io import MAX_DECODE_PIXELS, ImageTooLarge
+
+    path = Path(path)
+    data = path.read_bytes()
+    width, height, parts, pos = read_header(path, data)
+    limit = MAX_DECODE_PIXELS if max_pixels is None else max_pixels
+    if width * height > limit:
+        raise ImageTooLarge(path, width, height, limit)
+    n0, n1 = int(parts[1]), int(parts[3])
     rows_are_y = parts[0][1] == "Y"
-    height, width = (n0, n1) if rows_are_y else (n1, n0)
     scan_len, scans = (n1, n0)
-    pos = nl + 1
     rgbe = np.empty((scans, scan_len, 4), np.uint8)
     for row in range(scans):
         if (8 <= scan_len < 32768 and pos + 4 <= len(data) and data[pos] == 2 and data[pos + 1] == 2

@@ -161,6 +161,18 @@ class Case:
     search: tuple = ()              # load(search_path=...) ({tmp}: the test folder)
 
 
+def _png_claiming(width: int, height: int) -> bytes:
+    """A PNG signature and IHDR chunk claiming width x height RGB pixels, and no data."""
+    import zlib
+
+    chunk = b"IHDR" + struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    return (b"\x89PNG\r\n\x1a\n" + struct.pack(">I", 13) + chunk + struct.pack(">I", zlib.crc32(chunk))
+            + b"\0\0\0\0IEND\xaeB`\x82")
+
+
+PNG_20000 = _png_claiming(20000, 20000)      # past Pillow's error limit, not only its warning
+
+
 def refused(what: str, name: str) -> str:
     return rf"{what} '{re.escape(name)}' resolves to \S+, outside the scene's folder \S+: refused"
 
@@ -191,6 +203,26 @@ CASES = {
                                  r"no camera", code=0, search=("{tmp}/outside",)),
     "toml include allowed": Case({"scene/s.toml": 'include = "../outside/ok.toml"\n'},
                                  r"no camera", code=0, search=("{tmp}/outside",)),
+    # -- images a scene refers to: one line, the scene file and its field or line, the image
+    #    as the scene names it (once) and why; one size rule for every format; PIL's warning
+    "toml texture not an image": Case({"scene/s.toml": toml_texture("junk.png"),
+                                       "scene/junk.png": "not an image\n"},
+                                      r"s\.toml: textures\.t\.file: image 'junk\.png': cannot "
+                                      r"decode it \(cannot identify image file\)$"),
+    "toml envmap NaN": Case({"scene/s.toml": '[[lights]]\ntype = "envmap"\nfile = "e.pfm"\n',
+                             "scene/e.pfm": b"PF\n1 1\n-1.0\n" + struct.pack("<3f", float("nan"), 0, 0)},
+                            r"s\.toml: lights\[0\]\.file: image 'e\.pfm': it holds NaN or "
+                            r"infinite values$"),
+    "xml texture hdr too large": Case(
+        {"scene/s.xml": xml_bitmap("big.hdr"),
+         "scene/big.hdr": b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 9000 +X 9000\n"},
+        r"s\.xml:2: texture 'big\.hdr': 9000 x 9000 pixels is more than the 67,108,864 "
+        r"\(8192 x 8192\) a texture or environment map may have$"),
+    "cli texture bomb png": Case(
+        {"scene/s.toml": toml_texture("bomb.png"), "scene/bomb.png": PNG_20000},
+        r"^glrender: error: \S+/s\.toml: textures\.t\.file: image 'bomb\.png': 20000 x 20000 "
+        r"pixels is more than the 67,108,864 \(8192 x 8192\) a texture or environment map may "
+        r"have$", cli=("render", "{tmp}/scene/s.toml")),
     # -- Mitsuba XML: includes, obj and ply meshes, bitmaps, environment maps, <path>
     "xml include ..": Case({"scene/s.xml": xml('<include filename="../outside/secret.xml"/>')},
                            r"s\.xml:2: " + refused("included file", "../outside/secret.xml")),
@@ -402,6 +434,7 @@ def test01_hostile_input(tmp_path, name):
     assert "Traceback" not in text
     assert all(ch.isprintable() for line in text.splitlines() for ch in line), ascii(text)
     assert MARKER not in text
+    assert "decompression bomb" not in text.lower()      # images are held to glrender's limit
     passwd = _passwd_line()
     assert passwd is None or passwd not in text
     errors = [line for line in lines if line.startswith("glrender: error:")]

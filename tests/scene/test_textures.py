@@ -190,11 +190,11 @@ def _png_header_claiming(width: int, height: int) -> bytes:
 
 
 @pytest.mark.parametrize("fmt", ["toml", "obj", "xml"])
-@pytest.mark.parametrize("size, message", [
-    (12000, "declares 12000 x 12000 pixels"),            # above glrender's 8192^2 limit
-    (100000, "decompression bomb"),                      # above Pillow's own limit
-])
-def test05_huge_texture_headers_are_refused_before_decoding(write, fmt, size, message):
+@pytest.mark.parametrize("size", [12000,         # above glrender's 2^26 pixels (8192 x 8192)
+                                  100000])       # above Pillow's own limit: ours, no warning
+def test05_huge_texture_headers_are_refused_before_decoding(write, fmt, size):
+    import warnings
+
     from glrender.errors import SceneError
 
     write("huge.png", _png_header_claiming(size, size))
@@ -208,8 +208,55 @@ def test05_huge_texture_headers_are_refused_before_decoding(write, fmt, size, me
         path = write("s.xml", '<scene version="3.0.0"><shape type="sphere"><bsdf type="diffuse">'
                               '<texture type="bitmap" name="reflectance"><string name="filename" '
                               'value="huge.png"/></texture></bsdf></shape></scene>')
-    with pytest.raises(SceneError, match=message):
+    where = {"toml": r"s\.toml: textures\.t\.file: image", "obj": r"m\.mtl:2: texture",
+             "xml": r"s\.xml:1: texture"}[fmt]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with pytest.raises(SceneError, match=rf"{where} 'huge\.png': {size} x {size} pixels is "
+                                             rf"more than the 67,108,864 \(8192 x 8192\) a "
+                                             rf"texture or environment map may have$"):
+            glrender.load(path)
+    assert [str(w.message) for w in caught] == []          # PIL's DecompressionBombWarning
+
+
+# One rule for every format: at most 2^26 pixels, whatever the shape, read from the header.
+_HEADERS = {
+    "png": _png_header_claiming,
+    "pfm": lambda w, h: f"PF\n{w} {h}\n-1.0\n".encode(),
+    "hdr": lambda w, h: f"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y {h} +X {w}\n".encode(),
+    "npy": lambda w, h: _npy_header((h, w, 3)),
+}
+
+
+def _npy_header(shape) -> bytes:
+    import io as _io
+
+    out = _io.BytesIO()
+    np.lib.format.write_array_header_1_0(out, {"descr": "<f4", "fortran_order": False,
+                                                "shape": shape})
+    return out.getvalue()
+
+
+@pytest.mark.parametrize("ext", list(_HEADERS))
+@pytest.mark.parametrize("width, height, refused", [
+    (8193, 8192, True),          # one column more than 8192 x 8192
+    (16384, 4096, False),        # as many pixels as 8192 x 8192, another shape: allowed
+])
+def test06_one_pixel_limit_for_every_format(write, ext, width, height, refused):
+    from glrender.errors import SceneError
+
+    write(f"t.{ext}", _HEADERS[ext](width, height))           # a header, no pixels
+    path = write("s.toml", f'[textures.t]\nfile = "t.{ext}"\n[materials.a]\nreflectance = "t"\n'
+                           '[[shapes]]\ntype = "sphere"\nmaterial = "a"\n')
+    with pytest.raises(SceneError) as info:
         glrender.load(path)
+    line = str(info.value)
+    assert line.startswith(f"{path}: textures.t.file: image 't.{ext}': ") and line.count(f"t.{ext}") == 1
+    if refused:
+        assert line.endswith(f"{width} x {height} pixels is more than the 67,108,864 (8192 x 8192) "
+                             f"a texture or environment map may have"), line
+    else:                        # past the size check: the missing pixels are what fails
+        assert "cannot decode it" in line and "more than" not in line, line
 
 
 def test09_atlas_packs_many_textures_without_overlap(gl_ctx):

@@ -158,32 +158,52 @@ def file_hashes(paths) -> dict[str, str]:
     return hashes
 
 
-MAX_IMAGE_PIXELS = 1 << 26        # 8192 x 8192: larger textures are refused before decoding
+#: The most pixels an image a scene refers to (a texture or an environment map) may have, in
+#: every format: 2^26 = 67,108,864, which is 8192 x 8192 or any other shape with no more
+#: pixels. Checked from the file's header before any pixel is decoded.
+MAX_TEXTURE_PIXELS = 1 << 26
 
 
-def check_image_size(width: int, height: int, where: str) -> None:
-    if width * height > MAX_IMAGE_PIXELS:
-        raise SceneError(f"{where}: the image declares {width} x {height} pixels, more than the "
-                         f"{MAX_IMAGE_PIXELS} a texture may have")
+def check_image_size(width: int, height: int) -> None:
+    """Refuse an image of more than :data:`MAX_TEXTURE_PIXELS` (a SceneError saying why,
+    for the caller to put after the file and the image's name)."""
+    from ...film.io import ImageTooLarge
+
+    if width * height > MAX_TEXTURE_PIXELS:
+        raise SceneError(image_failure(ImageTooLarge("", width, height, MAX_TEXTURE_PIXELS,
+                                                     "a texture or environment map")))
 
 
-def read_image_checked(path) -> np.ndarray:
-    """An image file as linear RGB (glrender.film.io.read_image), its declared size checked
-    first for formats PIL reads lazily (a PNG header may claim 10^10 pixels)."""
-    from PIL import Image
+def image_failure(exc: BaseException, path=None) -> str:
+    """Why an image could not be read, without its path (the message names it once): our
+    own readers' reason, or a decoder's as "cannot decode it (...)"."""
+    from ...film.io import ImageTooLarge
 
+    text = str(exc).strip()
+    text = text.splitlines()[0] if text else type(exc).__name__
+    if path is not None:
+        for shown in (str(path), printable(str(path))):
+            text = text.removeprefix(f"{shown}: ").replace(f" {shown!r}", "").replace(shown, "it")
+    text = text.removeprefix(": ")
+    if isinstance(exc, (ImageTooLarge, SceneError)):
+        return text
+    return f"cannot decode it ({excerpt(text, 2 * EXCERPT_CHARS, quote=False)})"
+
+
+def read_image_checked(path, environment: bool = False) -> np.ndarray:
+    """An image file a scene refers to, as linear RGB (glrender.film.io.read_image): refused
+    from its header when larger than :data:`MAX_TEXTURE_PIXELS`, and after decoding when it
+    holds NaN or infinite values (an ``environment`` map: or negative ones). The SceneError
+    says only why: the caller names the scene file, its line or field and the image."""
     from ...film.io import read_image
 
     path = Path(path)
-    if path.suffix.lower() not in (".exr", ".hdr", ".pfm", ".npy"):
-        try:
-            with Image.open(path) as im:
-                check_image_size(im.size[0], im.size[1], str(path))
-        except SceneError:
-            raise
-        except Exception as exc:       # PIL's errors for truncated, unknown or bomb files
-            raise SceneError(f"{path}: cannot read the image ({cause(exc)})") from None
     try:
-        return read_image(path)
-    except Exception as exc:
-        raise SceneError(f"{path}: cannot read the image ({cause(exc)})") from None
+        image = read_image(path, MAX_TEXTURE_PIXELS, "a texture or environment map")
+    except Exception as exc:        # our readers' errors, and whatever a decoder raises
+        raise SceneError(image_failure(exc, path)) from None
+    if not np.all(np.isfinite(image)):
+        raise SceneError("it holds NaN or infinite values")
+    if environment and image.size and image.min() < 0:
+        raise SceneError("it holds negative values (an environment map is radiance)")
+    return image

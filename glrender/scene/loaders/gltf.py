@@ -28,7 +28,7 @@ import numpy as np
 
 from ...errors import SceneError, install_command
 from .. import model as m
-from .diagnostics import Notes, cause, check_image_size, excerpt
+from .diagnostics import Notes, cause, check_image_size, excerpt, image_failure
 from .meshes import MeshData, finish_mesh
 from .pbr import metallic_roughness_material
 from .scene_files import SceneFiles, read_bytes
@@ -316,28 +316,27 @@ class _Gltf:
 
     def image(self, index, where: str, srgb: bool, alpha: bool = False) -> np.ndarray:
         img = self.item("images", index, where)
+        named = f"images[{index}]"
         if "uri" in img:
             data = self._uri_bytes(img["uri"], f"images[{index}]")
+            if not str(img["uri"]).startswith("data:"):      # a file: named as written
+                named = f"images[{index}].uri {excerpt(img['uri'])}"
         elif "bufferView" in img:
             buf, offset, length, _ = self.view(img["bufferView"], f"images[{index}]")
             data = buf[offset:offset + length]
         else:
             self.fail(f"images[{index}]", "has neither uri nor bufferView")
-        from PIL import Image
-
-        from ...film.io import srgb_to_linear
+        from ...film.io import open_pil, srgb_to_linear
 
         try:
-            with Image.open(io.BytesIO(data)) as im:
-                check_image_size(im.size[0], im.size[1], f"{self.path}: images[{index}]")
+            with open_pil(io.BytesIO(data)) as im:
+                check_image_size(*im.size)
                 if alpha:       # the alpha channel (linear), as a grey image
                     a = np.asarray(im.convert("RGBA"), np.float64)[..., 3] / 255.0
                     return np.repeat(a[..., None], 3, axis=-1).astype(np.float32)
                 pixels = np.asarray(im.convert("RGB"), np.float64) / 255.0
-        except SceneError:
-            raise
-        except Exception as exc:
-            self.fail(f"images[{index}]", f"cannot decode the image ({cause(exc)})")
+        except Exception as exc:      # our size check's reason, or the decoder's
+            self.fail(named, image_failure(exc))
         return (srgb_to_linear(pixels) if srgb else pixels).astype(np.float32)
 
     def material(self, index, double_sided_default=False) -> tuple[int, m.Emission | None]:

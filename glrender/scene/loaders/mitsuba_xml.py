@@ -467,13 +467,12 @@ class _Builder:
 
     def image(self, node: Node, what: str) -> tuple[Path, np.ndarray]:
         """The image file a plugin's ``filename`` names, read (linear RGB)."""
-        path = self.r.files.resolve(self.prop(node, "filename", "string", ""), node.file, node.line,
-                                    what, tuple(self.r.search))
+        name = self.prop(node, "filename", "string", "")
+        path = self.r.files.resolve(name, node.file, node.line, what, tuple(self.r.search))
         try:
-            return path, read_image_checked(path)
+            return path, read_image_checked(path, environment=what == "environment map")
         except SceneError as exc:
-            raise SceneError(f"{node.where}: cannot read {what} {excerpt(path.name)} "
-                             f"({cause(exc, path)})") from None
+            raise SceneError(f"{node.where}: {what} {excerpt(name)}: {exc}") from None
 
     def alpha(self, node: Node) -> tuple[float, float]:
         if "alpha_u" in node.props or "alpha_v" in node.props:

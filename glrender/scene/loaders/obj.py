@@ -29,7 +29,7 @@ import numpy as np
 
 from ...errors import SceneError
 from .. import model as m
-from .diagnostics import Notes, cause, excerpt, read_image_checked, warn
+from .diagnostics import Notes, cause, excerpt, image_failure, read_image_checked, warn
 from .meshes import MeshData, finish_mesh
 from .pbr import metallic_roughness_material
 from .scene_files import MissingFile, SceneFiles, read_bytes
@@ -466,12 +466,11 @@ _MAP_OPTION_ARGS = {"-blendu": 1, "-blendv": 1, "-bm": 1, "-boost": 1, "-cc": 1,
 def _read_data_image(image_path: Path, opacity: bool) -> np.ndarray:
     """A data texture as stored (no sRGB decode): an opacity map's alpha channel where it
     has one, else its grey level; a normal map's RGB."""
-    from PIL import Image
-
+    from ...film.io import open_pil
     from .diagnostics import check_image_size
 
-    with Image.open(image_path) as im:
-        check_image_size(im.size[0], im.size[1], str(image_path))
+    with open_pil(image_path) as im:
+        check_image_size(*im.size)
         if opacity:
             a = np.asarray(im.convert("RGBA") if "A" in im.getbands() else im.convert("L"),
                            np.float64)
@@ -516,8 +515,8 @@ def _texture_map(parts, path: Path, lineno: int, files: SceneFiles,
         else:
             image = read_image_checked(image_path)
     except Exception as exc:
-        raise SceneError(f"{path}:{lineno}: cannot read texture {excerpt(name)} "
-                         f"({cause(exc, image_path)})") from None
+        raise SceneError(f"{path}:{lineno}: texture {excerpt(name)}: "
+                         f"{image_failure(exc, image_path)}") from None
     # options act on OBJ's uv (v up); in the flipped convention v' = 1 - v they become
     # v' -> s_v v' + (1 - s_v - o_v)
     M = np.array([[scale[0], 0.0, offset[0]], [0.0, scale[1], 1.0 - scale[1] - offset[1]],

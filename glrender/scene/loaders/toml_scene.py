@@ -293,8 +293,7 @@ def _texture(ctx, key: str, t) -> m.Texture:
         try:
             image = read_image_checked(path)
         except SceneError as exc:
-            ctx.fail(f"{key}.file", f"cannot read image {excerpt(path.name)} "
-                     f"({cause(exc, path)})")
+            ctx.fail(f"{key}.file", f"image {excerpt(t['file'])}: {exc}")
         if raw and path.suffix.lower() in (".png", ".jpg", ".jpeg"):
             from ...film.io import linear_to_srgb
 
@@ -455,10 +454,9 @@ def _light(ctx, i: int, t) -> m.Light:
     if kind == "envmap":
         path = ctx.file(t.get("file"), f"{key}.file")
         try:
-            light.image = read_image_checked(path)
+            light.image = read_image_checked(path, environment=True)
         except SceneError as exc:
-            ctx.fail(f"{key}.file", f"cannot read image {excerpt(path.name)} "
-                     f"({cause(exc, path)})")
+            ctx.fail(f"{key}.file", f"image {excerpt(t['file'])}: {exc}")
         light.scale = ctx.number(t.get("scale", 1.0), f"{key}.scale", 0)
         if "transform" in t:
             light.world_from_light = _transform(ctx, t["transform"], f"{key}.transform")
