@@ -15,6 +15,12 @@ Two ways, chosen by the user:
 
 A ``Scene`` object given to the Python API travels pickled.
 
+Both ways carry the client's search path (``--search-path``, ``glrender.load``'s
+``search_path``), so a worker resolves and refuses references as the client does: by value,
+each search folder the bundle holds files of becomes the same folder of the bundle on the
+worker; from a path, the folders are passed as given (the workers see them where the
+client does).
+
 The content hash covers each file's bytes and its path relative to the scene file's
 folder, plus the loader parameters: workers cache loaded scenes (and renderers, with
 their BVH and compiled kernel) under it.
@@ -44,6 +50,8 @@ class SceneSource:
     files: tuple = ()                   # value: ((relative path, bytes), ...)
     path: str | None = None             # path: the scene file as workers see it
     pickled: bytes | None = None        # a Scene object (Python API)
+    search: tuple = ()                  # search folders: value: relative to the bundle's
+                                        # folder; path: as given
 
     @property
     def mode(self) -> str:
@@ -68,29 +76,41 @@ def content_digest(scene_file: Path, files, params: dict) -> str:
     return h.hexdigest()
 
 
-def load_recorded(path, params: dict):
-    """``glrender.load`` that also returns every file it read (the scene file first)."""
+def load_recorded(path, params: dict, search=None):
+    """``glrender.load`` that also returns every file it read (the scene file first);
+    ``search``: its search path (None: the current one, e.g. the command line's)."""
     from .. import load
     from ..scene.loaders.diagnostics import record_files
 
     path = Path(os.path.abspath(path))
     with record_files() as files:
-        scene = load(path, **params)
+        scene = load(path, search_path=search, **params)
     return scene, [path] + [f for f in files if f != path]
 
 
-def from_file(scene_path, params: dict, scene_on_workers: str | None = None):
-    """(scene as loaded here, SceneSource) for a scene file."""
-    scene, files = load_recorded(scene_path, params)
+def from_file(scene_path, params: dict, scene_on_workers: str | None = None, search=None):
+    """(scene as loaded here, SceneSource) for a scene file, loaded with the search path
+    ``search`` (None: the current one, e.g. the command line's --search-path), which the
+    workers use too."""
+    from ..scene.loaders.scene_files import current_search_path
+
+    folders = [os.path.abspath(f) for f in (current_search_path() if search is None else search)]
+    scene, files = load_recorded(scene_path, params, folders)
     root = files[0]
     digest = content_digest(root, files, params)
     items = tuple(sorted(params.items()))
     if scene_on_workers is not None:
-        return scene, SceneSource(digest, str(scene_path), items, path=str(scene_on_workers))
+        return scene, SceneSource(digest, str(scene_path), items, path=str(scene_on_workers),
+                                  search=tuple(folders))
     base = os.path.commonpath([str(f.parent) for f in files])
     blobs = tuple((os.path.relpath(f, base), f.read_bytes()) for f in sorted(set(files)))
+    # each search folder the bundle holds files of, as the same folder inside the bundle (one
+    # it holds nothing of allows nothing a worker reads)
+    names = [name for name, _ in blobs]
+    inside = tuple(rel for rel in (os.path.relpath(f, base) for f in folders)
+                   if any(rel == "." or name.startswith(rel + os.sep) for name in names))
     return scene, SceneSource(digest, str(scene_path), items, root=os.path.relpath(root, base),
-                              files=blobs)
+                              files=blobs, search=inside)
 
 
 def from_scene(scene) -> SceneSource:
@@ -128,7 +148,7 @@ def _load(source: SceneSource):
         warnings.simplefilter("ignore")      # the client has shown the loader's warnings
         if source.mode == "path":
             try:
-                scene, files = load_recorded(source.path, params)
+                scene, files = load_recorded(source.path, params, source.search)
             except (SceneError, OSError) as exc:
                 raise UsageError(f"a worker cannot read the scene ({str(exc).splitlines()[0]}); "
                                  f"--scene-on-workers names a path every worker can read") \
@@ -141,7 +161,8 @@ def _load(source: SceneSource):
         folder = _materialize(source)
         from .. import load
 
-        return load(folder / source.root, **params)
+        return load(folder / source.root, search_path=[folder / rel for rel in source.search],
+                    **params)
 
 
 def _materialize(source: SceneSource) -> Path:

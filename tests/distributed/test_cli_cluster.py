@@ -238,3 +238,34 @@ def test07_the_unit_size_is_calibrated_once_then_reused_and_recorded(tmp_path):
     cache.write_text("{")
     r = run("render", CORNELL, *SMALL, "-o", tmp_path / "x.exr", "--workers", 1, env=env)
     assert "unit-size.json" in one_error_line(r)
+
+
+@pytest.mark.slow
+def test08_search_path_reaches_the_workers(tmp_path):
+    """A texture beside the scene's folder, allowed with --search-path: the workers resolve
+    it as the client does, by value and from a path (the same image as one process);
+    without --search-path the cluster render refuses it in the local render's one line."""
+    from PIL import Image
+
+    (tmp_path / "scene").mkdir()
+    (tmp_path / "textures").mkdir()
+    Image.new("RGB", (4, 4), (200, 100, 50)).save(tmp_path / "textures" / "t.png")
+    scene = tmp_path / "scene" / "s.toml"
+    scene.write_text(CORNELL.read_text().replace(
+        'reflectance = [0.885809, 0.698859, 0.666422]', 'reflectance = "wood"', 1)
+        + '\n[textures.wood]\nfile = "../textures/t.png"\n')
+    assert 'reflectance = "wood"' in scene.read_text()
+    allow = ["--search-path", tmp_path / "textures"]
+    small = ["--width", 16, "--height", 16, "--spp", 4, "--quiet"]
+    assert run("render", scene, *small, *allow, "-o", tmp_path / "one.npy").returncode == 0
+    by_value = run("render", scene, *small, *allow, "-o", tmp_path / "value.npy", "--workers", 1)
+    assert by_value.returncode == 0, by_value.stderr
+    from_path = run("render", scene, *small, *allow, "-o", tmp_path / "path.npy", "--workers", 1,
+                    "--scene-on-workers", scene)
+    assert from_path.returncode == 0, from_path.stderr
+    one = np.load(tmp_path / "one.npy")
+    assert np.array_equal(np.load(tmp_path / "value.npy"), one)
+    assert np.array_equal(np.load(tmp_path / "path.npy"), one)
+    local = one_error_line(run("render", scene, *small, "-o", tmp_path / "r.npy"))
+    cluster = one_error_line(run("render", scene, *small, "-o", tmp_path / "r.npy", "--workers", 1))
+    assert cluster == local and "'../textures/t.png'" in local and "--search-path" in local
