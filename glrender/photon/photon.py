@@ -21,7 +21,7 @@ import hashlib
 import math
 import time
 from dataclasses import dataclass
-from typing import Any, Iterator
+from typing import Any
 
 import numpy as np
 
@@ -323,13 +323,15 @@ class PhotonRenderer(Renderer):
         return h.hexdigest()
 
     def fingerprint_parts(self) -> dict[str, str]:
-        return {**super().fingerprint_parts(), **part_digests(self._photon_inputs())}
+        # the store kernel's source is made of the render kernel's defines and scene code,
+        # which the Renderer's parts cover: its settings are the part of its own
+        return {**super().fingerprint_parts(), **part_digests(self._photon_inputs()[:1])}
 
-    def _photon_inputs(self) -> Iterator[tuple[str, bytes]]:
+    def _photon_inputs(self) -> list[tuple[str, bytes]]:
         p = self.photon
-        yield "photon maps", repr(("photon", self.photons, p.radius, p.knn, p.kernel,
-                                   p.final_gather, p.direct)).encode()
-        yield "photon maps", self._store_hash.encode()
+        return [("photon map settings", repr(("photon", self.photons, p.radius, p.knn, p.kernel,
+                                              p.final_gather, p.direct)).encode()),
+                ("photon store kernel", self._store_hash.encode())]
 
     # -- outputs -----------------------------------------------------------------------------
     @current

@@ -27,7 +27,7 @@ import hashlib
 import math
 import time
 from dataclasses import dataclass, field, replace
-from typing import Any, Callable, Iterator
+from typing import Any, Callable
 
 import numpy as np
 
@@ -265,13 +265,15 @@ class SppmRenderer:
         return h.hexdigest()
 
     def fingerprint_parts(self) -> dict[str, str]:
-        return {**self.base.fingerprint_parts(), **part_digests(self._sppm_inputs())}
+        # SPPM's kernels are made of the inner renderer's defines and scene code, which its
+        # parts cover: SPPM's settings are the part of its own
+        return {**self.base.fingerprint_parts(), **part_digests(self._sppm_inputs()[1:])}
 
-    def _sppm_inputs(self) -> Iterator[tuple[str, bytes]]:
-        yield "SPPM kernels and parameters", self._kernel_hash.encode()
-        yield "SPPM kernels and parameters", repr(
-            ("sppm", self.photons_per_iteration, self.initial_radius, float(self.sppm.alpha),
-             self.sppm.direct, self.sppm.kernel)).encode()
+    def _sppm_inputs(self) -> list[tuple[str, bytes]]:
+        return [("SPPM kernels", self._kernel_hash.encode()),
+                ("SPPM settings", repr(
+                    ("sppm", self.photons_per_iteration, self.initial_radius,
+                     float(self.sppm.alpha), self.sppm.direct, self.sppm.kernel)).encode())]
 
     # -- rendering ---------------------------------------------------------------------------
     def _bind(self) -> None:
