@@ -322,8 +322,8 @@ def declared_size(path) -> tuple[int, int]:
                 shape = header(f, max_header_size=1 << 16)[0]
             except (ValueError, OSError, SyntaxError, TypeError) as exc:
                 raise UsageError(f"{path}: not a numpy array file ({exc})") from None
-        if len(shape) < 2:
-            raise UsageError(f"{path}: an array of shape {shape}, expected (height, width, 3)")
+        if len(shape) < 2:            # not an image: its elements count, its reader says why
+            return int(np.prod(shape, dtype=np.int64)), 1
         return int(shape[1]), int(shape[0])
     if ext == ".exr":
         try:
