@@ -5,7 +5,9 @@
   default 16) through the public API, written into the site as gallery/NAME.png;
 - the command-line reference, from glrender's argparse parser;
 - the example scripts, included verbatim;
-- the lab report pages (docs/lab/*.md), added to the navigation when present.
+- the lab report pages (docs/lab/*.md), added to the navigation when present;
+- benchmarks/RESULTS.md on the benchmarks page, its headings moved one level down and its
+  relative links made plain text (they point outside the site).
 """
 from __future__ import annotations
 
@@ -116,7 +118,26 @@ def cli_markdown() -> str:
     return "\n".join(out)
 
 
+def results_markdown() -> str:
+    """benchmarks/RESULTS.md, to go under a second-level heading of docs/benchmarks.md: its
+    title dropped, its headings one level down, its relative links plain text."""
+    lines = (ROOT / "benchmarks" / "RESULTS.md").read_text().splitlines()
+    if lines and lines[0].startswith("# "):
+        lines = lines[1:]
+    out, fenced = [], False
+    for line in lines:
+        if line.startswith("```"):
+            fenced = not fenced
+        elif not fenced and re.match(r"#{1,4} ", line):
+            line = "#" + line
+        out.append(line)
+    text = "\n".join(out) + "\n"
+    return re.sub(r"\[([^\]]+)\]\((?![a-z]+:|#)([^)]+)\)", r"\1 (`\2`)", text)
+
+
 def on_page_markdown(markdown: str, page: Any, config: Any, files: Files) -> str:
+    if "<!-- results -->" in markdown:
+        markdown = markdown.replace("<!-- results -->", results_markdown())
     if "<!-- gallery -->" in markdown:
         markdown = markdown.replace("<!-- gallery -->", gallery_markdown())
     if "<!-- cli-reference -->" in markdown:
