@@ -93,11 +93,26 @@ def test_examples_and_pages(site):
     for script in ("render_file.py", "scene_in_code.py", "compare_integrators.py"):
         first = (ROOT / "examples" / script).read_text().splitlines()[0].strip('"')
         assert first in examples
-    for page in ("getting-started.html", "scene-format.html", "scale-out.html"):
+    for page in ("getting-started.html", "scene-format.html", "scale-out.html",
+                 "integrators.html", "bidirectional.html", "photon-mapping.html",
+                 "checkpoints.html", "production.html", "denoising.html", "preview.html",
+                 "sampling.html", "estimator-lab.html", "benchmarks.html"):
         assert (site / page).is_file()
     assert "./dev.sh render" in (site / "getting-started.html").read_text()
     for report in (ROOT / "docs" / "lab").glob("*.md"):   # the lab's pages join the navigation
         assert f'href="lab/{report.stem}.html"' in (site / "index.html").read_text()
+
+
+@pytest.mark.slow
+def test_benchmarks_page_includes_results(site):
+    """benchmarks/RESULTS.md is on the benchmarks page, every section of it, under the page's
+    own headings."""
+    import html
+
+    text = html.unescape((site / "benchmarks.html").read_text())
+    assert "<!-- results -->" not in text
+    for heading in re.findall(r"^## (.+)$", (ROOT / "benchmarks/RESULTS.md").read_text(), re.M):
+        assert re.search(rf"<h3 id=[^>]*>{re.escape(heading)}", text), heading
 
 
 def find_chromium() -> str | None:
