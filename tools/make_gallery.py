@@ -2,10 +2,10 @@
 
     python tools/make_gallery.py [NAME ...]      # all images, or the named ones
 
-Each entry is the command the README shows under its image (run here with this Python's
-``-m glrender``); an entry with a ``pick`` writes into a scratch folder and copies one file
-of it to docs/images/. The sizes and sample counts keep each image under a minute on two
-llvmpipe cores and the PNGs small. The seconds each took are printed.
+Each entry is the command the README shows under its image (with ``--seed 1``; run here
+with this Python's ``-m glrender``); an entry with a ``pick`` writes into a scratch folder and
+copies one file of it to docs/images/. The sizes and sample counts keep each image under a
+minute on two llvmpipe cores and the PNGs small. The seconds each took are printed.
 """
 from __future__ import annotations
 
