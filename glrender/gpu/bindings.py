@@ -6,9 +6,9 @@ sees two blocks or samplers on one binding point.
 
 GL counts three binding spaces apart: uniform blocks (``UBO_*``), storage blocks (``SSBO_*``)
 and texture units (``TEX_*``). The render kernel's scene owns uniform block 0, storage blocks
-0-7 and texture units 0-9; the kernels beside it (bdpt's strategy images, the photon map and
+0-7 and texture units 0-10; the kernels beside it (bdpt's strategy images, the photon map and
 SPPM kernels) number theirs from there and never meet in one kernel, so storage blocks 8 and
-up and texture units 10 and up are each used by more than one of them.
+up and texture units 11 and up are each used by more than one of them.
 """
 from __future__ import annotations
 
@@ -55,11 +55,13 @@ TEX_TRI_INFO = 6
 TEX_ENVMAP = 7
 TEX_TEXTURES = 8
 TEX_TEXTURE_RECORDS = 9
+# the coating tables of per-texel rough plastic (scene/layout.glsl)
+TEX_MICROFACET_TABLES = 10
 # photon mapping's maps and their hash tables (photon/map_layout.glsl)
-TEX_GLOBAL_MAP = 10
-TEX_CAUSTIC_MAP = 11
-TEX_GLOBAL_CELLS = 12
-TEX_CAUSTIC_CELLS = 13
+TEX_GLOBAL_MAP = 11
+TEX_CAUSTIC_MAP = 12
+TEX_GLOBAL_CELLS = 13
+TEX_CAUSTIC_CELLS = 14
 
 # ---- flag bits --------------------------------------------------------------------------
 # MaterialData.info.y (bsdf/bsdf_common.glsl)
@@ -68,6 +70,8 @@ MATERIAL_FLAG_GGX = 2
 MATERIAL_FLAG_NONLINEAR = 4
 MATERIAL_FLAG_NORMAL_SHADOWING = 8   # the normal map's shadowing term (bsdf/bsdf.glsl)
 MATERIAL_FLAG_NORMAL_FLIP = 16       # the normal map's flip of invalid normals (bsdf/normal_map.glsl)
+MATERIAL_FLAG_ALPHA_TABLE = 32       # roughplastic reads the coating table over alpha (set on the
+                                     # device, bsdf/metallic_roughness.glsl)
 # LightData.info.y (lights/light.glsl)
 LIGHT_FLAG_TWO_SIDED = 1
 LIGHT_FLAG_RECTANGLE = 2             # a parallelogram with orthogonal edges, sampled as a

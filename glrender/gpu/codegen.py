@@ -77,6 +77,18 @@ def has_alpha_cutouts(packed: PackedScene) -> bool:
     return bool(len(packed.materials) and (packed.materials["opacity_texture"] > 0).any())
 
 
+def has_metallic_roughness(packed: PackedScene) -> bool:
+    """Whether a material is of the metallicroughness kind (its BSDF chosen per texel); the
+    renderer then compiles with GLRENDER_METALLIC_ROUGHNESS."""
+    return "metallicroughness" in packed.material_kinds
+
+
+def has_emission_textures(packed: PackedScene) -> bool:
+    """Whether an area light has an emission texture (LightData.emission_texture: its
+    texture + 1); the renderer then compiles with GLRENDER_EMISSION_TEXTURES."""
+    return bool(len(packed.lights) and (packed.lights["emission_texture"] > 0).any())
+
+
 _ALPHA_PASS = [
     "bool bvh_alpha_pass(uint tri, vec2 bary) {",
     "    MaterialHeader m = scene_material(texelFetch(u_tri_info, int(tri)).x);",

@@ -64,6 +64,7 @@ class DeviceScene:
             if self.packed.has_bvh:
                 self._upload_mesh()
             self._upload_textures()
+            self._upload_microfacet_tables()
         except BaseException:
             self._free()
             raise
@@ -164,6 +165,18 @@ class DeviceScene:
             self.texture_bytes = array.width * array.height * array.layers * 8
             self._owned += [array, records]
             self._units += [(bindings.TEX_TEXTURES, array.use), (bindings.TEX_TEXTURE_RECORDS, records.bind)]
+
+    def _upload_microfacet_tables(self) -> None:
+        """The coating table over alpha that per-texel rough plastic reads (scenes with a
+        metallicroughness material only)."""
+        from ..gl.buffers import BufferTexture
+        from .microfacet_tables import alpha_table
+
+        if "metallicroughness" in self.packed.material_kinds:
+            tex = BufferTexture(self.ctx, np.ascontiguousarray(alpha_table()).reshape(-1), "r32f",
+                                "microfacet tables")
+            self._owned.append(tex)
+            self._units.append((bindings.TEX_MICROFACET_TABLES, tex.bind))
 
     def _upload_mesh(self) -> None:
         """BVH over the static mesh triangles (world space) plus one tree per moving mesh

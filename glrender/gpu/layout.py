@@ -56,11 +56,16 @@ LIGHT = np.dtype([
     ("params", "<f4", 3),
     ("selection_pmf", "<f4"),
     ("info", *_U4),
+    ("uv0", "<f4", 2),            # textured emission: uv at p and its change along e1, e2
+    ("uv_e1", "<f4", 2),
+    ("uv_e2", "<f4", 2),
+    ("emission_texture", "<f4"),  # texture index + 1 (0: none)
+    ("pad", "<f4"),
 ])
 
 # std430/std140 sizes of the GLSL structs (16-byte vectors and matrices; MaterialData ends
 # with a float[64], std430 stride 4).
-SIZES = {"RenderParams": 288, "MaterialData": 336, "LightData": 112}
+SIZES = {"RenderParams": 288, "MaterialData": 336, "LightData": 144}
 for _name, _dtype in (("RenderParams", RENDER_PARAMS), ("MaterialData", MATERIAL),
                       ("LightData", LIGHT)):
     assert _dtype.itemsize == SIZES[_name], (_name, _dtype.itemsize)
@@ -68,7 +73,7 @@ for _name, _dtype in (("RenderParams", RENDER_PARAMS), ("MaterialData", MATERIAL
 # ---- enumerations shared with GLSL (bsdf/bsdf.glsl, lights/light.glsl) ---------------------
 MATERIAL_KINDS = {
     "diffuse": 0, "conductor": 1, "roughconductor": 2, "dielectric": 3, "roughdielectric": 4,
-    "thindielectric": 5, "plastic": 6, "roughplastic": 7, "null": 8,
+    "thindielectric": 5, "plastic": 6, "roughplastic": 7, "null": 8, "metallicroughness": 9,
 }
 LIGHT_KINDS = {
     "parallelogram": 0, "triangle": 1, "sphere": 2, "disk": 3, "point": 4, "spot": 5,

@@ -174,3 +174,65 @@ def internal_reflectance(alpha: float, eta: float, ggx: bool) -> float:
     smith = _smith_g1(wo, m, alpha, ggx) * F
     smith = np.where((wo[..., 2] <= 0.0) | (wi_b[..., 2] <= 0.0), 0.0, smith)
     return float(2.0 * np.mean((smith @ w) * wi[:, 2]))
+
+
+# ---- the coating of the metallic-roughness rule, per texel ------------------------------------
+#
+# A metallic-roughness material (glTF's, scene/loaders/pbr.py) chooses roughplastic per
+# surface point with alpha = roughness^2 >= ALPHA_TABLE_MIN, GGX and IOR 1.5 (PBR_IOR): the
+# table over alpha holds T(cos theta) and R_int for that coating at ALPHA_TABLE_ROWS values of
+# sqrt(alpha) evenly spaced in [sqrt(ALPHA_TABLE_MIN), 1]; bsdf/roughplastic.glsl interpolates
+# bilinearly in (sqrt(alpha), cos theta). Against the exact values between its rows the
+# interpolation errs by at most 7e-4 in T for cos theta > 0.1 (3e-3 at grazing angles) and
+# 8e-4 in R_int. R_int's quadrature (128 x 128 nodes, IOR below 1) takes half a second a row,
+# so the table ships with the package (data/roughplastic_alpha_table.npy, written by
+# ``python -m glrender.gpu.microfacet_tables``; tests/bsdf/test_metallic_roughness.py checks
+# rows of it against this module).
+
+PBR_IOR = 1.5
+ALPHA_TABLE_MIN = 1e-3
+ALPHA_TABLE_ROWS = 32
+ALPHA_TABLE_COLUMNS = TABLE_SIZE + 1      # T at the 64 cosines, then R_int
+_ALPHA_TABLE_FILE = "data/roughplastic_alpha_table.npy"
+
+
+def alpha_table_roughness() -> np.ndarray:
+    """sqrt(alpha) of each row of the table over alpha."""
+    return np.linspace(np.sqrt(ALPHA_TABLE_MIN), 1.0, ALPHA_TABLE_ROWS)
+
+
+def alpha_table_row(sqrt_alpha: float) -> np.ndarray:
+    """One row of the table: T at the 64 cosines and R_int, for alpha = sqrt_alpha^2
+    (GGX, IOR PBR_IOR), float32."""
+    alpha = float(sqrt_alpha) ** 2
+    return np.append(_external_transmittance(alpha, PBR_IOR, True),
+                     np.float32(internal_reflectance(alpha, PBR_IOR, True))).astype(np.float32)
+
+
+def compute_alpha_table() -> np.ndarray:
+    """The whole table (ALPHA_TABLE_ROWS x ALPHA_TABLE_COLUMNS float32), from scratch."""
+    return np.stack([alpha_table_row(s) for s in alpha_table_roughness()])
+
+
+@lru_cache(maxsize=1)
+def alpha_table() -> np.ndarray:
+    """The table as shipped with the package (read-only)."""
+    from importlib import resources
+
+    with resources.files(__package__).joinpath(_ALPHA_TABLE_FILE).open("rb") as f:
+        table = np.load(f, allow_pickle=False)
+    if table.shape != (ALPHA_TABLE_ROWS, ALPHA_TABLE_COLUMNS) or table.dtype != np.float32:
+        raise RuntimeError(f"glrender/gpu/{_ALPHA_TABLE_FILE}: a table of shape "
+                           f"{(ALPHA_TABLE_ROWS, ALPHA_TABLE_COLUMNS)} float32 was expected, "
+                           f"got {table.shape} {table.dtype}: write it again")
+    table.setflags(write=False)
+    return table
+
+
+if __name__ == "__main__":
+    from pathlib import Path
+
+    out = Path(__file__).with_name("data") / "roughplastic_alpha_table.npy"
+    out.parent.mkdir(exist_ok=True)
+    np.save(out, compute_alpha_table())
+    print(f"wrote {out}")

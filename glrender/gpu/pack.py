@@ -155,6 +155,16 @@ def _spectrum_mean(value) -> float:
     return float(np.mean(np.asarray(value, np.float64)))
 
 
+def _texture_mean_rgb(texture: m.Texture) -> np.ndarray:
+    """The mean colour of a texture over its texels (a checkerboard: of its two colours)."""
+    if texture.kind == "bitmap" and texture.image is not None:
+        image = np.asarray(texture.image, np.float64)
+        image = image.reshape(-1, image.shape[-1]) if image.ndim == 3 else image.reshape(-1, 1)
+        return np.resize(image[:, :3].mean(axis=0), 3) if image.shape[1] >= 3 else \
+            np.full(3, image.mean())
+    return 0.5 * (np.asarray(texture.color0, np.float64) + np.asarray(texture.color1, np.float64))
+
+
 def _specular_sampling_weight(mat: m.Material) -> float:
     """Mitsuba's plastic lobe weight: mean(specular) / (mean(diffuse) + mean(specular))."""
     s, d = _spectrum_mean(mat.specular_reflectance), _spectrum_mean(mat.reflectance)
@@ -179,7 +189,8 @@ def pack_material(mat: m.Material, textures: TextureTable | None = None) -> np.n
     by nature, so the two_sided flag is dropped, as Mitsuba's twosided rejects them);
     plastics (c0 diffuse reflectance, c1 specular reflectance, c2.x specular sampling
     weight, c2.y internal diffuse reflectance of the coating; roughplastic also the
-    transmittance table). params: alpha (clamped to >= 1e-4 as in Mitsuba), eta.
+    transmittance table); metallicroughness (c0 base colour, c1 (-, roughness,
+    metallic), c2 as plastic's). params: alpha (clamped to >= 1e-4 as in Mitsuba), eta.
     Textured colours (``m.Texture``) are numbered in ``textures``; info.z and info.w hold
     the texture index + 1 of color0 and color1 (0: the constant colour).
     """
@@ -235,6 +246,16 @@ def pack_material(mat: m.Material, textures: TextureTable | None = None) -> np.n
             ggx = mat.distribution == "ggx"
             out["table"] = external_transmittance(alpha[0], eta, ggx)
             out["color2"][1] = internal_reflectance(alpha[0], eta, ggx)
+    elif kind == "metallicroughness":
+        # chosen per surface point (bsdf/metallic_roughness.glsl): color0 the base colour,
+        # color1 (-, roughness, metallic), color2 the plastic's sampling weight and Fdr_int
+        # (its smooth coating; the rough one's come from the table over alpha)
+        out["color0"][:3], tex0 = _color(mat.reflectance, f"{what}.reflectance", textures)
+        out["color1"][:3], tex1 = _color(mat.metallic_roughness, f"{what}.metallic_roughness",
+                                         textures)
+        out["color2"][0] = _specular_sampling_weight(mat)
+        out["color2"][1] = _fresnel_diffuse_reflectance(1.0 / eta)
+        flags |= bindings.MATERIAL_FLAG_GGX
     out["params"] = (alpha[0], alpha[1], eta)
     out["info"] = (layout.MATERIAL_KINDS[kind], flags, tex0, tex1)
     for name in ("normal_map", "opacity"):
@@ -253,6 +274,32 @@ def pack_material(mat: m.Material, textures: TextureTable | None = None) -> np.n
         out["opacity_texture"] = textures.index(mat.opacity, f"{what}.opacity")
         out["alpha_cutoff"] = mat.alpha_cutoff
     return out
+
+
+def material_kinds(materials: list[m.Material]) -> set[str]:
+    """The material kinds the device meets: each material's, and for a metallicroughness
+    material every kind its metallic and roughness values can pick (bilinear filtering
+    stays within the texels' range; the range of the half floats the device reads)."""
+    from ..scene.loaders.pbr import metallic_roughness_kinds
+
+    kinds = {mat.kind for mat in materials}
+    for mat in materials:
+        if mat.kind != "metallicroughness":
+            continue
+        value = mat.metallic_roughness
+        if isinstance(value, m.Texture):
+            if value.kind == "bitmap" and value.image is not None:
+                texels = np.asarray(value.image, np.float32).reshape(-1, np.shape(value.image)[-1])
+            else:
+                texels = np.array([value.color0, value.color1], np.float32)
+            texels = texels.astype(np.float16).astype(np.float64)
+        else:
+            texels = np.asarray(value, np.float64).reshape(1, -1)
+        if texels.shape[-1] < 3:
+            texels = np.repeat(texels[:, :1], 3, axis=1)
+        kinds |= metallic_roughness_kinds((texels[:, 2].min(), texels[:, 2].max()),
+                                          (texels[:, 1].min(), texels[:, 1].max()))
+    return kinds
 
 
 def _fresnel_diffuse_reflectance(eta: float) -> float:
@@ -317,6 +364,7 @@ def pack_scene(scene: m.Scene) -> PackedScene:
     soup = MeshSoup()
     lights: list[np.ndarray] = []
     weights: list[float] = []
+    textures = TextureTable()
     lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
 
     def grow(points):
@@ -326,7 +374,8 @@ def pack_scene(scene: m.Scene) -> PackedScene:
             p_lo, p_hi = m.point_bounds(p)
             lo, hi = np.minimum(lo, p_lo), np.maximum(hi, p_hi)
 
-    def add_area_light(kind, emission: m.Emission, **fields):
+    def add_area_light(kind, emission: m.Emission, uv=None, **fields):
+        """uv: 3x2, the uv at p and its change along e1 and e2 (textured emission)."""
         rec = np.zeros(1, layout.LIGHT)[0]
         radiance = _rgb(emission.radiance, "emission.radiance")
         for key, value in fields.items():
@@ -335,14 +384,25 @@ def pack_scene(scene: m.Scene) -> PackedScene:
         flags = bindings.LIGHT_FLAG_TWO_SIDED if emission.two_sided else 0
         rec["info"] = (layout.LIGHT_KINDS[kind], flags, NO_PRIMITIVE, 0)
         area = float(rec["n"][3])
-        weights.append(math.pi * area * _luminance(radiance) * (2 if emission.two_sided else 1))
+        power_radiance = radiance
+        if emission.texture is not None:
+            # the radiance at a point is the texel's there (lights/light.glsl); selection by
+            # power takes the texture's mean over its texels
+            if kind == "sphere":
+                raise SceneError(f"{scene.source}: textured emission applies to meshes and "
+                                 f"rectangles, not to spheres")
+            rec["emission_texture"] = textures.index(emission.texture, "emission.texture")
+            rec["uv0"], rec["uv_e1"], rec["uv_e2"] = (np.array([[0, 0], [1, 0], [0, 1]])
+                                                      if uv is None else np.asarray(uv))
+            power_radiance = radiance * _texture_mean_rgb(emission.texture)
+        weights.append(math.pi * area * _luminance(power_radiance) * (2 if emission.two_sided else 1))
         lights.append(rec)
         return len(lights)  # index + 1
 
     def add_quad(q: Parallelogram, emission):
         if emission is not None:
             q.light = add_area_light("triangle" if q.triangle else "parallelogram", emission,
-                                     p=q.corner, e1=q.e1, e2=q.e2,
+                                     uv=q.uv, p=q.corner, e1=q.e1, e2=q.e2,
                                      n=(*q.normal, q.area))
             lights[-1]["info"][2] = len(quads)   # its primitive id
         quads.append(q)
@@ -442,8 +502,9 @@ def pack_scene(scene: m.Scene) -> PackedScene:
                     e1, e2 = tri[k, 1] - tri[k, 0], tri[k, 2] - tri[k, 0]
                     n = np.cross(e1, e2)
                     area = 0.5 * np.linalg.norm(n)
-                    light_ids[k] = add_area_light("triangle", shape.emission, p=tri[k, 0], e1=e1, e2=e2,
-                                                  n=(*(n / (2 * area)), area))
+                    uv = (uvs[k, 0], uvs[k, 1] - uvs[k, 0], uvs[k, 2] - uvs[k, 0])
+                    light_ids[k] = add_area_light("triangle", shape.emission, uv=uv, p=tri[k, 0],
+                                                  e1=e1, e2=e2, n=(*(n / (2 * area)), area))
             soup.positions.append(tri)
             soup.normals.append(normals)
             soup.uvs.append(uvs)
@@ -514,14 +575,13 @@ def pack_scene(scene: m.Scene) -> PackedScene:
         lights.append(rec)
         weights.append(weight)
 
-    textures = TextureTable()
     materials = np.array([pack_material(mat, textures) for mat in scene.materials], layout.MATERIAL) \
         if scene.materials else layout.zeros(layout.MATERIAL)
     light_arr = np.array(lights, layout.LIGHT) if lights else np.zeros(0, layout.LIGHT)
     return PackedScene(
         quads=quads, spheres=spheres, mesh=soup.arrays(), materials=materials,
         lights=light_arr, light_weights=np.asarray(weights, np.float64),
-        bounds=(lo, hi), material_kinds={mat.kind for mat in scene.materials},
+        bounds=(lo, hi), material_kinds=material_kinds(scene.materials),
         light_kinds={k for k, v in layout.LIGHT_KINDS.items()
                      if len(light_arr) and (light_arr["info"][:, 0] == v).any()},
         environment=environment, env_image=env_image, textures=textures, moving_meshes=moving)

@@ -21,6 +21,8 @@ OPTIONAL_DEFINES = {
     "GLRENDER_STRATEGY_DEPTH": "bdpt keeps each strategy's image up to this path length",
     "GLRENDER_BVH_MAX_DEPTH": "the deepest BVH the traversal stack holds (tests lower it)",
     "GLRENDER_BDPT_GENERIC_WEIGHTS": "test only: bdpt evaluates every MIS density afresh",
+    "GLRENDER_METALLIC_ROUGHNESS": "a metallic-roughness material picks its BSDF per texel",
+    "GLRENDER_EMISSION_TEXTURES": "an area light's radiance varies with a texture",
 }
 
 

@@ -272,6 +272,10 @@ class Renderer:
             self.defines["GLRENDER_ALPHA_CUTOUTS"] = 1     # geometry/bvh.glsl asks the scene
         if codegen.has_normal_shadowing(p):
             self.defines["GLRENDER_NORMAL_SHADOWING"] = 1  # bsdf/bsdf.glsl bsdf_normal_shadowing
+        if codegen.has_metallic_roughness(p):
+            self.defines["GLRENDER_METALLIC_ROUGHNESS"] = 1  # bsdf/metallic_roughness.glsl
+        if codegen.has_emission_textures(p):
+            self.defines["GLRENDER_EMISSION_TEXTURES"] = 1   # lights/light.glsl area_light_radiance
         if s.strategy_depth:
             self._check_strategy_images()
             self.defines["GLRENDER_STRATEGY_DEPTH"] = s.strategy_depth

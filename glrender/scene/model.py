@@ -151,7 +151,7 @@ Spectrum = Union[RGB, Texture]
 
 # -- materials -----------------------------------------------------------------------------
 MATERIAL_KINDS = ("diffuse", "conductor", "roughconductor", "dielectric", "roughdielectric",
-                  "thindielectric", "plastic", "roughplastic", "null")
+                  "thindielectric", "plastic", "roughplastic", "null", "metallicroughness")
 
 
 @dataclass
@@ -165,6 +165,11 @@ class Material:
       ``specular_reflectance`` / ``specular_transmittance``, ``alpha``
     - plastic / roughplastic: ``reflectance`` (diffuse base), ``specular_reflectance``,
       ``int_ior`` / ``ext_ior``, ``alpha``, ``nonlinear``
+    - metallicroughness: glTF's metallic-roughness model with the BSDF chosen per surface
+      point: ``metallic_roughness``'s blue channel is the metallic value there and its
+      green channel the roughness (a raw texture with glTF's factors multiplied in, or an
+      RGB), ``reflectance`` the base colour; the rule of :mod:`.loaders.pbr` picks a
+      (rough) conductor reflecting the base colour or a (rough) plastic over it
     ``two_sided``: the BSDF answers on both sides of the surface (Mitsuba's twosided).
     Any kind may also have a tangent-space ``normal_map`` (a raw bitmap: n = 2 c - 1 in
     the frame x = dp/du, y = n x x, z = the shading normal, the glTF / OpenGL convention
@@ -196,6 +201,7 @@ class Material:
     normal_flip: bool = False
     opacity: Optional[Texture] = None
     alpha_cutoff: float = 0.5
+    metallic_roughness: Spectrum = (0.0, 1.0, 0.0)
 
     def __post_init__(self) -> None:
         if self.kind not in MATERIAL_KINDS:
@@ -209,10 +215,12 @@ class Material:
 # -- shapes ------------------------------------------------------------------------------
 @dataclass
 class Emission:
-    """An area light attached to a shape: uniform radiance on its front side."""
+    """An area light attached to a shape: radiance on its front side, uniform, or with a
+    ``texture`` (meshes and rectangles) ``radiance`` times the texture at the surface uv."""
 
     radiance: RGB = (1.0, 1.0, 1.0)
     two_sided: bool = False
+    texture: Optional[Texture] = None
 
 
 @dataclass

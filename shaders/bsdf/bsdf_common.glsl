@@ -18,6 +18,8 @@ const uint kMaterialThinDielectric = 5u;
 const uint kMaterialPlastic = 6u;
 const uint kMaterialRoughPlastic = 7u;
 const uint kMaterialNull = 8u;
+// resolved per surface point into one of the above (bsdf/metallic_roughness.glsl)
+const uint kMaterialMetallicRoughness = 9u;
 
 // Material flags (kMaterialFlag*): common/bindings.glsl.
 #include "common/bindings.glsl"

@@ -1,6 +1,8 @@
 // From a material record and texture coordinates to the Bsdf of one surface point.
 #include "bsdf/bsdf_common.glsl"
+#include "bsdf/metallic_roughness.glsl"
 #include "bsdf/texture.glsl"
+#include "common/params.glsl"
 #include "scene/layout.glsl"
 #include "@scene"
 
@@ -25,6 +27,7 @@ Bsdf bsdf_from_material(uint material, vec2 uv) {
     b.eta = m.params.z;
     b.material = material;
     b.n0 = vec3(0.0, 0.0, 1.0);
+    if (kMetallicRoughness && b.kind == kMaterialMetallicRoughness) b = metallic_roughness_resolve(b);
     return b;
 }
 
@@ -32,3 +35,10 @@ Bsdf bsdf_from_material(uint material, vec2 uv) {
 float material_table_fetch(uint material, uint i) {
     return materials[material].table[i];
 }
+
+#if GLRENDER_METALLIC_ROUGHNESS
+// The coating table over alpha (bsdf/roughplastic.glsl's prototype).
+float alpha_table_fetch(uint i) {
+    return texelFetch(u_microfacet_tables, int(i)).x;
+}
+#endif

@@ -6,7 +6,9 @@
 // hemispherical reflectance from inside; the nonlinear flag; `material` indexes
 // T(cos theta), the coating's directional transmittance from outside, tabulated by
 // the host at 64 evenly spaced cosines in [0, 1] and interpolated linearly (both
-// exactly as Mitsuba 3 computes them: glrender/gpu/microfacet_tables.py). Lobes:
+// exactly as Mitsuba 3 computes them: glrender/gpu/microfacet_tables.py); with the flag
+// kMaterialFlagAlphaTable (per-texel roughness, bsdf/metallic_roughness.glsl) T comes from
+// the table over alpha of the metallic-roughness coating instead (GGX, eta 1.5). Lobes:
 //   glossy:  f |cos theta_i| = c1 F(wo.m) D G / (4 cos theta_o)   (roughconductor's form)
 //   diffuse: f |cos theta_i| = rho' T(cos theta_o) T(cos theta_i) cos theta_i / (pi eta^2),
 //            rho' = rho / (1 - R_int) (or rho / (1 - rho R_int) if nonlinear).
@@ -19,6 +21,7 @@
 #include "bsdf/microfacet_distribution.glsl"
 #include "bsdf/plastic.glsl"
 #include "common/constants.glsl"
+#include "common/params.glsl"
 #include "sampling/hemisphere.glsl"
 
 // Element i in [0, 64) of the transmittance table of material record `material`.
@@ -30,10 +33,43 @@ float material_table_fetch(uint material, uint i);
 
 const uint kRoughPlasticTableSize = 64u;
 
-// T(cos_theta) for cos_theta in [0, 1]: linear interpolation of the table.
+#if GLRENDER_METALLIC_ROUGHNESS
+// Element i of the coating table over alpha (scene/layout.glsl u_microfacet_tables): row j
+// holds T at the 64 cosines, then R_int, for sqrt(alpha) = kAlphaTableMinRoughness + j
+// (1 - kAlphaTableMinRoughness) / (kAlphaTableRows - 1). Defined where the data lives
+// (bsdf/material.glsl; tests define it over their own buffer).
+float alpha_table_fetch(uint i);
+
+// The table's shape: glrender/gpu/microfacet_tables.py ALPHA_TABLE_ROWS, sqrt(ALPHA_TABLE_MIN).
+const uint kAlphaTableRows = 32u;
+const uint kAlphaTableColumns = kRoughPlasticTableSize + 1u;
+const float kAlphaTableMinRoughness = 0.031622776601683794;
+
+// Column `column` of the table over alpha at alpha (clamped to the table's range): linear
+// interpolation between the rows around sqrt(alpha).
+float alpha_table_lookup(float alpha, uint column) {
+    float x = clamp((sqrt(alpha) - kAlphaTableMinRoughness) / (1.0 - kAlphaTableMinRoughness), 0.0, 1.0) *
+              float(kAlphaTableRows - 1u);
+    uint j = min(uint(x), kAlphaTableRows - 2u);
+    return mix(alpha_table_fetch(j * kAlphaTableColumns + column),
+               alpha_table_fetch((j + 1u) * kAlphaTableColumns + column), x - float(j));
+}
+
+// R_int of the metallic-roughness coating at alpha (bilinear in the table over alpha).
+float alpha_table_internal_reflectance(float alpha) {
+    return alpha_table_lookup(alpha, kRoughPlasticTableSize);
+}
+#endif
+
+// T(cos_theta) for cos_theta in [0, 1]: linear interpolation of the table (with
+// kMaterialFlagAlphaTable: bilinear in (sqrt(alpha), cos theta) of the table over alpha).
 float roughplastic_transmittance(Bsdf b, float cos_theta) {
     float x = cos_theta * float(kRoughPlasticTableSize - 1u);
     uint i = min(uint(x), kRoughPlasticTableSize - 2u);
+#if GLRENDER_METALLIC_ROUGHNESS
+    if ((b.flags & kMaterialFlagAlphaTable) != 0u)
+        return mix(alpha_table_lookup(b.alpha.x, i), alpha_table_lookup(b.alpha.x, i + 1u), x - float(i));
+#endif
     return mix(material_table_fetch(b.material, i), material_table_fetch(b.material, i + 1u),
                x - float(i));
 }

@@ -4,7 +4,7 @@
 //
 // GL counts three binding spaces apart: uniform blocks (UBO_*), storage blocks (SSBO_*)
 // and texture units (TEX_*). The render kernel's scene owns uniform block 0, storage
-// blocks 0-7 and texture units 0-9; bdpt's strategy images and the photon kernels number
+// blocks 0-7 and texture units 0-10; bdpt's strategy images and the photon kernels number
 // theirs from there and never meet in one kernel.
 
 // ---- uniform blocks (std140) ------------------------------------------------------------
@@ -50,11 +50,13 @@
 #define TEX_ENVMAP 7
 #define TEX_TEXTURES 8
 #define TEX_TEXTURE_RECORDS 9
+// the coating tables of per-texel rough plastic (scene/layout.glsl)
+#define TEX_MICROFACET_TABLES 10
 // photon mapping's maps and their hash tables (photon/map_layout.glsl)
-#define TEX_GLOBAL_MAP 10
-#define TEX_CAUSTIC_MAP 11
-#define TEX_GLOBAL_CELLS 12
-#define TEX_CAUSTIC_CELLS 13
+#define TEX_GLOBAL_MAP 11
+#define TEX_CAUSTIC_MAP 12
+#define TEX_GLOBAL_CELLS 13
+#define TEX_CAUSTIC_CELLS 14
 
 // ---- flag bits --------------------------------------------------------------------------
 // MaterialData.info.y
@@ -63,6 +65,7 @@ const uint kMaterialFlagGgx = 2u;
 const uint kMaterialFlagNonlinear = 4u;
 const uint kMaterialFlagNormalShadowing = 8u;   // the normal map's shadowing term (bsdf/bsdf.glsl)
 const uint kMaterialFlagNormalFlip = 16u;       // the normal map's flip of invalid normals
+const uint kMaterialFlagAlphaTable = 32u;       // roughplastic reads the coating table over alpha
 // LightData.info.y
 const uint kLightFlagTwoSided = 1u;
 const uint kLightFlagRectangle = 2u;   // a parallelogram with orthogonal edges (spherical rectangle)

@@ -35,6 +35,12 @@
 #ifndef GLRENDER_BDPT_GENERIC_WEIGHTS
 #define GLRENDER_BDPT_GENERIC_WEIGHTS 0
 #endif
+#ifndef GLRENDER_METALLIC_ROUGHNESS
+#define GLRENDER_METALLIC_ROUGHNESS 0
+#endif
+#ifndef GLRENDER_EMISSION_TEXTURES
+#define GLRENDER_EMISSION_TEXTURES 0
+#endif
 // A material's normal map has Mitsuba's shadowing term (bsdf/bsdf.glsl
 // bsdf_normal_shadowing; bdpt's vertices keep the unperturbed normal for it).
 const bool kNormalShadowing = GLRENDER_NORMAL_SHADOWING != 0;
@@ -50,6 +56,11 @@ const int kBvhMaxDepth = GLRENDER_BVH_MAX_DEPTH;
 // Test only (tests/render/test_bdpt.py): bdpt evaluates every MIS density afresh
 // instead of reusing its connections' own, the oracle of the O(1) weights.
 const bool kBdptGenericWeights = GLRENDER_BDPT_GENERIC_WEIGHTS != 0;
+// A metallic-roughness material picks its BSDF per surface point (bsdf/metallic_roughness.glsl),
+// and rough plastic may read the coating table over alpha (bsdf/roughplastic.glsl).
+const bool kMetallicRoughness = GLRENDER_METALLIC_ROUGHNESS != 0;
+// An area light's radiance may vary over it with a texture (lights/light.glsl).
+const bool kEmissionTextures = GLRENDER_EMISSION_TEXTURES != 0;
 
 // Sample generator (sampling/sampler.glsl).
 const int kSamplerIndependent = 0;

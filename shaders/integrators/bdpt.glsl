@@ -216,7 +216,7 @@ vec3 strategy_emission(int t) {
     vec3 wo = normalize(g_camera[t - 2].p - pt.p);
     float unused;
     vec3 L = pt.beta * (vertex_kind(pt) == kVertexInfinite ? environment_radiance(l, -wo, unused)
-                                                   : area_light_radiance(l, pt.ng, wo));
+                                                   : area_light_radiance(l, pt.ng, wo, pt.uv));
     if (max_component(L) <= 0.0) return vec3(0.0);
     float w = bdpt_mis_weight(0, t);
     strategy_record(0, t, L, w);

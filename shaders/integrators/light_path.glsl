@@ -55,7 +55,7 @@ LightPathStart light_path_start(inout SamplerState s) {
 // Radiance (area lights) or intensity (point, spot) that light `l` sends from its point
 // of emission e toward the unit direction w, times |cos| at the light for area lights.
 vec3 light_emitted_toward(LightData l, LightEmission e, vec3 w) {
-    if (light_is_area(l)) return area_light_radiance(l, e.n, w) * abs(dot(e.n, w));
+    if (light_is_area(l)) return area_light_radiance(l, e.n, w, e.uv) * abs(dot(e.n, w));
     if (l.info.x == kLightSpot) return l.radiance.rgb * spot_falloff(l, dot(w, l.n.xyz));
     return l.radiance.rgb;
 }

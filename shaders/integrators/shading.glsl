@@ -52,7 +52,7 @@ vec3 emitter_hit_contribution_n(SurfaceHit hit, vec3 d, int depth, vec3 prev_p, 
                                 bool prev_delta, float n_bsdf, float n_light) {
     uint index = hit.light - 1u;
     LightData l = scene_light(index);
-    vec3 Le = area_light_radiance(l, hit.ng, -d);
+    vec3 Le = area_light_radiance(l, hit.ng, -d, hit.uv);
     if (depth == 0) return kHideEmitters ? vec3(0.0) : Le;
     if (prev_delta || kStrategy == kStrategyBsdf) return Le;
     if (kStrategy == kStrategyLight) return vec3(0.0);

@@ -18,6 +18,7 @@
 #include "sampling/distribution2d.glsl"
 #include "sampling/disk.glsl"
 #include "sampling/hemisphere.glsl"
+#include "bsdf/texture.glsl"
 
 // Light kinds: the values of glrender.gpu.layout.LIGHT_KINDS.
 const uint kLightParallelogram = 0u;
@@ -79,11 +80,37 @@ vec3 envmap_lookup(LightData l, vec2 uv) {
     return textureLod(u_envmap, st, 0.0).rgb * l.params.x;
 }
 
-// Radiance leaving an area light's surface with normal n toward direction w (unit, away).
-vec3 area_light_radiance(LightData l, vec3 n, vec3 w) {
+// The radiance an area light emits on its emitting side(s) at surface coordinates uv:
+// uniform, or with an emission texture the radiance times the texture at uv
+// (kEmissionTextures; uniform area sampling stays unbiased, as the estimators evaluate
+// it at the point they sample or hit).
+vec3 area_light_emitted(LightData l, vec2 uv) {
+    vec3 Le = l.radiance.rgb;
+    if (kEmissionTextures && l.emission_texture > 0.0) Le *= texture_eval(uint(l.emission_texture) - 1u, uv);
+    return Le;
+}
+
+// Radiance leaving an area light's surface at surface coordinates uv, where its normal is
+// n, toward direction w (unit, away).
+vec3 area_light_radiance(LightData l, vec3 n, vec3 w, vec2 uv) {
     bool front = dot(n, w) > 0.0;
     bool two_sided = (l.info.y & kLightFlagTwoSided) != 0u;
-    return (front || two_sided) ? l.radiance.rgb : vec3(0.0);
+    return (front || two_sided) ? area_light_emitted(l, uv) : vec3(0.0);
+}
+
+// The surface uv of the point p + a e1 + b e2 of a planar light, ab = (a, b).
+vec2 planar_light_uv(LightData l, vec2 ab) {
+    return l.uv0 + ab.x * l.uv_e1 + ab.y * l.uv_e2;
+}
+
+// (a, b) of a point q on the plane of a planar light: q = p + a e1 + b e2 (the edges need
+// not be orthogonal; a triangle's (a, b) are its barycentrics of vertices 1 and 2).
+vec2 planar_light_coordinates(LightData l, vec3 q) {
+    vec3 d = q - l.p.xyz;
+    float e11 = dot(l.e1.xyz, l.e1.xyz), e12 = dot(l.e1.xyz, l.e2.xyz), e22 = dot(l.e2.xyz, l.e2.xyz);
+    float d1 = dot(d, l.e1.xyz), d2 = dot(d, l.e2.xyz);
+    float det = e11 * e22 - e12 * e12;
+    return det > 0.0 ? vec2(e22 * d1 - e12 * d2, e11 * d2 - e12 * d1) / det : vec2(0.0);
 }
 
 // Solid-angle pdf from an area pdf: p_A d^2 / |cos theta_l|.
@@ -145,6 +172,7 @@ LightSample sample_light(LightData l, vec3 p, vec2 u) {
         bool spherical = triangle ? use_spherical_sampling_triangle(l, p, solid_angle)
                                   : use_spherical_sampling_rectangle(l, p, solid_angle);
         vec3 q;
+        vec2 ab = vec2(0.0);
         float pdf_sa = 0.0;
         if (spherical) {
             if (triangle) {
@@ -155,8 +183,9 @@ LightSample sample_light(LightData l, vec3 p, vec2 u) {
             } else {
                 q = sample_spherical_rectangle(p, l.p.xyz, l.e1.xyz, l.e2.xyz, u, pdf_sa);
             }
+            if (kEmissionTextures && l.emission_texture > 0.0) ab = planar_light_coordinates(l, q);
         } else {
-            vec2 ab = u;
+            ab = u;
             if (triangle) ab = sample_uniform_triangle(u).yz;
             q = l.p.xyz + ab.x * l.e1.xyz + ab.y * l.e2.xyz;
         }
@@ -166,7 +195,7 @@ LightSample sample_light(LightData l, vec3 p, vec2 u) {
         s.wi = d / dist;
         s.dist = dist;
         s.pdf = spherical ? pdf_sa : area_to_solid_angle(1.0 / l.n.w, dist, l.n.xyz, s.wi);
-        s.Le = area_light_radiance(l, l.n.xyz, -s.wi);
+        s.Le = area_light_radiance(l, l.n.xyz, -s.wi, planar_light_uv(l, ab));
     } else if (light_kind_present(kLightSphere) && kind == kLightSphere) {
         vec3 c = l.p.xyz;
         float r = l.e1.w;
@@ -187,7 +216,7 @@ LightSample sample_light(LightData l, vec3 p, vec2 u) {
             s.wi = w;
             s.dist = dist;
             s.pdf = uniform_cone_pdf(cos_max);
-            s.Le = area_light_radiance(l, n, -w);
+            s.Le = area_light_radiance(l, n, -w, vec2(0.0));
         } else {
             // Inside (or on) the sphere: uniform by area.
             vec3 n = sample_uniform_sphere(u);
@@ -198,7 +227,7 @@ LightSample sample_light(LightData l, vec3 p, vec2 u) {
             s.wi = dvec / dist;
             s.dist = dist;
             s.pdf = area_to_solid_angle(1.0 / l.n.w, dist, n, s.wi);
-            s.Le = area_light_radiance(l, n, -s.wi);
+            s.Le = area_light_radiance(l, n, -s.wi, vec2(0.0));
         }
     } else if ((light_kind_present(kLightPoint) && kind == kLightPoint) ||
                (light_kind_present(kLightSpot) && kind == kLightSpot)) {
@@ -295,6 +324,7 @@ struct LightEmission {
     vec3 n;          // surface normal at p on the emitting side (area lights), else d
     vec3 d;          // unit emission direction
     vec3 Le;         // radiance (area, environment), intensity (point, spot), irradiance (directional) along d
+    vec2 uv;         // area lights: the surface uv at p (textured emission)
     float pdf_pos;   // density of p per unit area (1: a delta position)
     float pdf_dir;   // density of d per unit solid angle (1: a delta direction)
     bool delta_pos;  // point and spot lights
@@ -316,7 +346,7 @@ bool light_is_infinite(LightData l) {
 // infinity. Densities as in LightEmission; pdf_pos 0 when nothing was sampled.
 LightEmission sample_light_emission(LightData l, vec2 u_pos, vec2 u_dir, vec4 scene_sphere) {
     LightEmission e = LightEmission(vec3(0.0), vec3(0.0, 0.0, 1.0), vec3(0.0, 0.0, 1.0), vec3(0.0),
-                                    0.0, 0.0, false, false);
+                                    vec2(0.0), 0.0, 0.0, false, false);
     uint kind = l.info.x;
     if ((light_kind_present(kLightParallelogram) && kind == kLightParallelogram) ||
         (light_kind_present(kLightTriangle) && kind == kLightTriangle) ||
@@ -328,6 +358,7 @@ LightEmission sample_light_emission(LightData l, vec2 u_pos, vec2 u_dir, vec4 sc
         } else {
             vec2 ab = kind == kLightTriangle ? sample_uniform_triangle(u_pos).yz : u_pos;
             e.p = l.p.xyz + ab.x * l.e1.xyz + ab.y * l.e2.xyz;
+            e.uv = planar_light_uv(l, ab);
         }
         float side_pdf = 1.0;
         if ((l.info.y & kLightFlagTwoSided) != 0u) {
@@ -342,7 +373,7 @@ LightEmission sample_light_emission(LightData l, vec2 u_pos, vec2 u_dir, vec4 sc
         e.d = frame_from_local(frame_from_z(n), local);
         e.pdf_pos = 1.0 / l.n.w;
         e.pdf_dir = side_pdf * cosine_hemisphere_pdf(local.z);
-        e.Le = l.radiance.rgb;
+        e.Le = area_light_emitted(l, e.uv);
     } else if ((light_kind_present(kLightPoint) && kind == kLightPoint) ||
                (light_kind_present(kLightSpot) && kind == kLightSpot)) {
         e.p = l.p.xyz;

@@ -75,6 +75,14 @@ struct LightData {
     vec3 params;    // spot: x cos(cutoff), y cos(beam width); environment: x scale
     float selection_pmf;  // the probability that light selection picks it (lights/light_selection.glsl)
     uvec4 info;     // x: kind, y: flags (kLightFlag*), z: primitive id, w: distribution offset
+    // Textured emission (parallelograms, triangles): the point p + a e1 + b e2 has the
+    // surface uv uv0 + a uv_e1 + b uv_e2, and its radiance is `radiance` times the
+    // emission texture there (lights/light.glsl area_light_radiance).
+    vec2 uv0;
+    vec2 uv_e1;
+    vec2 uv_e2;
+    float emission_texture;  // the emission texture + 1 (0: none, uniform radiance)
+    float pad;
 };
 layout(std430, binding = SSBO_LIGHTS) readonly buffer Lights { LightData lights[]; };
 
@@ -109,6 +117,10 @@ layout(binding = TEX_ENVMAP) uniform sampler2D u_envmap;
 layout(binding = TEX_TEXTURES) uniform sampler2DArray u_textures;
 // 9: texture records, 5 texels each (kind, layer, size; uv transform, filter, wrap; colours).
 layout(binding = TEX_TEXTURE_RECORDS) uniform samplerBuffer u_texture_records;
+// 10: the coating of per-texel rough plastic (metallic-roughness materials): rows over
+// sqrt(alpha), each T(cos theta) at 64 cosines and R_int (glrender/gpu/microfacet_tables.py
+// alpha_table; read by bsdf/roughplastic.glsl). Bound only for scenes that use it.
+layout(binding = TEX_MICROFACET_TABLES) uniform samplerBuffer u_microfacet_tables;
 
 // The packed distribution array for sampling/distribution_data.glsl's prototype.
 float distribution_fetch(uint i) {

@@ -44,6 +44,7 @@ void main() {
         LightData l = lights[i];
         put(k, l.p); put(k, l.e1); put(k, l.e2); put(k, l.n); put(k, l.radiance);
         put(k, vec4(l.params, l.selection_pmf)); put(k, l.info);
+        put(k, vec4(l.uv0, l.uv_e1)); put(k, vec4(l.uv_e2, l.emission_texture, l.pad));
     }
     put(k, u_params.camera_open); put(k, u_params.camera_close); put(k, u_params.camera_screen);
     put(k, u_params.camera_clip); put(k, u_params.shutter); put(k, u_params.filter_params);

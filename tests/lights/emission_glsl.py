@@ -16,7 +16,7 @@ from glrender.testing.harness import run_glsl
 DEFINES = shader_defines(light_kinds=tuple(layout.LIGHT_KINDS))
 SPHERE = (0.5, -0.25, 1.0, 3.0)   # the scene's bounding sphere for lights at infinity
 LIGHT = ("LightData l = LightData(l_p, l_e1, l_e2, l_n, l_radiance, l_params.xyz, l_params.w, "
-         "l_info);\n")
+         "l_info, vec2(0.0), vec2(0.0), vec2(0.0), 0.0, 0.0);\n")
 
 
 def record(kind: str, *, p=(0, 0, 0), e1=(0, 0, 0, 0), e2=(0, 0, 0), n=(0, 0, 1, 0),

@@ -5,7 +5,10 @@ arrays are shared), triangle / strip / fan primitives with POSITION, NORMAL and
 TEXCOORD_0, metallic-roughness materials, perspective and orthographic cameras and
 KHR_lights_punctual. Materials map onto the renderer's BSDFs by the metallic-roughness
 rule of :mod:`.pbr` (docs/scene-format.md), with KHR_materials_transmission and
-KHR_materials_ior (default 1.5); emissive factor times KHR_materials_emissive_strength
+KHR_materials_ior (default 1.5). A metallicRoughnessTexture varies metallic (blue) and
+roughness (green) per texel, the BSDF chosen per surface point by the same rule (on
+transmissive materials its mean roughness is used). Emissive factor times
+KHR_materials_emissive_strength, times the emissiveTexture at each point where there is one,
 makes the primitive an area light.
 
 glTF is top-left based: uv (0, 0) is the first texel of the image, which is Mitsuba's
@@ -30,7 +33,7 @@ from ...errors import SceneError, install_command
 from .. import model as m
 from .diagnostics import Notes, cause, check_image_size, excerpt, image_failure
 from .meshes import MeshData, finish_mesh
-from .pbr import metallic_roughness_material
+from .pbr import metallic_roughness_material, textured_metallic_roughness_material
 from .scene_files import SceneFiles, read_bytes
 
 SUPPORTED_EXTENSIONS = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
@@ -362,16 +365,6 @@ class _Gltf:
         base = _floats(pbr.get("baseColorFactor", [1, 1, 1, 1]), 4, self, where)[:3]
         metallic = _floats([pbr.get("metallicFactor", 1.0)], 1, self, where)[0]
         roughness = min(max(_floats([pbr.get("roughnessFactor", 1.0)], 1, self, where)[0], 0.0), 1.0)
-        if "metallicRoughnessTexture" in pbr:
-            # one material per primitive: the texture's mean metallic (blue) and roughness
-            # (green) scale the factors
-            self.notes.add("metallicRoughnessTexture (its mean is used)")
-            info = pbr["metallicRoughnessTexture"]
-            tex_def = self.item("textures", info.get("index") if isinstance(info, dict) else None,
-                                f"{where}.metallicRoughnessTexture")
-            raw = self.image(tex_def.get("source"), f"{where}.metallicRoughnessTexture", srgb=False)
-            metallic *= float(raw[..., 2].mean())
-            roughness *= float(raw[..., 1].mean())
         color = tuple(base)
         if "baseColorTexture" in pbr:
             tex = self.texture(pbr["baseColorTexture"], f"{where}.baseColorTexture")
@@ -384,9 +377,29 @@ class _Gltf:
         ior = ior if ior > 1.0 else 1.5
         transmission = _floats([self.table(ext.get("KHR_materials_transmission"), where).get(
             "transmissionFactor", 0.0)], 1, self, where)[0]
+        metallic_roughness = None
+        if "metallicRoughnessTexture" in pbr:
+            # metallic (blue) and roughness (green) per texel, the factors multiplied in: the
+            # device picks the BSDF per point by pbr.py's rule (bsdf/metallic_roughness.glsl)
+            from dataclasses import replace
+
+            tex = self.texture(pbr["metallicRoughnessTexture"], f"{where}.metallicRoughnessTexture",
+                               srgb=False)
+            if transmission > 0:
+                # glass stays one material: the texture's mean roughness scales the factor
+                self.notes.add("metallicRoughnessTexture on a transmissive material (its mean "
+                               "roughness is used)")
+                roughness *= float(tex.image[..., 1].mean())
+            else:
+                metallic_roughness = replace(tex, image=tex.image * np.asarray(
+                    [0.0, roughness, metallic], np.float32))
         two_sided = bool(mdef.get("doubleSided", double_sided_default))
-        mat = metallic_roughness_material(color, metallic, roughness, ior=ior, transmission=transmission,
-                                          two_sided=two_sided, name=name)
+        if metallic_roughness is not None:
+            mat = textured_metallic_roughness_material(color, metallic_roughness, two_sided=two_sided,
+                                                       name=name)
+        else:
+            mat = metallic_roughness_material(color, metallic, roughness, ior=ior,
+                                              transmission=transmission, two_sided=two_sided, name=name)
         if "normalTexture" in mdef:
             info = mdef["normalTexture"]
             mat.normal_map = self.texture(info, f"{where}.normalTexture", srgb=False)
@@ -417,12 +430,13 @@ class _Gltf:
         emissive = _floats(mdef.get("emissiveFactor", [0, 0, 0]), 3, self, where)
         strength = _floats([self.table(ext.get("KHR_materials_emissive_strength"), where).get(
             "emissiveStrength", 1.0)], 1, self, where)[0]
+        emissive_texture = None
         if "emissiveTexture" in mdef and max(emissive) > 0:
-            self.notes.add("emissiveTexture (its mean scales the emissive factor)")
-            tex = self.texture(mdef["emissiveTexture"], f"{where}.emissiveTexture")
-            emissive = list(np.asarray(emissive) * tex.image.reshape(-1, 3).mean(axis=0))
+            # the radiance per texel: the factor times the (sRGB-decoded) texel
+            emissive_texture = self.texture(mdef["emissiveTexture"], f"{where}.emissiveTexture")
         if max(emissive) * strength > 0:
-            emission = m.Emission(tuple(float(e) * strength for e in emissive), two_sided=two_sided)
+            emission = m.Emission(tuple(float(e) * strength for e in emissive), two_sided=two_sided,
+                                  texture=emissive_texture)
         self._materials[(index,)] = (self.scene.add_material(mat), emission)
         return self._materials[(index,)]
 
