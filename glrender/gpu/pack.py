@@ -209,6 +209,10 @@ def pack_material(mat: m.Material, textures: TextureTable | None = None) -> np.n
     if mat.int_ior <= 0 or mat.ext_ior <= 0:
         raise SceneError(f"{what}: int_ior and ext_ior must be positive")
     eta = mat.int_ior / mat.ext_ior
+    if kind == "metallicroughness":
+        from ..scene.loaders.pbr import PLASTIC_IOR
+
+        eta = PLASTIC_IOR     # the rule's plastic, whose coating the table over alpha holds
     alpha = np.asarray(mat.alpha, np.float64).reshape(-1)
     if alpha.size == 1:
         alpha = np.repeat(alpha, 2)

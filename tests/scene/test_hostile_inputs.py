@@ -124,6 +124,19 @@ def gltf(**kwargs) -> str:
     return json.dumps(gltf_doc(**kwargs))
 
 
+def gltf_texture_slot(slot: str, info, image_uri: str = "t.png") -> str:
+    """The triangle whose material reads its texture ``slot`` (metallicRoughnessTexture,
+    emissiveTexture) through the textureInfo ``info``; texture 0 is the image at image_uri."""
+    doc = gltf_doc(image_uri=image_uri)
+    material = {"pbrMetallicRoughness": {}, "emissiveFactor": [1, 1, 1]}
+    if slot == "metallicRoughnessTexture":
+        material["pbrMetallicRoughness"][slot] = info
+    else:
+        material[slot] = info
+    doc["materials"] = [material]
+    return json.dumps(doc)
+
+
 def glb(**kwargs) -> bytes:
     text = json.dumps(gltf_doc(**kwargs)).encode()
     text += b" " * (-len(text) % 4)
@@ -268,6 +281,17 @@ CASES = {
     "gltf image link out": Case({"scene/s.gltf": gltf(image_uri="link.png"),
                                  "scene/link.png": Link("outside/secret.png")},
                                 r"s\.gltf: images\[0\]\.uri: " + refused("file", "link.png")),
+    **{f"gltf {slot} {name}": Case({"scene/s.gltf": gltf_texture_slot(slot, info, uri),
+                                    **({"scene/link.png": Link("outside/secret.png")} if uri == "link.png" else {})},
+                                   rf"s\.gltf: {pattern}")
+       for slot in ("metallicRoughnessTexture", "emissiveTexture")
+       for name, info, uri, pattern in (
+           ("missing texture", {"index": 3}, "t.png",
+            rf"materials\[0\]\.{slot}: refers to textures\[3\], which does not exist"),
+           ("not an object", "t.png", "t.png",
+            rf"materials\[0\]\.{slot}: expected a textureInfo object, got 't\.png'"),
+           ("image link out", {"index": 0}, "link.png",
+            r"images\[0\]\.uri: " + refused("file", "link.png")))},
     "gltf buffer allowed": Case({"scene/s.gltf": gltf(buffer_uri="../outside/ok.bin")},
                                 r"no camera", code=0, search=("{tmp}/outside",)),
     "glb buffer absolute": Case({"scene/s.glb": glb(buffer_uri="/etc/passwd")},

@@ -160,3 +160,32 @@ def test10_translation_only_transforms_equal_the_matrix_product_bitwise():
             expected = n / np.where(length > 0, length, 1.0)
             got = m.transform_normals(M, p)
         assert np.array_equal(got.view(np.uint64), expected.view(np.uint64))
+
+
+def test11_metallicroughness_material(write):
+    """type = "metallicroughness" with a metallic_roughness colour (blue metallic, green
+    roughness): the device meets the kinds the rule can pick, and the plastic's IOR is the
+    rule's 1.5 whatever int_ior says."""
+    from glrender.gpu.pack import pack_scene
+
+    path = write("mr.toml", """
+[materials.metal]
+type = "metallicroughness"
+reflectance = [0.8, 0.5, 0.3]
+metallic_roughness = [0.0, 0.4, 1.0]
+[materials.plastic]
+type = "metallicroughness"
+metallic_roughness = [0.0, 0.01, 0.2]
+[[shapes]]
+type = "rectangle"
+material = "metal"
+[[shapes]]
+type = "rectangle"
+material = "plastic"
+transform = [{ translate = [0, 0, 1] }]
+""")
+    scene = glrender.load(path)
+    packed = pack_scene(scene)
+    assert packed.material_kinds == {"metallicroughness", "roughconductor", "plastic"}
+    np.testing.assert_allclose(packed.materials["params"][:, 2], 1.5)
+    np.testing.assert_allclose(packed.materials["color1"][0], [0.0, 0.4, 1.0], rtol=1e-6)

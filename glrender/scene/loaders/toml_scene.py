@@ -308,7 +308,7 @@ def _texture(ctx, key: str, t) -> m.Texture:
 _MATERIAL_FIELDS = {"type", "reflectance", "specular_reflectance", "specular_transmittance", "eta",
                     "k", "int_ior", "ext_ior", "alpha", "distribution", "nonlinear", "two_sided",
                     "material", "normal_map", "normal_scale", "normal_shadowing", "normal_flip",
-                    "opacity", "alpha_cutoff"}
+                    "opacity", "alpha_cutoff", "metallic_roughness"}
 # Mitsuba's default interior IOR per kind ("bk7" for dielectrics, "polypropylene" for plastics)
 _DEFAULT_INT_IOR = {"plastic": "polypropylene", "roughplastic": "polypropylene"}
 
@@ -333,7 +333,8 @@ def _material(ctx, name: str, t) -> m.Material:
     _check_keys(ctx, t, key, _MATERIAL_FIELDS)
     kind = ctx.string(t.get("type", "diffuse"), f"{key}.type", m.MATERIAL_KINDS)
     mat = m.Material(kind=kind, name=name)
-    for field_name in ("reflectance", "specular_reflectance", "specular_transmittance"):
+    for field_name in ("reflectance", "specular_reflectance", "specular_transmittance",
+                       "metallic_roughness"):
         if field_name in t:
             setattr(mat, field_name, ctx.spectrum(t[field_name], f"{key}.{field_name}"))
     for field_name in ("eta", "k"):
