@@ -116,3 +116,37 @@ def test04_throughput_averages_to_power(gl_ctx):
         expected = power(name)
         tol = z * beta.std() / math.sqrt(n) + 1e-5 * expected
         assert abs(beta.mean() - expected) <= tol, (name, beta.mean(), expected, tol)
+
+
+@pytest.mark.parametrize("name", ["parallelogram", "triangle"])
+def test05_planar_light_coordinates_and_uv(gl_ctx, name):
+    """planar_light_coordinates inverts p + a e1 + b e2 (edges not orthogonal), and the uv a
+    textured emitter reads there is uv0 + a uv_e1 + b uv_e2: at points sample_light_emission
+    returns (its e.uv) and at any point of the plane (the spherical samplers' points)."""
+    from emission_glsl import DEFINES, _uniforms
+    from glrender.testing.harness import run_glsl
+
+    p, e1, e2 = (0.3, -0.2, 1.0), (1.5, 0.2, 0.1), (0.4, 0.9, -0.3)
+    rec = parallelogram(p, e1, e2) if name == "parallelogram" else triangle(p, e1, e2)
+    uv = np.array([[0.25, 0.5], [1.0, -0.5], [0.25, 2.0]])
+    rng = np.random.default_rng(5)
+    u = rng.random((256, 4)).astype(np.float32)
+    ab = rng.uniform(-0.5, 1.5, (256, 2)).astype(np.float32)
+    uniforms = {**_uniforms(rec), **{f"l_uv{k}": ("vec2", tuple(uv[k])) for k in range(3)}}
+    body = ("LightData l = LightData(l_p, l_e1, l_e2, l_n, l_radiance, l_params.xyz, l_params.w,\n"
+            "                        l_info, l_uv0, l_uv1, l_uv2, 1.0, 0.0);\n"
+            "vec3 q = l.p.xyz + ab.x * l.e1.xyz + ab.y * l.e2.xyz;\n"
+            "vec2 ab_back = planar_light_coordinates(l, q);\n"
+            "vec2 uv_q = planar_light_uv(l, ab);\n"
+            "LightEmission e = sample_light_emission(l, u.xy, u.zw, u_sphere);\n"
+            "vec2 uv_e = e.uv;\n"
+            "vec2 uv_e_back = planar_light_uv(l, planar_light_coordinates(l, e.p));")
+    out = run_glsl(body, {"ab": ab, "u": u}, {"ab_back": "vec2", "uv_q": "vec2", "uv_e": "vec2",
+                                               "uv_e_back": "vec2"},
+                   includes=["lights/light.glsl"], uniforms=uniforms, defines=DEFINES)
+    np.testing.assert_allclose(out["ab_back"], ab, atol=2e-5)
+    np.testing.assert_allclose(out["uv_q"], uv[0] + ab[:, :1] * uv[1] + ab[:, 1:] * uv[2], atol=1e-5)
+    np.testing.assert_allclose(out["uv_e"], out["uv_e_back"], atol=2e-5)
+    # the sampled points lie on the light: their (a, b) in the parallelogram or the triangle
+    a, b = np.linalg.lstsq(uv[1:].T, (out["uv_e"] - uv[0]).T, rcond=None)[0]
+    assert a.min() > -1e-5 and b.min() > -1e-5 and (a + b if name == "triangle" else np.maximum(a, b)).max() < 1 + 1e-5
