@@ -37,11 +37,11 @@ layout(std430, binding = SSBO_ACCUM_SQ) buffer AccumSq { uvec4 accum_sq[]; };
 
 // 2: materials. kind: see kMaterial* in bsdf/bsdf.glsl.
 struct MaterialData {
-    vec3 color0;            // diffuse reflectance (diffuse, plastics) | conductor eta | specular reflectance (dielectrics)
+    vec3 color0;            // diffuse reflectance (diffuse, plastics) | conductor eta | specular reflectance (dielectrics) | base colour (metallicroughness)
     float opacity_texture;  // the opacity texture + 1 (0: none; alpha cutouts)
-    vec3 color1;            // specular reflectance (conductors, plastics) | specular transmittance (dielectrics)
+    vec3 color1;            // specular reflectance (conductors, plastics) | specular transmittance (dielectrics) | (-, roughness, metallic) (metallicroughness)
     float alpha_cutoff;     // an opacity below it is a hole
-    vec3 color2;            // conductor k (rgb) | plastic, roughplastic: x specular sampling weight, y internal reflectance
+    vec3 color2;            // conductor k (rgb) | plastic, roughplastic, metallicroughness: x specular sampling weight, y internal reflectance
     float normal_scale;     // the normal map's strength (scales its x and y)
     vec3 params;            // x: alpha u, y: alpha v, z: relative IOR int/ext
     float normal_map;       // the normal map texture + 1 (0: none)
