@@ -72,6 +72,7 @@ class CameraController:
     def reset(self) -> None:
         """Back to the scene's camera."""
         self.eye, self.target = (v.copy() for v in self.home_pose)
+        self.extent = 1.0           # an orthographic view's width, as a factor of the scene's
         self.moved = False
 
     @property
@@ -96,8 +97,9 @@ class CameraController:
             return self.home
         pose = pose_matrix(self.eye, self.target, self.up)
         close = None if self._local_close is None else pose @ self._local_close
+        wide = {"half_extent": self.home.half_extent * self.extent} if self.home.orthographic else {}
         return replace(self.home, world_from_camera=pose @ self._local_open,
-                       world_from_camera_close=close)
+                       world_from_camera_close=close, **wide)
 
     # -- moves -----------------------------------------------------------------------------
     def orbit(self, dx: float, dy: float) -> None:
@@ -129,8 +131,14 @@ class CameraController:
 
     def zoom(self, steps: float) -> None:
         """Dolly toward the target (steps > 0) or away: distance x ZOOM_PER_STEP^steps,
-        kept within 1e-4 and 1e4 scene radii."""
+        kept within 1e-4 and 1e4 scene radii. An orthographic view looks the same from any
+        distance: its width changes instead, by the same factor (within 1e-4 and 1e4 of the
+        scene's)."""
         factor = ZOOM_PER_STEP ** min(max(steps, -100.0), 100.0)
+        if self.home.orthographic:
+            self.extent = min(max(self.extent * factor, 1e-4), 1e4)
+            self.moved = True
+            return
         distance = min(max(self.distance * factor, 1e-4 * self.radius), 1e4 * self.radius)
         self.eye = self.target - self.forward * distance
         self.moved = True

@@ -138,3 +138,21 @@ def test06_zoom_and_fly():
     c.fly(0, 1, 1, 1.0)              # right (-left) and up the world's axis
     np.testing.assert_allclose(c.eye - eye0 - f0 * 0.5, (-c.left + c.up) * 1.0, atol=1e-12)
     np.testing.assert_allclose(c.distance, _controller().distance)
+
+
+def test07_zoom_narrows_an_orthographic_view():
+    """An orthographic view is as wide at every distance: the wheel changes its width, by
+    the factor a perspective camera's distance changes, and R restores it."""
+    cam = m.Camera(world_from_camera=m.look_at((1.0, 2.0, 6.0), CENTER, (0, 1, 0)),
+                   kind="orthographic", half_extent=2.0)
+    c = CameraController(cam, CENTER, 2.0)
+    d0 = c.distance
+    c.zoom(2.0)
+    zoomed = c.camera()
+    assert zoomed.orthographic and math.isclose(zoomed.half_extent, 2.0 * ZOOM_PER_STEP ** 2)
+    assert math.isclose(c.distance, d0)
+    np.testing.assert_allclose(zoomed.world_from_camera, cam.world_from_camera, atol=1e-12)
+    c.zoom(-1e4)
+    assert c.camera().half_extent <= 2.0 * 1e4
+    c.reset()
+    assert c.camera() is cam
