@@ -30,7 +30,9 @@ at the same Šidák threshold, its sigma from the pixels' pooled variances, or f
 splats correlate the pixels, from the spread of the seeds' region means), asserted within 5%
 (1.2-3.2% measured), and the image-mean and (one-sided) MSE tests bound what a bias there can
 hide. Elsewhere the reference's error is a small part of a worst block's (at most 3% of
-the block's value on its own).
+the block's value on its own). The door scene (``scene-door`` and its BDPT and light-tracing
+cases) compares blocks of 16 x 16 pixels: every integrator's paths reach its near room
+through a narrow gap, heavy-tailed, and the catalog states their block bounds.
 
 Where glrender deliberately differs (catalog keys ``difference``, where it is documented, and
 ``tolerance``, the documented size), the test says so and checks that difference instead: every
@@ -266,3 +268,13 @@ def test_region_comparison_sigma():
     assert spread["t"] > pooled["t"]
     biased = region_comparison(independent * 1.05, ref, ref_stderr, mask, False, 100, 0.0)
     assert biased["detectable"].max() < 0.01 and not biased["passed"]
+
+
+@pytest.mark.slow
+def test_door_xml_is_the_toml_scene(gl_ctx):
+    """scenes/scene-door.xml is scenes/door/scene.toml at 64 x 64: the same image, bitwise."""
+    toml = glrender.load(HERE.parents[1] / "scenes" / "door" / "scene.toml")
+    toml.film = toml.film.resized(64, 64)
+    xml = glrender.load(HERE / "scenes" / "scene-door.xml")
+    a, b = (glrender.render(s, spp=4, seed=3, sampler="independent", progress=False).mean for s in (toml, xml))
+    assert np.array_equal(a, b)
