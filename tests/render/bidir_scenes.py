@@ -53,6 +53,18 @@ def closed_enclosure(size=32) -> m.Scene:
     return enclosure(albedo=0.5, radiance=1.0, width=size, height=size, max_depth=-1)
 
 
+def slab_enclosure(size=32) -> m.Scene:
+    """The closed enclosure flattened into a slab 0.1 thick, 2 from the origin: its two large
+    walls face each other 0.1 apart, where a connection's shadow ray offset off its start
+    alone (256 ulps of 2 along the normal) ran past the margin kept short of the far end
+    (1e-4 of the distance) and met the far wall: BDPT lost every such connection."""
+    scene = enclosure(albedo=0.5, radiance=1.0, width=size, height=size, max_depth=-1)
+    scene.shapes[0].world_from_object = m.translate((0.0, 0.0, 2.0)) @ m.scale((1.0, 1.0, 0.05))
+    scene.camera = replace(scene.camera, world_from_camera=m.look_at((-0.8, -0.1, 2.0), (1.0, 0.3, 2.02),
+                                                                     (0, 0, 1)))
+    return scene
+
+
 def caustic(size=32) -> m.Scene:
     scene = glrender.load(ROOT / "scenes" / "caustic" / "scene.toml")
     scene.film = replace(scene.film, width=size, height=size)

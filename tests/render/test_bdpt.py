@@ -13,7 +13,7 @@ from glrender.render.renderer import Renderer, settings_from_scene
 from glrender.testing.images import compare_images
 
 from bidir_scenes import (caustic, closed_enclosure, cornell, directional, environment, glossy,
-                          point_light, renders, thin_lens)
+                          point_light, renders, slab_enclosure, thin_lens)
 
 SEEDS_PATH, SEEDS_BDPT = (11, 12, 13, 14), (31, 32, 33, 34)
 # name: (scene, block, path spp, bdpt spp)
@@ -23,6 +23,9 @@ SCENES = {
     "thin-lens": (thin_lens, 16, 64, 16),
     "point-light": (point_light, 4, 16, 16),
     "enclosure": (closed_enclosure, 4, 16, 8),
+    # facing walls 0.1 apart, 2 from the origin: connections between them (their shadow rays
+    # once met the far wall: 1.0% dark)
+    "slab": (slab_enclosure, 4, 16, 8),
     "caustic": (caustic, 8, 256, 64),
     "environment": (environment, 8, 64, 16),
     "directional": (directional, 8, 64, 16),
@@ -47,7 +50,7 @@ def test01_bdpt_matches_path(gl_ctx, all_tests, name, heuristic):
     scene = make()
     extra = all_tests - block_tests(scene, block)
     bd = renders(scene, "bdpt", spp_bdpt, SEEDS_BDPT, strategy=heuristic)
-    if name == "enclosure":
+    if name in ("enclosure", "slab"):
         # closed form: L = Le / (1 - albedo) = 2 (bdpt stops at 16 segments: 2 (1 - 2^-16);
         # tests/render/test_depth_cap.py counts the subpaths its cap cuts)
         ref, ref_se = np.full(bd.shape[1:], 2.0), None
