@@ -20,7 +20,7 @@ def pyplot():
     try:
         import matplotlib
     except ImportError as exc:   # pragma: no cover - the test extra installs it
-        raise MissingExtra("the estimator lab's figures", "matplotlib", "lab") from exc
+        raise MissingExtra("the estimator lab (its figures)", "matplotlib", "lab") from exc
     matplotlib.use("Agg", force=True)
     import matplotlib.pyplot as plt
 
