@@ -161,7 +161,7 @@ class DeviceScene:
         from . import textures
 
         if len(self.packed.textures):
-            array, records = textures.upload(self.ctx, self.packed.textures)
+            array, records = textures.upload(self.ctx, self.packed.textures, self.scene.source)
             self.texture_bytes = array.width * array.height * array.layers * 8
             self._owned += [array, records]
             self._units += [(bindings.TEX_TEXTURES, array.use), (bindings.TEX_TEXTURE_RECORDS, records.bind)]

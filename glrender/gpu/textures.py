@@ -187,9 +187,9 @@ class TextureTable:
         return h.digest()
 
 
-def upload(ctx, table: TextureTable):
+def upload(ctx, table: TextureTable, where: str = "the scene"):
     """The array texture and record buffer texture of ``table`` on the device:
-    (moderngl TextureArray, BufferTexture)."""
+    (moderngl TextureArray, BufferTexture). ``where`` names the scene in errors."""
     from ..gl.buffers import BufferTexture
 
     gl = getattr(ctx, "gl", ctx)
@@ -197,7 +197,9 @@ def upload(ctx, table: TextureTable):
     n, h, w = layers.shape[:3]
     limit = gl.info.get("GL_MAX_ARRAY_TEXTURE_LAYERS", 256)
     if n > limit:
-        raise SceneError(f"the scene has {n} bitmap textures; this device holds at most {limit}")
+        raise SceneError(f"{where}: its bitmap textures take {n} atlas pages of {w} x {h} texels; "
+                         f"this device's texture arrays hold at most {limit} (fewer or smaller "
+                         f"images)")
     array = gl.texture_array((w, h, n), 4, np.ascontiguousarray(layers).tobytes(), dtype="f2")
     array.filter = (gl.NEAREST, gl.NEAREST)   # the shader filters (texelFetch)
     return array, BufferTexture(ctx, records, "rgba32f", "texture records")

@@ -291,3 +291,20 @@ def test09_atlas_packs_many_textures_without_overlap(gl_ctx):
     err = np.abs(got - want).max(axis=1)
     assert err[bilinear].max() <= F16_TOL + 4e-6
     assert np.mean(err[~bilinear] > F16_TOL) < 1e-3   # float32 uv at a texel edge
+
+
+def test10_more_atlas_pages_than_the_device_holds_names_the_scene():
+    """A device whose texture arrays hold fewer layers than the atlas needs: one line naming
+    the scene, the pages and the device's limit (before anything is uploaded)."""
+    from types import SimpleNamespace
+
+    from glrender.errors import SceneError
+
+    table = textures.TextureTable()
+    for k in range(2):                 # two 2048^2 images: two full pages
+        table.index(m.Texture("bitmap", image=np.full((2048, 2048, 3), 0.1 * k, np.float32)))
+    gl = SimpleNamespace(info={"GL_MAX_ARRAY_TEXTURE_LAYERS": 1})
+    with pytest.raises(SceneError, match=r"^scene\.toml: its bitmap textures take 2 atlas pages "
+                                         r"of 2048 x 2048 texels; this device's texture arrays "
+                                         r"hold at most 1"):
+        textures.upload(SimpleNamespace(gl=gl), table, "scene.toml")
