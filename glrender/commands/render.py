@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import integrators
 from ..errors import DeviceError, UsageError
 from .options import (AOV_NAMES, FIRST_HIT_AOVS, RESUMABLE, check_memory, check_options,
                       check_scene_file, parse_aovs, parse_crop, parse_defines)
@@ -64,9 +65,10 @@ def _strategy_depth(options: dict, scene) -> int:
         raise UsageError(f"--strategy-images {folder}: is a file, expected a folder (created if "
                          f"missing)")
     integrator = options.get("integrator") or scene.integrator.kind
-    if integrator != "bdpt":
-        raise UsageError(f"--strategy-images: only the bdpt integrator has strategies (s, t), "
-                         f"not {integrator} (add --integrator bdpt)")
+    if not integrators.get(integrator).strategies:
+        have = [n for n in integrators.names() if integrators.get(n).strategies]
+        raise UsageError(f"--strategy-images: only the {' and '.join(have)} integrator has "
+                         f"strategies (s, t), not {integrator} (add --integrator {have[0]})")
     from ..film.io import check_writable
 
     check_writable(folder, "strategy images", "--strategy-images", folder=True)
