@@ -11,7 +11,8 @@ image and the caustic window, rows 130-170 x columns 130-200), efficiency 1 / (M
 time), its ratio to our path tracer and to Mitsuba, and the time each config needs to
 reach our path tracer's equal-time MSE (t x MSE / MSE_path, from MSE ~ 1/t). LuxCore's
 BIDIRCPU is not rerun: ../shared/notes/peers.md has its figures (biased on the Cornell
-box). Writes the "## Bidirectional" section of benchmarks/RESULTS.md.
+box). Writes the "## Bidirectional" section of benchmarks/RESULTS.md: its header and table
+(the notes after the table stay).
 
     .venv/bin/python benchmarks/bdpt.py [--seconds 20] [--rounds 1] [--scenes cornell,door,caustic]
 """
@@ -152,7 +153,16 @@ def write_results(rows, device, commit, args) -> None:
         text = text.rstrip("\n") + "\n\n" + section
     else:
         end = text.find("\n## ", start + 1)
-        text = text[:start + 1] + section + (text[end:] if end >= 0 else "")
+        end = len(text) if end < 0 else end
+        # the header and the table are this run's; what follows the old table (notes
+        # written by hand) stays
+        old = text[start + 1:end].split("\n")
+        first = next((i for i, line in enumerate(old) if line.startswith("| scene |")), len(old))
+        last = first
+        while last < len(old) and old[last].startswith("|"):
+            last += 1
+        rest = "\n".join(old[last:]).strip("\n")
+        text = text[:start + 1] + section + ("\n" + rest + "\n" if rest else "") + text[end:]
     RESULTS.write_text(text.rstrip("\n") + "\n")
     print(section)
 
