@@ -105,6 +105,12 @@ def _saved_ok(kind, value) -> bool:
     return isinstance(value, kind)
 
 
+def _refused_option(ckpt, what: str) -> UsageError:
+    """The one line refusing an option value ``ckpt`` saved (``what``: the option and why)."""
+    return UsageError(f"{ckpt.path}: the checkpoint's option {what}: render without --resume "
+                      f"to start afresh")
+
+
 def _saved_options(args, ckpt, resumable) -> dict:
     """The options ``ckpt`` saved that a resume takes back, each checked as the command
     line checks it (its type or choices, then :func:`check_options`); one line naming the
@@ -112,7 +118,6 @@ def _saved_options(args, ckpt, resumable) -> dict:
     import json
 
     kinds = _saved_kinds()
-    fresh = "render without --resume to start afresh"
     saved = {k: v for k, v in ckpt.meta.get("options", {}).items() if k in resumable}
     for name, value in saved.items():
         kind = kinds.get(name, object)
@@ -122,14 +127,13 @@ def _saved_options(args, ckpt, resumable) -> dict:
                      str: "text"}.get(kind, "X0,Y0,X1,Y1"))
             shown = json.dumps(value)
             shown = shown if len(shown) <= 40 else shown[:37] + "..."
-            raise UsageError(f"{ckpt.path}: the checkpoint's option {name} is {shown}, "
-                             f"expected {want}: {fresh}")
+            raise _refused_option(ckpt, f"{name} is {shown}, expected {want}")
     merged = argparse.Namespace(**{**vars(args), **{k: v for k, v in saved.items()
                                                     if getattr(args, k, None) is None}})
     try:
         check_options(merged)
     except UsageError as exc:
-        raise UsageError(f"{ckpt.path}: the checkpoint's option {exc}: {fresh}") from None
+        raise _refused_option(ckpt, str(exc)) from None
     return saved
 
 
@@ -294,8 +298,7 @@ def run_render(args, signals) -> int:
         saved = ckpt.meta.get("options", {}) if ckpt is not None else {}
         if ckpt is None or not any(n in saved and n not in given for n in PHOTON_OPTIONS):
             raise
-        raise UsageError(f"{ckpt.path}: the checkpoint's option {exc}: "
-                         f"render without --resume to start afresh") from None
+        raise _refused_option(ckpt, str(exc)) from None
     ctx = _context(args, timings)
     check_memory(scene.film.width, scene.film.height, first_hit, ctx.is_llvmpipe)
     job_options = JobOptions(
