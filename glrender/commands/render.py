@@ -227,6 +227,9 @@ def _write(args, job, film, output: Path, aov_names: list, options: dict, say) -
 def _summary(say, outcome, signals, budget: float | None, ckpt_path: Path, output: Path) -> int:
     """The last line (what was rendered, how fast, where it went) and the exit code."""
     film, run = outcome.film, outcome.run
+    cut = film.truncated_total
+    samples = f"{film.nonfinite_total} non-finite samples" + (
+        f", {cut} paths cut at the {outcome.depth_cap}-segment cap" if cut and outcome.depth_cap else "")
     written = outcome.outputs.get("outputs", [])
     image = f"image -> {', '.join(written)}"
     if written and written[0] != str(output):
@@ -239,12 +242,12 @@ def _summary(say, outcome, signals, budget: float | None, ckpt_path: Path, outpu
             say(f"glrender: stopped by {name} before the first pass: nothing written")
         else:
             say(f"glrender: stopped by {name} at {film.spp} spp ({speed}, "
-                f"{film.nonfinite_total} non-finite samples{outcome.truncation_note}): {image}; "
+                f"{samples}): {image}; "
                 f"checkpoint -> {ckpt_path} (continue with --resume)")
         return 128 + signals.received
     why = f" (time budget {budget:g} s)" if run.stopped == "time" else ""
     say(f"glrender: {film.spp} spp in {run.render_seconds:.2f} s{why} ({speed}), "
-        f"{film.nonfinite_total} non-finite samples{outcome.truncation_note} -> {', '.join(written)}"
+        f"{samples} -> {', '.join(written)}"
         + (f"; checkpoint -> {outcome.checkpoint}" if outcome.checkpoint else ""))
     return 0
 

@@ -250,12 +250,6 @@ class JobOutcome:
     def stopped(self) -> str:
         return self.run.stopped
 
-    @property
-    def truncation_note(self) -> str:
-        """'' or ', N paths cut at the C-segment cap' for the summary line."""
-        n = self.film.truncated_total
-        return f", {n} paths cut at the {self.depth_cap}-segment cap" if n and self.depth_cap else ""
-
 
 class Job:
     """One render of ``scene`` as ``options`` ask, its driver made by ``create_driver``.
