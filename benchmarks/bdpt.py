@@ -30,6 +30,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from cornell_vs_mitsuba import LLVM, MITSUBA_SCRIPT, REFS, ROOT, run  # noqa: E402
+from results_md import put_run  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "RESULTS.md"
 MARKER = "## Bidirectional"
@@ -147,23 +148,7 @@ def write_results(rows, device, commit, args) -> None:
                      f"{m['mse_window'] ** 0.5:.4g} | {m['mean']:+.2%} | {ratio(r_path)} | {ratio(r_path_w)} | "
                      f"{ratio(r_mi)} | {ratio(r_mi_w)} | {t_path:.1f} s |")
     section = "\n".join(lines) + "\n"
-    text = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n"
-    start = text.find("\n" + MARKER)
-    if start < 0:
-        text = text.rstrip("\n") + "\n\n" + section
-    else:
-        end = text.find("\n## ", start + 1)
-        end = len(text) if end < 0 else end
-        # the header and the table are this run's; what follows the old table (notes
-        # written by hand) stays
-        old = text[start + 1:end].split("\n")
-        first = next((i for i, line in enumerate(old) if line.startswith("| scene |")), len(old))
-        last = first
-        while last < len(old) and old[last].startswith("|"):
-            last += 1
-        rest = "\n".join(old[last:]).strip("\n")
-        text = text[:start + 1] + section + ("\n" + rest + "\n" if rest else "") + text[end:]
-    RESULTS.write_text(text.rstrip("\n") + "\n")
+    put_run(RESULTS, MARKER, section)
     print(section)
 
 

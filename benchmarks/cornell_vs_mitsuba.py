@@ -30,6 +30,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from results_md import put_run
+
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -189,15 +191,7 @@ def write_results(path: Path, rows, device, commit, args):
                      f"{m['mean']:+.2%} | {m['eff']:.3g} | {r_ind:.2f}x | {r_mj:.2f}x | {r_speed:.2f}x | "
                      f"{t_mj:.1f} s |")
     section = "\n".join(lines) + "\n"
-    text = path.read_text() if path.exists() else "# Benchmark results\n\n"
-    marker = "## Cornell box, Cornell + bunny, caustic"
-    if marker in text:
-        start = text.index(marker)
-        nxt = text.find("\n## ", start + 1)
-        text = text[:start] + section + (text[nxt + 1:] if nxt >= 0 else "")
-    else:
-        text = text.rstrip() + "\n\n" + section
-    path.write_text(text)
+    put_run(path, "## Cornell box, Cornell + bunny, caustic", section)
     print(section)
 
 

@@ -1,0 +1,30 @@
+"""Writing a benchmark's run into benchmarks/RESULTS.md.
+
+A benchmark's section is a level-2 heading, a paragraph saying how the run was made, its
+table, and then notes written by hand (earlier runs, what a run showed). A new run replaces
+the heading, the paragraph and the table; the notes after the table stay.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def put_run(path: Path, marker: str, section: str) -> None:
+    """Write ``section`` (heading, paragraph, table) into ``path`` in place of the run under
+    the heading that starts with ``marker``, keeping what followed that run's table; append
+    it when there is no such heading."""
+    text = path.read_text() if path.exists() else "# Benchmark results\n"
+    start = text.find("\n" + marker)
+    if start < 0:
+        path.write_text(text.rstrip("\n") + "\n\n" + section.rstrip("\n") + "\n")
+        return
+    end = text.find("\n## ", start + 1)
+    end = len(text) if end < 0 else end
+    old = text[start + 1:end].split("\n")
+    first = next((i for i, line in enumerate(old) if line.startswith("|")), len(old))
+    last = first
+    while last < len(old) and old[last].startswith("|"):
+        last += 1
+    rest = "\n".join(old[last:]).strip("\n")
+    text = text[:start + 1] + section.rstrip("\n") + "\n" + ("\n" + rest + "\n" if rest else "") + text[end:]
+    path.write_text(text.rstrip("\n") + "\n")
