@@ -1,4 +1,4 @@
-"""Acceleration structures: a 4-wide BVH built in numpy for the GLSL traversal.
+"""Acceleration structures: a 4-wide (or 8-wide) BVH built in numpy for the GLSL traversal.
 
 ``build_bvh`` (no GL) is the entry point; ``glrender.gpu.bvh_upload.GpuBvh`` uploads
 the result as buffer textures.

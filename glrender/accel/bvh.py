@@ -1,21 +1,24 @@
-"""``build_bvh``: triangles in, a 4-wide BVH packed for the GLSL traversal out.
+"""``build_bvh``: triangles in, a wide BVH packed for the GLSL traversal out.
 
 Pipeline (all numpy, no GL): validate and clean the triangles
 (:mod:`.mesh`), build a binary tree (by default PLOC up to 4096 clusters and a
 binned SAH over those for the top, :mod:`.ploc`; a full binned-SAH sweep on
-request, :mod:`.binned_sah`), choose leaves of at most four triangles by SAH,
-collapse to four children per node with a bounded depth (:mod:`.collapse`) and
+request, :mod:`.binned_sah`), choose leaves of at most four triangles by SAH
+(up to seven on request for 8-wide trees), collapse to ``width`` = 4 (the
+default) or 8 children per node with a bounded depth (:mod:`.collapse`) and
 reorder the triangles so that every leaf is a contiguous range. Rigid motion
-instances (:mod:`.instances`) get their own trees in the same buffers.
+instances (:mod:`.instances`) get their own trees, of the same width, in the
+same buffers.
 
 The packed layout (:meth:`Bvh.pack`) is what ``shaders/geometry/bvh.glsl``
-reads through buffer textures:
+reads through buffer textures (it reads 4-wide trees):
 
-``nodes`` (rgba32ui, 4 texels = 64 bytes per node, :mod:`.quantize`)
-    the node's origin and scale, the four child references and the child
+``nodes`` (rgba32ui, :mod:`.quantize`: 4 texels = 64 bytes per 4-wide node, 6 = 96 bytes per 8-wide one)
+    the node's origin and scale, the child references and the child
     boxes as 8-bit planes rounded outwards. A reference is an inner node index
     (high bit clear) or a leaf ``LEAF_FLAG | count << 28 | first`` covering
-    triangles ``[first, first + count)``; empty slots decode to a box no ray enters.
+    triangles ``[first, first + count)`` (count in 3 bits: at most 7); empty
+    slots decode to a box no ray enters.
 ``triangles`` (rgba32f, 3 texels per triangle)
     the corners v0, v1, v2 of each triangle in BVH order (``w`` unused).
 ``instances`` (rgba32f)
@@ -31,7 +34,8 @@ import numpy as np
 
 from ..errors import UsageError
 from .binned_sah import build_binned_sah
-from .collapse import KIND_EMPTY, KIND_INNER, KIND_LEAF, MAX_LEAF_SIZE, WIDTH, Bvh4Arrays, collapse_to_bvh4
+from .collapse import (DEFAULT_WIDTH, KIND_EMPTY, KIND_INNER, KIND_LEAF, MAX_LEAF_SIZE, WIDTHS, BvhArrays,
+                       collapse_to_bvh)
 from .instances import MAX_MOTION_INSTANCES, MotionInstance, motion_bounds, pack_instance
 from .mesh import PreparedTriangles, prepare_triangles
 from .ploc import DEFAULT_RADIUS, DEFAULT_TOP_CLUSTERS, build_ploc
@@ -43,17 +47,31 @@ LEAF_FLAG = 0x80000000
 LEAF_COUNT_SHIFT = 28
 LEAF_FIRST_MASK = (1 << LEAF_COUNT_SHIFT) - 1
 EMPTY_REF = LEAF_FLAG  # a leaf of zero triangles: harmless even if visited
-# Stack bound of the GLSL traversal: it pushes at most WIDTH - 1 entries per
-# inner node on the path, so a tree of inner depth <= MAX_DEPTH never needs more
-# than (WIDTH - 1) * (MAX_DEPTH + 1) entries; shaders/geometry/bvh.glsl sizes its
-# stack from this (kBvhStackSize) and the builder guarantees the depth.
-MAX_DEPTH = 31
-STACK_SIZE = (WIDTH - 1) * (MAX_DEPTH + 1)
+# Stack bound of a traversal: it pushes at most width - 1 entries per inner node
+# on the path, so a tree of inner depth <= max_depth(width) never needs more than
+# stack_size(width) = (width - 1) * (max_depth(width) + 1) entries (4-wide: 96,
+# 8-wide: 154); the builder guarantees the depth.
+MAX_DEPTH_BY_WIDTH = {4: 31, 8: 21}
+# The 4-wide bound, which shaders/geometry/bvh.glsl sizes its stack from
+# (kBvhStackSize; common/params.glsl GLRENDER_BVH_MAX_DEPTH).
+MAX_DEPTH = MAX_DEPTH_BY_WIDTH[4]
+# Largest leaf per width: the reference's 3-bit count holds 7; 4-wide trees keep 4.
+MAX_LEAF_SIZE_BY_WIDTH = {4: 4, 8: 7}
 # SAH constants for the leaf decision (cost of a binary node visit and of a
 # triangle test, in the same unit). Triangle costs 0.5..1.5 traced within 3% of
 # each other (mean leaf 2.8..1.7 triangles); benchmarks/RESULTS.md, "BVH".
 C_NODE = 1.0
 C_TRI = 1.0
+
+
+def max_depth(width: int) -> int:
+    """Deepest inner node (the root is 0) a ``width``-wide tree may have: 31 for 4, 21 for 8."""
+    return MAX_DEPTH_BY_WIDTH[width]
+
+
+def stack_size(width: int) -> int:
+    """Traversal stack entries that a ``width``-wide tree of depth <= max_depth(width) can need."""
+    return (width - 1) * (max_depth(width) + 1)
 
 
 @dataclass
@@ -68,11 +86,11 @@ class MotionBvh:
 
 @dataclass
 class Bvh:
-    """A 4-wide BVH over triangles, in BVH order (see the module doc for the layout)."""
+    """A 4- or 8-wide BVH over triangles, in BVH order (see the module doc for the layout)."""
 
     corners: np.ndarray  # (T, 3, 3) float32, BVH order
     prim_order: np.ndarray  # (T,) int64: BVH-order triangle -> input triangle index
-    arrays: Bvh4Arrays
+    arrays: BvhArrays
     prepared: PreparedTriangles = field(repr=False)
     method: str = "ploc"
     build_seconds: float = 0.0
@@ -87,6 +105,11 @@ class Bvh:
     @property
     def node_count(self) -> int:
         return self.arrays.node_count
+
+    @property
+    def width(self) -> int:
+        """Children per node: 4 or 8 (motion instances' trees have the same)."""
+        return self.arrays.width
 
     @property
     def depth(self) -> int:
@@ -117,11 +140,11 @@ class Bvh:
                 np.maximum(np.maximum(c[:, 0], c[:, 1]), c[:, 2]).max(axis=0))
 
     def sah_cost(self, c_node: float = 1.0, c_tri: float = 1.0) -> float:
-        """SAH cost of the 4-wide tree relative to its root box.
+        """SAH cost of the wide tree relative to its root box.
 
         ``(c_node * sum of inner node areas + c_tri * sum of leaf area x count) / root area``
         (Goldsmith & Salmon 1987; MacDonald & Booth 1990), with surface areas of
-        the node boxes; one inner node visit tests its four child boxes.
+        the node boxes; one inner node visit tests all its child boxes.
         """
         a = self.arrays
         if not self.triangle_count:
@@ -150,6 +173,7 @@ class Bvh:
         nbytes = self.nbytes
         return {
             "method": self.method,
+            "width": self.width,
             "input_triangles": p.input_count,
             "triangles": self.triangle_count,
             "skipped_invalid": p.skipped_invalid,
@@ -170,7 +194,7 @@ class Bvh:
         }
 
     def child_refs(self, node_offset: int = 0, triangle_offset: int = 0) -> np.ndarray:
-        """(N, 4) uint32 child references (see the module doc), for a tree stored
+        """(N, width) uint32 child references (see the module doc), for a tree stored
         ``node_offset`` nodes and ``triangle_offset`` triangles into the buffers."""
         a = self.arrays
         refs = np.full(a.child_kind.shape, EMPTY_REF, np.uint64)
@@ -178,7 +202,7 @@ class Bvh:
         leaf = a.child_kind == KIND_LEAF
         refs[inner] = (a.child_index[inner] + node_offset).astype(np.uint64)
         first = a.child_index[leaf] + triangle_offset
-        if len(first) and first.max() + MAX_LEAF_SIZE > LEAF_FIRST_MASK:
+        if len(first) and first.max() + MAX_LEAF_SIZE_BY_WIDTH[self.width] > LEAF_FIRST_MASK:
             raise UsageError(f"too many triangles for a leaf reference (at most {LEAF_FIRST_MASK})")
         refs[leaf] = (LEAF_FLAG | (a.child_count[leaf] << LEAF_COUNT_SHIFT) | first).astype(np.uint64)
         return refs.astype(np.uint32)
@@ -214,8 +238,8 @@ def build_bvh(vertices, triangles, *, method: str = "ploc", radius: int = DEFAUL
               top_clusters: int = DEFAULT_TOP_CLUSTERS, threads: int | None = None,
               on_invalid: str = "skip", remove_degenerate: bool = True,
               remove_duplicates: bool = True, max_leaf_size: int = MAX_LEAF_SIZE,
-              c_node: float = C_NODE, c_tri: float = C_TRI, motion=()) -> Bvh:
-    """Build a 4-wide BVH over ``triangles`` (T, 3) int indexing ``vertices`` (V, 3).
+              c_node: float = C_NODE, c_tri: float = C_TRI, motion=(), width: int = DEFAULT_WIDTH) -> Bvh:
+    """Build a ``width``-wide BVH over ``triangles`` (T, 3) int indexing ``vertices`` (V, 3).
 
     ``method``: ``"ploc"`` (fast, the default) or ``"binned_sah"`` (a full
     top-down binned SAH sweep: slower, the quality reference). ``on_invalid``:
@@ -223,12 +247,19 @@ def build_bvh(vertices, triangles, *, method: str = "ploc", radius: int = DEFAUL
     exactly duplicated triangles are dropped (counted in :meth:`Bvh.stats`)
     unless disabled. ``prim_order`` maps BVH-order triangles to input indices.
     ``motion``: :class:`~glrender.accel.instances.MotionInstance` objects, each
-    built into its own tree (see :meth:`Bvh.motion_prim_ranges`).
+    built into its own tree (see :meth:`Bvh.motion_prim_ranges`). ``width``: 4
+    children per node (what the GLSL traversal reads) or 8; ``max_leaf_size``
+    at most 4 for width 4 and 7 for width 8.
     """
     if method not in METHODS:
         raise UsageError(f"build_bvh: method must be one of {METHODS}, got {method!r}")
-    if not 1 <= max_leaf_size <= MAX_LEAF_SIZE:
-        raise UsageError(f"build_bvh: max_leaf_size must be 1..{MAX_LEAF_SIZE}, got {max_leaf_size}")
+    if isinstance(width, bool) or width not in WIDTHS:
+        raise UsageError(f"build_bvh: width must be one of {WIDTHS}, got {width!r}")
+    width = int(width)
+    limit = MAX_LEAF_SIZE_BY_WIDTH[width]
+    if not 1 <= max_leaf_size <= limit:
+        raise UsageError(f"build_bvh: max_leaf_size must be 1..{limit} for width {width}, "
+                         f"got {max_leaf_size}")
     start = time.perf_counter()
     prepared = prepare_triangles(vertices, triangles, on_invalid=on_invalid,
                                  remove_degenerate=remove_degenerate,
@@ -238,7 +269,7 @@ def build_bvh(vertices, triangles, *, method: str = "ploc", radius: int = DEFAUL
     hi = np.maximum(np.maximum(c[:, 0], c[:, 1]), c[:, 2])
     threads = threads or build_threads()
     tree = build_ploc(lo, hi, radius, top_clusters, threads) if method == "ploc" else build_binned_sah(lo, hi)
-    arrays = collapse_tree(tree, max_leaf_size, c_node, c_tri)
+    arrays = collapse_tree(tree, max_leaf_size, c_node, c_tri, width)
     order = arrays.prim_order
     bvh = Bvh(np.take(c, order, axis=0), np.take(prepared.source, order), arrays, prepared, method,
               binary_sah=tree.sah_cost())
@@ -251,7 +282,7 @@ def build_bvh(vertices, triangles, *, method: str = "ploc", radius: int = DEFAUL
         tree = build_bvh(instance.vertices, instance.triangles, method=method, radius=radius,
                          top_clusters=top_clusters, threads=threads, on_invalid=on_invalid,
                          remove_degenerate=remove_degenerate, remove_duplicates=remove_duplicates,
-                         max_leaf_size=max_leaf_size, c_node=c_node, c_tri=c_tri)
+                         max_leaf_size=max_leaf_size, c_node=c_node, c_tri=c_tri, width=width)
         lo, hi = tree.bounds
         if tree.triangle_count:
             lo, hi = motion_bounds(instance, lo, hi)
@@ -269,8 +300,8 @@ def build_threads() -> int:
 
 
 def collapse_tree(tree: BinaryTree, max_leaf_size: int = MAX_LEAF_SIZE, c_node: float = C_NODE,
-                  c_tri: float = C_TRI) -> Bvh4Arrays:
-    """Leaf decisions by SAH, then the collapse to four children per node."""
+                  c_tri: float = C_TRI, width: int = DEFAULT_WIDTH) -> BvhArrays:
+    """Leaf decisions by SAH, then the collapse to ``width`` children per node."""
     count = tree.counts()
     leaf = tree.leaf_mask(count, max_leaf_size, c_node, c_tri)
-    return collapse_to_bvh4(tree, leaf, count, tree.first_prim(count), MAX_DEPTH)
+    return collapse_to_bvh(tree, leaf, count, tree.first_prim(count), max_depth(width), width)

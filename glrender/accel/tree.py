@@ -1,7 +1,7 @@
 """Binary BVHs as flat arrays, and the bottom-up / top-down passes over them.
 
 Every builder here (PLOC, binned SAH) produces the same representation, so the
-leaf decisions, the collapse to a 4-wide BVH and the cost model are shared and
+leaf decisions, the collapse to a 4- or 8-wide BVH and the cost model are shared and
 two trees over one mesh can be compared fairly.
 
 Node ``i < n`` is the leaf holding primitive ``i``; nodes ``n .. 2n-2`` are

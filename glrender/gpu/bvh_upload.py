@@ -8,9 +8,10 @@ from __future__ import annotations
 
 from ..errors import UsageError
 from ..gl.buffers import BufferTexture
-from ..accel.bvh import MAX_DEPTH, Bvh
+from ..accel.bvh import Bvh, max_depth
 from . import bindings
 
+TRAVERSAL_WIDTHS = (4,)  # node widths shaders/geometry/bvh.glsl reads
 UNITS_RESERVED = range(bindings.TEX_BVH_NODES, bindings.TEX_GEOMETRY_RESERVED + 1)
 # name in Bvh.pack() -> (texture unit, buffer texture format, GLSL sampler name)
 TEXTURES = {
@@ -24,9 +25,12 @@ class GpuBvh:
     """A BVH's buffer textures on one context; :meth:`bind` before dispatching."""
 
     def __init__(self, ctx, bvh: Bvh):
-        if bvh.depth > MAX_DEPTH:
+        if bvh.width not in TRAVERSAL_WIDTHS:
+            raise UsageError(f"GpuBvh: the GLSL traversal reads {TRAVERSAL_WIDTHS[0]}-wide trees, "
+                             f"this one is {bvh.width}-wide (build it with width={TRAVERSAL_WIDTHS[0]})")
+        if bvh.depth > max_depth(bvh.width):
             raise UsageError(f"GpuBvh: tree depth {bvh.depth} exceeds the traversal stack "
-                             f"bound {MAX_DEPTH} (build it with glrender.accel.build_bvh)")
+                             f"bound {max_depth(bvh.width)} (build it with glrender.accel.build_bvh)")
         packed = bvh.pack()
         self.bvh = bvh
         self.textures = {}

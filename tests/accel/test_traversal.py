@@ -295,5 +295,12 @@ def test11_gpu_bvh_refuses_trees_deeper_than_the_stack(gl_ctx, monkeypatch):
     v, f = load_mesh("teapot.ply")
     bvh = build_bvh(v, f)
     monkeypatch.setattr(type(bvh), "depth", property(lambda self: bvh_module.MAX_DEPTH + 1))
-    with pytest.raises(UsageError, match="exceeds the traversal stack bound"):
+    with pytest.raises(UsageError, match="exceeds the traversal stack bound 31 "):
         GpuBvh(gl_ctx, bvh)
+
+
+def test12_gpu_bvh_refuses_8_wide_trees(gl_ctx):
+    """The GLSL traversal reads 4-wide nodes only."""
+    v, f = load_mesh("teapot.ply")
+    with pytest.raises(UsageError, match="reads 4-wide trees, this one is 8-wide"):
+        GpuBvh(gl_ctx, build_bvh(v, f, width=8))
