@@ -9,6 +9,9 @@ GLSL has no include mechanism, so entry points (``*.comp.glsl``, ``*.vert.glsl``
 - ``#include "path"`` is resolved against the shader roots (the packaged
   ``shaders/`` folder, plus any extra roots given); each file is included once,
   and an include cycle is an error naming the whole chain.
+- ``#extension`` lines, wherever they are, move to just after ``#version`` (the
+  driver accepts them only before the first declaration), each once; a file that
+  uses an extension says so itself, with ``enable`` where the code tests for it.
 - ``#include "@name"`` is a slot, filled at compile time from ``slots``
   (e.g. ``{"integrator": "integrators/path.glsl"}``).
 - ``#line`` directives carry a file id so that every compile or link error is
@@ -36,6 +39,7 @@ from ..errors import ShaderError, UsageError
 
 _INCLUDE = re.compile(r'^\s*#\s*include\s+(?:"([^"]*)"|<([^>]*)>)\s*(?://.*)?$')
 _VERSION = re.compile(r"^\s*#\s*version\s+\d+")
+_EXTENSION = re.compile(r"^\s*#\s*extension\s+\w+\s*:\s*\w+\s*(?://.*)?$")
 _IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 # Driver log formats: Mesa "0:12(5): error: ...", NVIDIA "0(12) : error C0000: ...",
 # AMD/others "ERROR: 0:12: ...".
@@ -161,6 +165,7 @@ class _Expander:
         self.files: list[str] = []
         self.done: set[str] = set()
         self.out: list[str] = []
+        self.extensions: list[str] = []
 
     def file_id(self, path: str) -> int:
         self.files.append(path)
@@ -179,6 +184,11 @@ class _Expander:
                 if _VERSION.match(line):
                     raise ShaderError("#version is only allowed on line 1 of an entry point",
                                       path, number)
+                if _EXTENSION.match(line):
+                    directive = " ".join(line.split("//")[0].split())
+                    if directive not in self.extensions:
+                        self.extensions.append(directive)
+                    line = ""  # keep line numbering of this file intact
                 self.out.append(line)
                 continue
             target = m.group(1) if m.group(1) is not None else m.group(2)
@@ -216,11 +226,11 @@ def preprocess(entry: str | None = None, *, source: str | None = None, name: str
     if not lines or not _VERSION.match(lines[0]):
         raise ShaderError("an entry point must start with #version on line 1", name, 1)
     expander = _Expander(library, slots or {})
-    expander.out.append(lines[0].strip())
     for key, value in (defines or {}).items():
         expander.out.append(format_define(key, value))
     expander.expand(name, source, [], first_line=2)
-    return Preprocessed("\n".join(expander.out) + "\n", expander.files)
+    head = [lines[0].strip()] + expander.extensions
+    return Preprocessed("\n".join(head + expander.out) + "\n", expander.files)
 
 
 def _driver_log(exc: Exception) -> str:

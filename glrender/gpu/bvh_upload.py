@@ -11,7 +11,9 @@ from ..gl.buffers import BufferTexture
 from ..accel.bvh import Bvh, max_depth
 from . import bindings
 
-TRAVERSAL_WIDTHS = (4,)  # node widths shaders/geometry/bvh.glsl reads
+# node widths a GLSL traversal reads: 4 (shaders/geometry/bvh.glsl, the render kernels') and
+# 8 (shaders/geometry/bvh8.glsl, per lane and cooperative: benchmarks/traversal.py)
+TRAVERSAL_WIDTHS = (4, 8)
 UNITS_RESERVED = range(bindings.TEX_BVH_NODES, bindings.TEX_GEOMETRY_RESERVED + 1)
 # name in Bvh.pack() -> (texture unit, buffer texture format, GLSL sampler name)
 TEXTURES = {
@@ -26,8 +28,9 @@ class GpuBvh:
 
     def __init__(self, ctx, bvh: Bvh):
         if bvh.width not in TRAVERSAL_WIDTHS:
-            raise UsageError(f"GpuBvh: the GLSL traversal reads {TRAVERSAL_WIDTHS[0]}-wide trees, "
-                             f"this one is {bvh.width}-wide (build it with width={TRAVERSAL_WIDTHS[0]})")
+            raise UsageError(f"GpuBvh: the GLSL traversals read "
+                             f"{' or '.join(map(str, TRAVERSAL_WIDTHS))}-wide trees, this one is "
+                             f"{bvh.width}-wide")
         if bvh.depth > max_depth(bvh.width):
             raise UsageError(f"GpuBvh: tree depth {bvh.depth} exceeds the traversal stack "
                              f"bound {max_depth(bvh.width)} (build it with glrender.accel.build_bvh)")

@@ -272,8 +272,13 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
     if has_bvh:
         body += [
             "    BvhHit bh;",
+            "#if GLRENDER_WAVE_BVH_HITS",
+            "    // the wavefront's extend stage traced the BVH already (kernels/wavefront.comp.glsl)",
+            "    if (wave_bvh_hit(t, bh)) {",
+            "#else",
             f"    if ({box_test.format('t')} && "
             f"{'bvh_intersect_closest_t(o, d, t, time, bh)' if moving else 'bvh_intersect_closest(o, d, t, bh)'}) {{",
+            "#endif",
             "        t = bh.t;",
             "        prim = kCompiledPrimitives + bh.prim;",
             f"        {'mesh_surface_t(bh.prim, bh.bary, time, p, ng, ns, uv, material, light, dpdu)' if moving else 'mesh_surface(bh.prim, bh.bary, p, ng, ns, uv, material, light, dpdu)'};",
@@ -338,4 +343,24 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
         occ.append("    return false;")
     occ += ["}", ""]
     lines += occ
+
+    # -- the wavefront's bin key ---------------------------------------------------
+    lines += ["// Whether the ray o + t d, t in (0, t_max), may meet a BVH mesh (its box): the",
+              "// wavefront executor bins rays by it, so that the rays a vector traverses together",
+              "// all enter the BVH (kernels/wavefront.comp.glsl).",
+              "bool scene_meets_meshes(vec3 o, vec3 d, float t_max) {"]
+    if has_bvh:
+        lines += ["    vec3 inv_d = 1.0 / d;", f"    return {box_test.format('t_max')};"]
+    else:
+        lines += ["    return false;"]
+    lines += ["}", ""]
+    if has_bvh:
+        lines += ["// The nearest BVH triangle alone (the wavefront's extend stage).",
+                  "bool scene_bvh_closest(vec3 o, vec3 d, float t_max, float time, out BvhHit bh) {",
+                  f"    return {'bvh_intersect_closest_t(o, d, t_max, time, bh)' if moving else 'bvh_intersect_closest(o, d, t_max, bh)'};",
+                  "}", ""]
+    else:
+        lines += ["#if GLRENDER_WAVEFRONT", "// No BVH: the wavefront's extend stage has nothing to trace.",
+                  "bool scene_bvh_closest(vec3 o, vec3 d, float t_max, float time, out BvhHit bh) {",
+                  "    bh = BvhHit(t_max, kBvhNoHit, vec2(0.0));", "    return false;", "}", "#endif", ""]
     return "\n".join(lines)

@@ -23,6 +23,10 @@ OPTIONAL_DEFINES = {
     "GLRENDER_BDPT_GENERIC_WEIGHTS": "test only: bdpt evaluates every MIS density afresh",
     "GLRENDER_METALLIC_ROUGHNESS": "a metallic-roughness material picks its BSDF per texel",
     "GLRENDER_EMISSION_TEXTURES": "an area light's radiance varies with a texture",
+    "GLRENDER_WAVEFRONT": "the path tracer runs as the wavefront executor's stages",
+    "GLRENDER_WAVE_STAGE": "which stage of the wavefront executor the program is",
+    "GLRENDER_WAVE_BVH_HITS": "the scene's closest hit takes the extend stage's BVH hit",
+    "GLRENDER_COOP_LANES": "8-wide traversal: cooperative when at most this many lanes have rays",
 }
 
 

@@ -33,11 +33,13 @@ from ..gpu.pack import PackedScene
 from ..sampling.sequences import strata_columns
 from ..scene import model as m
 from ..film import Film
-from . import strategies
+from . import strategies, wavefront
 from .accumulation import SPLAT_SCALE, Accumulation
 from .driver import part_digests
 from .params import shader_defines
 
+#: RenderSettings.executor: the render kernel, or the wavefront stages (path tracer)
+EXECUTORS = ("megakernel", "wavefront")
 BDPT_DEPTH_CAP = cast(int, integrators.get("bdpt").depth_cap)   # kBdptDepthCap (integrators/bdpt_vertex.glsl)
 
 
@@ -60,6 +62,8 @@ class RenderSettings:
                                           # emission AOV; glrender.denoise renders it apart)
     strategy_depth: int = 0               # bdpt: keep each strategy's image up to this path
                                           # length (glrender/render/strategies.py; 0: none)
+    executor: str = "megakernel"          # how the path tracer runs: one render kernel, or
+                                          # stages over binned queues (glrender/render/wavefront.py)
 
 
 def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: int | None = None,
@@ -72,7 +76,7 @@ def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: i
                         aovs: bool = False, count_loops: bool = False, count_rays: bool = False,
                         samples_per_pass: int | None = None, time_target: float = 0.1,
                         clamp: float | None = None, emission_only: bool = False,
-                        strategy_depth: int = 0) -> RenderSettings:
+                        strategy_depth: int = 0, executor: str = "megakernel") -> RenderSettings:
     """The scene's settings with the given overrides (None keeps the scene's value).
     ``clamp``: scale each camera sample whose largest RGB component exceeds it down to
     it (removes fireflies at the price of bias; None: off). ``emission_only`` (path
@@ -102,11 +106,17 @@ def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: i
                          f"{integ.kind}")
     if count_loops and count_rays:
         raise UsageError("count_loops and count_rays share one debug counter: ask for one")
+    if executor not in EXECUTORS:
+        raise UsageError(f"executor: expected one of {', '.join(EXECUTORS)}, got {executor!r}")
+    if executor == "wavefront":
+        why = wavefront.supports(integ.kind, integ.split, integ.light_samples)
+        if why is not None:
+            raise UsageError(f"executor: {why}")
     return RenderSettings(integ, samp, aovs=aovs, count_loops=count_loops, count_rays=count_rays,
                           samples_per_pass=samples_per_pass, time_target=time_target,
                           clamp=None if clamp is None else float(clamp),
                           emission_only=bool(emission_only),
-                          strategy_depth=int(strategy_depth))
+                          strategy_depth=int(strategy_depth), executor=executor)
 
 
 def _half_extents(half: float, fov_axis: str, width: int, height: int) -> tuple[float, float]:
@@ -280,11 +290,17 @@ class Renderer:
             self._check_strategy_images()
             self.defines["GLRENDER_STRATEGY_DEPTH"] = s.strategy_depth
         self._source_fingerprint = (geometry, sorted(self.defines.items()), spec.glsl)
+        slots = {"integrator": spec.glsl, "scene": codegen.GENERATED_PATH}
         self.program: Any = shaders.compile_compute(
-            self.ctx, "kernels/render.comp.glsl", defines=self.defines,
-            slots={"integrator": spec.glsl,
-                   "scene": codegen.GENERATED_PATH},
+            self.ctx, "kernels/render.comp.glsl", defines=self.defines, slots=slots,
             library=library)
+        self.wavefront: wavefront.Wavefront | None = None
+        if s.executor == "wavefront":
+            why = wavefront.supports(integ.kind, integ.split, integ.light_samples)
+            if why is not None:
+                raise UsageError(f"executor: {why}")
+            self.wavefront = wavefront.Wavefront(self.ctx, self.defines, slots, library,
+                                                 self.binding_limit())
         if s.samples_per_pass is not None:
             self.samples_per_pass = max(1, int(s.samples_per_pass))
         elif spec.strategies and not 0 < integ.max_depth <= 8:
@@ -521,6 +537,8 @@ class Renderer:
         so far are undone (from a copy taken before the pass) and the pass returns False,
         so the accumulation always holds whole passes."""
         prm = self.param_block(first_sample, samples)
+        if self.wavefront is not None:
+            return self._run_pass_wavefront(prm, first_sample, samples, should_stop)
         total = self.tiles_x * self.rows[1]
         done = 0
         self.bind()
@@ -555,6 +573,34 @@ class Renderer:
                 self._tile_rate = rate if self._tile_rate is None else 0.7 * self._tile_rate + 0.3 * rate
                 start += count
                 done += count
+        if len(slices) > 1:
+            self.bind()
+        return True
+
+    def _run_pass_wavefront(self, prm: Any, first_sample: int, samples: int,
+                            should_stop: Callable[[], bool] | None) -> bool:
+        """_run_pass through the wavefront executor: the same samples and sums, in waves
+        (a pass stopped between waves is undone as a pass stopped between dispatches)."""
+        assert self.wavefront is not None
+        self.bind()
+        slices = self.accumulation.slices()
+        waves = sum(math.ceil(self.tiles_x * n * 64 * samples / self.wavefront.capacity)
+                    for _, n in slices)
+        if should_stop is not None and waves > 1:
+            self.accumulation.take_snapshot()
+        for k, (first_row, n_rows) in enumerate(slices):
+            if len(slices) > 1:
+                self.accumulation.bind_slice(first_row, n_rows)
+            prm["image"][3], prm["counts"][3] = n_rows, first_row
+            prm["dispatch"][0], prm["dispatch"][1] = 0, self.tiles_x * n_rows
+            self.write_params(prm)
+            stop = should_stop if waves > 1 else None
+            if (k and stop is not None and stop()) or \
+                    not self.wavefront.render(first_sample, samples, self.tiles_x * n_rows, stop):
+                self.accumulation.restore_snapshot()
+                self.bind()
+                return False
+            self.gl.finish()
         if len(slices) > 1:
             self.bind()
         return True
@@ -640,6 +686,9 @@ class Renderer:
         own data stays on the device while another renderer shares it."""
         for buf in self._buffers + [self._params]:
             buf.release()
+        if self.wavefront is not None:
+            self.wavefront.release()
+            self.wavefront = None
         self.accumulation.release()
         self._buffers = []
         data, self.device_scene = self.device_scene, None

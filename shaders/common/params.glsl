@@ -41,6 +41,18 @@
 #ifndef GLRENDER_EMISSION_TEXTURES
 #define GLRENDER_EMISSION_TEXTURES 0
 #endif
+#ifndef GLRENDER_WAVEFRONT
+#define GLRENDER_WAVEFRONT 0
+#endif
+#ifndef GLRENDER_WAVE_STAGE
+#define GLRENDER_WAVE_STAGE 0
+#endif
+#ifndef GLRENDER_WAVE_BVH_HITS
+#define GLRENDER_WAVE_BVH_HITS 0
+#endif
+#ifndef GLRENDER_COOP_LANES
+#define GLRENDER_COOP_LANES 0
+#endif
 // A material's normal map has Mitsuba's shadowing term (bsdf/bsdf.glsl
 // bsdf_normal_shadowing; bdpt's vertices keep the unperturbed normal for it).
 const bool kNormalShadowing = GLRENDER_NORMAL_SHADOWING != 0;
@@ -61,6 +73,16 @@ const bool kBdptGenericWeights = GLRENDER_BDPT_GENERIC_WEIGHTS != 0;
 const bool kMetallicRoughness = GLRENDER_METALLIC_ROUGHNESS != 0;
 // An area light's radiance may vary over it with a texture (lights/light.glsl).
 const bool kEmissionTextures = GLRENDER_EMISSION_TEXTURES != 0;
+// The path tracer runs as stages over queues of paths (kernels/wavefront.comp.glsl): a
+// segment hands its light sample's shadow ray to the shadow stage instead of tracing it.
+const bool kWavefront = GLRENDER_WAVEFRONT != 0;
+// Which of its stages a wavefront program runs (kernels/wavefront.comp.glsl kStage*); the
+// step's scene code then takes the extend stage's BVH hit (GLRENDER_WAVE_BVH_HITS, tested
+// by #if in the generated scene code: it declares nothing otherwise).
+const uint kWaveStage = uint(GLRENDER_WAVE_STAGE);
+// The 8-wide traversal (geometry/bvh8.glsl) traces a vector's rays cooperatively when at
+// most this many of its lanes have one (0: never; benchmarks/traversal.py measures it).
+const uint kCoopLanes = uint(GLRENDER_COOP_LANES);
 
 // Sample generator (sampling/sampler.glsl).
 const int kSamplerIndependent = 0;

@@ -49,6 +49,7 @@ struct PathState {
     vec3 split_d;          // throughput (over kSplit) and eta product each branch starts from
     vec3 split_beta;
     float split_eta;
+    ShadowRay shadow;      // kWavefront: this segment's light sample, value times throughput
 };
 
 PathState path_start(vec3 o, vec3 d, float t_max, float time) {
@@ -68,6 +69,7 @@ PathState path_start(vec3 o, vec3 d, float t_max, float time) {
     st.aov_open = true;
     st.aov_weight = vec3(1.0);
     st.split_left = 0;
+    st.shadow = kNoShadowRay;
     return st;
 }
 
@@ -153,7 +155,13 @@ bool path_segment(inout PathState st, inout SamplerState s) {
     float u_rr = sampler_1d(s);
     bool delta = bsdf_is_delta(b);
     bool use_light = kStrategy != kStrategyBsdf && !delta;
-    if (kLightSamples == 1) {
+    if (kWavefront) {   // one light sample, traced by the shadow stage
+        if (use_light) {
+            st.shadow = next_event_ray(p, hit, b, frame, wo, u_choice.x, u_light,
+                                       kStrategy != kStrategyLight, 1.0, 1.0);
+            st.shadow.value = st.beta * st.shadow.value;
+        }
+    } else if (kLightSamples == 1) {
         if (use_light)
             st.L += st.beta * next_event(p, hit, b, frame, wo, st.time, u_choice.x, u_light,
                                          kStrategy != kStrategyLight);

@@ -107,7 +107,9 @@ float max_abs(vec3 v) {
     return max(abs(v.x), max(abs(v.y), abs(v.z)));
 }
 
-void accumulate(inout Accumulator acc, vec3 L, Aov aov, uint index) {
+// The clamp and the debug poison applied to sample `index`; whether it counts (finite and
+// below kAccumLimit). Every accumulation of camera samples goes through it.
+bool accumulation_admits(inout vec3 L, inout Aov aov, uint index) {
     if (kDebugNonFinite != 0u && (index % 7u) == kDebugNonFinite - 1u) L = vec3(uintBitsToFloat(0x7fc00000u));
     float clamp_to = u_params.sample_clamp;
     float largest = max(L.r, max(L.g, L.b));
@@ -115,7 +117,11 @@ void accumulate(inout Accumulator acc, vec3 L, Aov aov, uint index) {
         L *= clamp_to / largest;
         aov.emission *= clamp_to / largest;
     }
-    if (is_finite(L) && max(abs(L.r), max(abs(L.g), abs(L.b))) < kAccumLimit) {
+    return is_finite(L) && max(abs(L.r), max(abs(L.g), abs(L.b))) < kAccumLimit;
+}
+
+void accumulate(inout Accumulator acc, vec3 L, Aov aov, uint index) {
+    if (accumulation_admits(L, aov, index)) {
         // constant indices only: an array indexed by a loop variable may be kept in
         // memory and addressed lane by lane
         acc.counts.x += 1u;
@@ -168,6 +174,56 @@ void accumulate(inout Accumulator acc, vec3 L, Aov aov, uint index) {
         }
     } else {
         acc.counts.y += 1u;
+    }
+}
+
+// a += v (modulo 2^128) for the 128-bit word quadruple BUF[i], with integer atomics: each
+// word's carry goes to the next word in a further atomic add, so samples of one pixel may
+// arrive from several invocations at once and the sum is the same bits as accum_add's.
+#define ACCUM_ATOMIC_ADD(NAME, BUF) \
+void NAME(uint i, uvec4 v) { \
+    uint old = atomicAdd(BUF[i].x, v.x); \
+    uint carry = old + v.x < old ? 1u : 0u; \
+    uint add = v.y + carry; \
+    carry = add < carry ? 1u : 0u; \
+    if (add != 0u) { old = atomicAdd(BUF[i].y, add); carry += old + add < old ? 1u : 0u; } \
+    add = v.z + carry; \
+    carry = add < carry ? 1u : 0u; \
+    if (add != 0u) { old = atomicAdd(BUF[i].z, add); carry += old + add < old ? 1u : 0u; } \
+    add = v.w + carry; \
+    if (add != 0u) atomicAdd(BUF[i].w, add); \
+}
+ACCUM_ATOMIC_ADD(accum_atomic_sum, accum_sum)
+ACCUM_ATOMIC_ADD(accum_atomic_sq, accum_sq)
+ACCUM_ATOMIC_ADD(accum_atomic_aov, accum_aov)
+
+// accumulate() for one sample straight into the film's pixel `idx` (the accumulation's
+// index), by atomics: the same sums as accumulate() and the render kernel's write-back.
+void accumulate_atomic(uint idx, vec3 L, Aov aov, uint index) {
+    if (accumulation_admits(L, aov, index)) {
+        atomicAdd(accum_sum[4u * idx + 3u].x, 1u);
+        vec3 sq = L * L;
+        accum_atomic_sum(4u * idx, accum_fixed(L.r));
+        accum_atomic_sum(4u * idx + 1u, accum_fixed(L.g));
+        accum_atomic_sum(4u * idx + 2u, accum_fixed(L.b));
+        accum_atomic_sq(3u * idx, accum_fixed_abs(sq.r));
+        accum_atomic_sq(3u * idx + 1u, accum_fixed_abs(sq.g));
+        accum_atomic_sq(3u * idx + 2u, accum_fixed_abs(sq.b));
+        if (kAovs) {
+            uint a = kAovChannels * idx;
+            accum_atomic_aov(a, accum_fixed(aov.albedo.r));
+            accum_atomic_aov(a + 1u, accum_fixed(aov.albedo.g));
+            accum_atomic_aov(a + 2u, accum_fixed(aov.albedo.b));
+            accum_atomic_aov(a + 3u, accum_fixed(aov.normal.x));
+            accum_atomic_aov(a + 4u, accum_fixed(aov.normal.y));
+            accum_atomic_aov(a + 5u, accum_fixed(aov.normal.z));
+            accum_atomic_aov(a + 6u, accum_fixed(aov.depth));
+            accum_atomic_aov(a + 7u, accum_fixed(aov.emission.r));
+            accum_atomic_aov(a + 8u, accum_fixed(aov.emission.g));
+            accum_atomic_aov(a + 9u, accum_fixed(aov.emission.b));
+        }
+    } else {
+        atomicAdd(accum_sum[4u * idx + 3u].y, 1u);
     }
 }
 

@@ -82,28 +82,48 @@ vec3 environment_contribution(vec3 d, int depth, vec3 prev_p, float prev_pdf, bo
     return environment_contribution_n(d, depth, prev_p, prev_pdf, prev_delta, 1.0, 1.0);
 }
 
+// A light sample's shadow ray and what it brings when nothing blocks it: f |cos| Le w / pdf,
+// without the path throughput (valid false: no ray to trace, nothing brought).
+struct ShadowRay {
+    vec3 o;
+    vec3 d;
+    float t_max;
+    uint ignore;   // the primitive the ray aims at (scene_occluded skips it)
+    vec3 value;
+    bool valid;
+};
+
+const ShadowRay kNoShadowRay = ShadowRay(vec3(0.0), vec3(0.0), 0.0, 0u, vec3(0.0), false);
+
 // One light sample at the vertex p (with n_light light and n_bsdf BSDF samples taken
-// there): choose a light with u_select, sample it with u_light, trace the shadow ray.
-// Returns f |cos| Le w / pdf, without the path throughput.
-vec3 next_event_n(vec3 p, SurfaceHit hit, Bsdf b, Frame frame, vec3 wo, float time, float u_select,
-                  vec2 u_light, bool use_mis, float n_light, float n_bsdf) {
-    if (u_params.counts.x == 0u) return vec3(0.0);
+// there): choose a light with u_select, sample it with u_light; the shadow ray to trace.
+ShadowRay next_event_ray(vec3 p, SurfaceHit hit, Bsdf b, Frame frame, vec3 wo, float u_select,
+                         vec2 u_light, bool use_mis, float n_light, float n_bsdf) {
+    if (u_params.counts.x == 0u) return kNoShadowRay;
     LightChoice choice = select_light(u_select);
     LightData light = scene_light(choice.index);
     LightSample ls = sample_light(light, p, u_light);
-    if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return vec3(0.0);
-    if (!light_side_valid(ls.wi, hit.ng, frame.z)) return vec3(0.0);
+    if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return kNoShadowRay;
+    if (!light_side_valid(ls.wi, hit.ng, frame.z)) return kNoShadowRay;
     vec3 wi = frame_to_local(frame, ls.wi);
     float pdf_bsdf;
     vec3 f = bsdf_eval_pdf(b, wo, wi, false, pdf_bsdf);
-    if (max_component(f) <= 0.0) return vec3(0.0);
+    if (max_component(f) <= 0.0) return kNoShadowRay;
     vec3 o = offset_ray_origin(p, hit.ng, ls.wi);
     float t_max = isinf(ls.dist) ? kInfinity : ls.dist * (1.0 - kShadowEpsilon);
-    RAY_TICK();
-    if (scene_occluded(o, ls.wi, t_max, time, light.info.z)) return vec3(0.0);
     float pdf_light = choice.pmf * ls.pdf;
     float w = (ls.delta || !use_mis) ? 1.0 : mis_weight_n(n_light, pdf_light, n_bsdf, pdf_bsdf);
-    return f * ls.Le * (w / pdf_light);
+    return ShadowRay(o, ls.wi, t_max, light.info.z, f * ls.Le * (w / pdf_light), true);
+}
+
+// The same light sample with its shadow ray traced: f |cos| Le w / pdf, or zero.
+vec3 next_event_n(vec3 p, SurfaceHit hit, Bsdf b, Frame frame, vec3 wo, float time, float u_select,
+                  vec2 u_light, bool use_mis, float n_light, float n_bsdf) {
+    ShadowRay r = next_event_ray(p, hit, b, frame, wo, u_select, u_light, use_mis, n_light, n_bsdf);
+    if (!r.valid) return vec3(0.0);
+    RAY_TICK();
+    if (scene_occluded(r.o, r.d, r.t_max, time, r.ignore)) return vec3(0.0);
+    return r.value;
 }
 
 vec3 next_event(vec3 p, SurfaceHit hit, Bsdf b, Frame frame, vec3 wo, float time, float u_select,

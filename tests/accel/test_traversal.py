@@ -299,8 +299,55 @@ def test11_gpu_bvh_refuses_trees_deeper_than_the_stack(gl_ctx, monkeypatch):
         GpuBvh(gl_ctx, bvh)
 
 
-def test12_gpu_bvh_refuses_8_wide_trees(gl_ctx):
-    """The GLSL traversal reads 4-wide nodes only."""
+def trace_glsl8(gpu, o, d, t_max, has_ray, coop_lanes):
+    """Closest and any hit through geometry/bvh8.glsl; lanes without a ray ask nothing."""
+    from glrender.render.params import shader_defines
+    from glrender.testing.harness import run_glsl
+
+    body = ["BvhHit h;", "bool hit = bvh8_traverse(has != 0u, 0u, o, d, t_max, false, h);",
+            "BvhHit h2;", "bool any = bvh8_traverse(has != 0u, 0u, o, d, t_max, true, h2);",
+            "float t = h.t;", "uint prim = h.prim;", "vec2 bary = h.bary;"]
+    gpu.bind()
+    return run_glsl("\n".join(body), {"o": o, "d": d, "t_max": np.asarray(t_max, np.float32),
+                                       "has": has_ray.astype(np.uint32)},
+                    {"t": "float", "prim": "uint", "bary": "vec2", "hit": "bool", "any": "bool"},
+                    includes=["geometry/bvh8.glsl"],
+                    defines={**shader_defines(), "GLRENDER_COOP_LANES": coop_lanes})
+
+
+@pytest.mark.parametrize("coop_lanes", [0, 3, 8])
+def test12_8_wide_traversal_per_lane_and_cooperative(gl_ctx, coop_lanes):
+    """geometry/bvh8.glsl against the brute force: per lane (0), cooperative when at most 3
+    of a vector's 8 lanes have rays, and always cooperative (8); lanes without a ray get no
+    hit and still help. The kernel's last vector is partly empty (a divergent call): the
+    cooperative query must notice and trace per lane."""
+    rng = np.random.default_rng(41)
     v, f = load_mesh("teapot.ply")
-    with pytest.raises(UsageError, match="reads 4-wide trees, this one is 8-wide"):
-        GpuBvh(gl_ctx, build_bvh(v, f, width=8))
+    bvh = build_bvh(v, f, width=8)
+    gpu = GpuBvh(gl_ctx, bvh)
+    n = 12003  # not a multiple of 8
+    o, d = random_rays(rng, n, v.min(0), v.max(0), spread=0.9)
+    t_max = np.where(rng.random(n) < 0.5, np.inf, rng.random(n) * 2).astype(np.float32)
+    has_ray = rng.random(n) < np.repeat(rng.choice([0.1, 0.4, 1.0], n // 64 + 1), 64)[:n]
+    out = trace_glsl8(gpu, o, d, t_max, has_ray, coop_lanes)
+    none = ~has_ray
+    assert np.all(out["prim"][none] == NO_HIT) and not out["any"][none].any()
+    sub = {k: v_[has_ray] for k, v_ in out.items()}
+    ref = compare(bvh, o[has_ray], d[has_ray], t_max[has_ray], sub)
+    assert 300 < np.count_nonzero(ref["prim"] >= 0) < has_ray.sum() - 300
+
+
+def test12b_gpu_bvh_takes_the_widths_a_traversal_reads(gl_ctx, monkeypatch):
+    v, f = load_mesh("teapot.ply")
+    bvh = build_bvh(v, f)
+    monkeypatch.setattr(type(bvh), "width", property(lambda self: 2))   # no builder makes one
+    with pytest.raises(UsageError, match="read 4 or 8-wide trees, this one is 2-wide"):
+        GpuBvh(gl_ctx, bvh)
+
+
+def test12c_8_wide_constants_match_the_builder():
+    from glrender.accel.quantize import texels_per_node
+
+    src = (packaged_root() / "geometry" / "bvh8.glsl").read_text()
+    assert re.search(rf"kBvh8TexelsPerNode = {texels_per_node(8)};", src)
+    assert re.search(rf"kBvh8MaxDepth = {bvh_module.max_depth(8)};", src)

@@ -162,3 +162,23 @@ def test15_shader_log_path_that_cannot_be_written_is_a_clear_error(gl_ctx, tmp_p
     monkeypatch.setenv("GLRENDER_SHADER_LOG", str(log))
     with pytest.raises(UsageError, match=r"GLRENDER_SHADER_LOG=.*missing.*cannot append"):
         compile_compute(gl_ctx, source=entry("// test15 shader log path"), defines={"T15": 1})
+
+
+def test16_extension_directives_move_after_version(gl_ctx):
+    """An #extension in an included file (the driver takes them only before declarations)
+    moves to just after #version, once; the file keeps its line numbers."""
+    lib = ShaderLibrary(generated={
+        "ext/a.glsl": "float a_value() { return 1.0; }\n#extension GL_ARB_shader_ballot : enable\n"
+                      "float a_two() { return 2.0; }\n",
+        "ext/b.glsl": "#extension   GL_ARB_shader_ballot :  enable  // again\nfloat b_value() { return 3.0; }\n",
+    })
+    src = entry('#include "ext/a.glsl"\n#include "ext/b.glsl"')
+    pre = preprocess(source=src, defines={"X": 1}, library=lib)
+    lines = pre.source.splitlines()
+    assert lines[:3] == ["#version 450", "#extension GL_ARB_shader_ballot : enable", "#define X 1"]
+    assert pre.source.count("#extension") == 1
+    compile_compute(gl_ctx, source=src, library=lib)
+    bad = ShaderLibrary(generated={"ext/c.glsl": "float c() { return 1.0; }\nfloat c2() { return x; }\n"
+                                                 "#extension GL_ARB_shader_ballot : enable\n"})
+    with pytest.raises(ShaderError, match="ext/c.glsl:2"):
+        compile_compute(gl_ctx, source=entry('#include "ext/c.glsl"'), library=bad)

@@ -66,9 +66,10 @@ def entry_points() -> list[tuple[str, dict[str, str]]]:
     scene = {"scene": "scene/layout.glsl"}    # the generated scene code declares no binding
     out = [("kernels/render.comp.glsl", {**scene, "integrator": spec.glsl})
            for spec in map(integrators.get, integrators.names()) if spec.glsl is not None]
+    out.append(("kernels/wavefront.comp.glsl", {**scene, "integrator": "integrators/path.glsl"}))
     for path in sorted(packaged_root().rglob("*.comp.glsl")):
         rel = path.relative_to(packaged_root()).as_posix()
-        if rel != "kernels/render.comp.glsl":
+        if rel not in ("kernels/render.comp.glsl", "kernels/wavefront.comp.glsl"):
             out.append((rel, scene))
     return out
 

@@ -1,0 +1,292 @@
+#version 450
+// The path tracer as stages over queues of paths (the wavefront executor,
+// glrender/render/wavefront.py), for scenes whose rays spend their time in the BVH.
+//
+// In the render kernel a SIMD vector runs 8 pixels' paths in lock step, and a BVH
+// traversal runs for the whole vector while only the lanes whose rays meet a mesh have
+// work in it. Here every segment of every path in flight is a queue entry, and the
+// queues are binned by whether the ray meets the meshes' box (scene_meets_meshes): those
+// rays fill the queue from the front, the others from the back, so the vectors that
+// traverse the BVH have a ray in every lane. A wave holds a fixed set of samples (pixel,
+// sample index), each one path:
+//
+// Each stage is its own program (kWaveStage):
+//   kStageGenerate  camera rays of the wave's paths into the ray queue;
+//   kStageExtend    the BVH's nearest hit of each ray at the queue's front (a small
+//                   kernel: its traversal loop runs 2-3x faster than inside the step's);
+//   kStageStep      one segment of each queued path (integrators/path.glsl path_step):
+//                   the closest hit, emission, the light sample's shadow ray into the
+//                   shadow queue, the BSDF sample's ray into the next ray queue; a path
+//                   that ends adds its sample to the film (unless its shadow ray is
+//                   pending: then the shadow stage does);
+//   kStageShadow    each shadow ray's any-hit query; what it brings joins its path's
+//                   radiance.
+//
+// Each path draws the random numbers it would draw in the render kernel, in the same
+// order, and its sample is added to the exact fixed-point sums by atomics
+// (accumulate_atomic): the image is bitwise the render kernel's.
+layout(local_size_x = 64) in;
+
+#extension GL_ARB_shader_ballot : enable
+#extension GL_ARB_gpu_shader_int64 : enable
+#include "common/params.glsl"
+#include "common/loop_counter.glsl"
+#include "scene/layout.glsl"
+#include "sampling/sampler.glsl"
+#include "geometry/bvh.glsl"
+
+// The extend stage's answer for the path being stepped (none for a ray that misses the
+// meshes' box), which the scene code's closest hit takes in place of a traversal.
+BvhHit g_wave_hit = BvhHit(0.0, kBvhNoHit, vec2(0.0));
+
+bool wave_bvh_hit(float t_max, out BvhHit bh) {
+    bh = g_wave_hit;
+    return bh.prim != kBvhNoHit && bh.t < t_max;
+}
+
+#include "@integrator"
+
+const uint kStageGenerate = 0u;
+const uint kStageStep = 1u;
+const uint kStageShadow = 2u;
+const uint kStageExtend = 3u;
+
+// A path between segments, 10 vec4 (160 bytes).
+struct WavePath {
+    vec4 o_tmax;       // ray origin, t_max
+    vec4 d_time;       // ray direction, shutter time
+    vec4 L_eta;        // radiance so far, eta product
+    vec4 beta_pdf;     // throughput, pdf of the last BSDF sample
+    vec4 prev_flags;   // last vertex, flags (uint bits): depth | prev_delta << 16 |
+                       // aov_open << 17 | ended << 18
+    uvec4 sampler;     // pixel hash, sample index, next dimension, accumulation index
+    vec4 weight_aovw;  // pixel filter weight, product of delta weights for the AOVs
+    vec4 albedo_depth;
+    vec4 normal;
+    vec4 emission;
+};
+
+// A shadow ray waiting for its any-hit query, 3 vec4 (48 bytes).
+struct WaveShadow {
+    vec4 o_tmax;
+    vec4 d_slot;       // direction, the path's slot (uint bits)
+    vec4 value_ignore; // what it brings (times the throughput), the primitive it aims at
+};
+
+layout(std430, binding = SSBO_WAVE_PATHS) buffer WavePaths { WavePath wave_paths[]; };
+layout(std430, binding = SSBO_WAVE_QUEUE_IN) readonly buffer WaveQueueIn { uint queue_in[]; };
+layout(std430, binding = SSBO_WAVE_QUEUE_OUT) writeonly buffer WaveQueueOut { uint queue_out[]; };
+layout(std430, binding = SSBO_WAVE_SHADOWS) buffer WaveShadows { WaveShadow wave_shadows[]; };
+// [0], [1]: entries of the next ray queue from the front (meeting the meshes) and the
+// back; [2], [3]: the same for the shadow queue
+layout(std430, binding = SSBO_WAVE_COUNTERS) buffer WaveCounters { uint wave_counters[]; };
+// the extend stage's BVH hit per path slot: t, triangle (uint bits), barycentrics
+layout(std430, binding = SSBO_WAVE_HITS) buffer WaveHits { vec4 wave_hits[]; };
+
+// x, y: entries of the input queue at its front and its back; z: the queues' capacity
+// (paths in the wave); w: the wave's first path (generate)
+uniform uvec4 u_wave;
+// x: samples per pixel in the pass, y: the pass's first sample index, z: pixels of the
+// slice's tile grid (tiles x 64)
+uniform uvec4 u_pass;
+
+const uint kFlagPrevDelta = 1u << 16u;
+const uint kFlagAovOpen = 1u << 17u;
+const uint kFlagEnded = 1u << 18u;
+
+void wave_store(uint slot, PathState st, SamplerState s, uint idx, float weight, bool ended) {
+    uint flags = uint(st.depth) | (st.prev_delta ? kFlagPrevDelta : 0u) |
+                 (st.aov_open ? kFlagAovOpen : 0u) | (ended ? kFlagEnded : 0u);
+    WavePath w;
+    w.o_tmax = vec4(st.o, st.t_max);
+    w.d_time = vec4(st.d, st.time);
+    w.L_eta = vec4(st.L, st.eta_product);
+    w.beta_pdf = vec4(st.beta, st.prev_pdf);
+    w.prev_flags = vec4(st.prev_p, uintBitsToFloat(flags));
+    w.sampler = uvec4(s.pixel_hash, s.index, s.dim, idx);
+    w.weight_aovw = vec4(weight, st.aov_weight);
+    w.albedo_depth = vec4(st.aov.albedo, st.aov.depth);
+    w.normal = vec4(st.aov.normal, 0.0);
+    w.emission = vec4(st.aov.emission, 0.0);
+    wave_paths[slot] = w;
+}
+
+PathState wave_load(uint slot, out SamplerState s, out uint idx, out float weight) {
+    WavePath w = wave_paths[slot];
+    PathState st = path_start(w.o_tmax.xyz, w.d_time.xyz, w.o_tmax.w, w.d_time.w);
+    st.L = w.L_eta.xyz;
+    st.eta_product = w.L_eta.w;
+    st.beta = w.beta_pdf.xyz;
+    st.prev_pdf = w.beta_pdf.w;
+    st.prev_p = w.prev_flags.xyz;
+    uint flags = floatBitsToUint(w.prev_flags.w);
+    st.depth = int(flags & 0xFFFFu);
+    st.prev_delta = (flags & kFlagPrevDelta) != 0u;
+    st.aov_open = (flags & kFlagAovOpen) != 0u;
+    st.aov_weight = w.weight_aovw.yzw;
+    st.aov = Aov(w.albedo_depth.xyz, w.normal.xyz, w.albedo_depth.w, w.emission.xyz);
+    s = sampler_start(w.sampler.x, w.sampler.y, u_params.samples.z, u_params.samples.w);
+    s.dim = w.sampler.z;
+    idx = w.sampler.w;
+    weight = w.weight_aovw.x;
+    return st;
+}
+
+// Appends to a binned queue: from the front when `front`, else from the back; kNone when
+// not `want`. Every invocation that reaches the call takes part: with subgroup ballots,
+// the lanes of a subgroup that append to one end take their places with one atomic add
+// (the counter's cache line is fought over by every thread: one add per lane cost more
+// than the rest of a step).
+#if defined(GL_ARB_shader_ballot) && defined(GL_ARB_gpu_shader_int64)
+uint bits64(uvec2 m) { return uint(bitCount(m.x) + bitCount(m.y)); }
+uint lsb64(uvec2 m) { return m.x != 0u ? uint(findLSB(m.x)) : 32u + uint(findLSB(m.y)); }
+
+uint wave_append(uint counter, bool want, bool front) {
+    uvec2 below = unpackUint2x32(gl_SubGroupLtMaskARB);
+    uvec2 mf = unpackUint2x32(ballotARB(want && front));
+    uvec2 mb = unpackUint2x32(ballotARB(want && !front));
+    uint lane = gl_SubGroupInvocationARB;
+    uint base = 0u;
+    uint index = 0xFFFFFFFFu;
+    if ((mf.x | mf.y) != 0u) {
+        uint leader = lsb64(mf);
+        if (lane == leader) base = atomicAdd(wave_counters[counter], bits64(mf));
+        base = readInvocationARB(base, leader);
+        if (want && front) index = base + bits64(mf & below);
+    }
+    if ((mb.x | mb.y) != 0u) {
+        uint leader = lsb64(mb);
+        if (lane == leader) base = atomicAdd(wave_counters[counter + 1u], bits64(mb));
+        base = readInvocationARB(base, leader);
+        if (want && !front) index = u_wave.z - 1u - (base + bits64(mb & below));
+    }
+    return index;
+}
+#else
+uint wave_append(uint counter, bool want, bool front) {
+    if (!want) return 0xFFFFFFFFu;
+    uint k = atomicAdd(wave_counters[counter + (front ? 0u : 1u)], 1u);
+    return front ? k : u_wave.z - 1u - k;
+}
+#endif
+
+// The entry of the binned input queue that invocation i takes (kNone beyond the queue).
+uint wave_entry(uint i) {
+    if (i < u_wave.x) return i;
+    i -= u_wave.x;
+    return i < u_wave.y ? u_wave.z - 1u - i : 0xFFFFFFFFu;
+}
+
+void wave_finish(uint idx, PathState st, SamplerState s, float weight) {
+    accumulate_atomic(idx, weight * st.L, aov_scaled(st.aov, weight), s.index);
+}
+
+void wave_counts(uint idx) {
+    if (g_truncated_paths > 0u) atomicAdd(accum_sum[4u * idx + 3u].z, g_truncated_paths);
+    if (kCountLoops) atomicMax(debug_counters[idx], g_loop_count);
+    if (kCountRays) atomicAdd(debug_counters[idx], g_ray_count);
+}
+
+void stage_generate() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= u_wave.y) return;
+    uint g = u_wave.w + i;
+    uint p = g / u_pass.x;                      // the pixel in the slice's tile order
+    uint sample_index = u_pass.y + g % u_pass.x;
+    uint tile = p / 64u, within = p % 64u;
+    uint first_row = u_params.counts.w;
+    uvec2 pixel = uvec2(tile % u_params.image.z, tile / u_params.image.z + first_row) * 8u +
+                  uvec2(within % 8u, within / 8u);
+    // a wave slot whose pixel lies beyond the image holds an ended path
+    bool inside = all(lessThan(pixel, u_params.image.xy)) && p < u_pass.z;
+    uint idx = (pixel.y - 8u * first_row) * u_params.image.x + pixel.x;
+    uint pixel_hash = sampler_pixel_hash(pixel, u_params.dispatch.z);
+    SamplerState s = pixel_sampler(pixel_hash, sample_index);
+    PathState st;
+    float weight = 0.0;
+    if (inside) {
+        CameraSample c = camera_sample(pixel, s);
+        st = path_start(c.o, c.d, c.t_max, c.time);
+        weight = c.weight;
+    } else {
+        st = path_start(vec3(0.0), vec3(0.0, 0.0, 1.0), 0.0, 0.0);
+    }
+    uint k = wave_append(0u, inside, scene_meets_meshes(st.o, st.d, st.t_max));
+    if (inside) queue_out[k] = i;
+    wave_store(i, st, s, inside ? idx : 0u, weight, !inside);
+}
+
+void stage_step() {
+    uint e = wave_entry(gl_GlobalInvocationID.x);
+    if (e == 0xFFFFFFFFu) return;
+    uint slot = queue_in[e];
+    SamplerState s;
+    uint idx;
+    float weight;
+    PathState st = wave_load(slot, s, idx, weight);
+    if (e < u_wave.x) {   // a ray of the front: the extend stage traced it
+        vec4 h = wave_hits[slot];
+        g_wave_hit = BvhHit(h.x, floatBitsToUint(h.y), h.zw);
+    }
+    bool alive = path_step(st, s);
+    bool shadow = st.shadow.valid;
+    ShadowRay r = st.shadow;
+    uint j = wave_append(2u, shadow, scene_meets_meshes(r.o, r.d, r.t_max));
+    uint k = wave_append(0u, alive, scene_meets_meshes(st.o, st.d, st.t_max));
+    if (shadow) {
+        wave_shadows[j] = WaveShadow(vec4(r.o, r.t_max), vec4(r.d, uintBitsToFloat(slot)),
+                                     vec4(r.value, uintBitsToFloat(r.ignore)));
+    }
+    if (alive) {
+        queue_out[k] = slot;
+    } else if (!shadow) {
+        wave_finish(idx, st, s, weight);
+    }
+    wave_store(slot, st, s, idx, weight, !alive);
+    wave_counts(idx);
+}
+
+void stage_shadow() {
+    uint e = wave_entry(gl_GlobalInvocationID.x);
+    if (e == 0xFFFFFFFFu) return;
+    WaveShadow r = wave_shadows[e];
+    uint slot = floatBitsToUint(r.d_slot.w);
+    RAY_TICK();
+    if (!scene_occluded(r.o_tmax.xyz, r.d_slot.xyz, r.o_tmax.w, wave_paths[slot].d_time.w,
+                        floatBitsToUint(r.value_ignore.w))) {
+        wave_paths[slot].L_eta.xyz += r.value_ignore.xyz;
+    }
+    if ((floatBitsToUint(wave_paths[slot].prev_flags.w) & kFlagEnded) != 0u) {
+        SamplerState s;
+        uint idx;
+        float weight;
+        PathState st = wave_load(slot, s, idx, weight);
+        wave_finish(idx, st, s, weight);
+    }
+    wave_counts(wave_paths[slot].sampler.w);
+}
+
+// The BVH's nearest hit of each queued ray at the queue's front (those meeting the meshes'
+// box): a small kernel, so the traversal loop keeps its state in registers.
+void stage_extend() {
+    uint e = gl_GlobalInvocationID.x;
+    if (e >= u_wave.x) return;
+    uint slot = queue_in[e];
+    vec4 o = wave_paths[slot].o_tmax;
+    vec4 d = wave_paths[slot].d_time;
+    BvhHit h;
+    scene_bvh_closest(o.xyz, d.xyz, o.w, d.w, h);
+    wave_hits[slot] = vec4(h.t, uintBitsToFloat(h.prim), h.bary);
+}
+
+void main() {
+    if (kWaveStage == kStageExtend) {
+        stage_extend();
+    } else if (kWaveStage == kStageGenerate) {
+        stage_generate();
+    } else if (kWaveStage == kStageStep) {
+        stage_step();
+    } else {
+        stage_shadow();
+    }
+}
