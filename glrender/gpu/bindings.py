@@ -41,13 +41,12 @@ SSBO_PHOTON_RECORDS = 15
 # photon mapping's tracing kernel and counters (photon/map_layout.glsl)
 SSBO_TRACED_PHOTONS = 8
 SSBO_MAP_COUNTERS = 12
-# the wavefront executor's paths, queues and hits (kernels/wavefront.comp.glsl)
-SSBO_WAVE_PATHS = 8
-SSBO_WAVE_QUEUE_IN = 9
-SSBO_WAVE_QUEUE_OUT = 10
-SSBO_WAVE_SHADOWS = 11
-SSBO_WAVE_COUNTERS = 12
-SSBO_WAVE_HITS = 13
+# the wavefront executor's paths (in and out), shadow rays, counters and hits (kernels/wavefront.comp.glsl)
+SSBO_WAVE_PATHS_IN = 8
+SSBO_WAVE_PATHS_OUT = 9
+SSBO_WAVE_SHADOWS = 10
+SSBO_WAVE_COUNTERS = 11
+SSBO_WAVE_HITS = 12
 
 # ---- texture units ----------------------------------------------------------------------
 # the BVH (geometry/bvh_layout.glsl; unit 3 is reserved for geometry)

@@ -8,8 +8,9 @@ ray queue with the shadow stage over the shadow queue until no path is left. The
 are bitwise the render kernel's: every path draws the same numbers and adds its sample to
 the same exact sums.
 
-Memory, per path of a wave: :data:`PATH_BYTES` of state, :data:`SHADOW_BYTES` of shadow
-queue and two 4-byte ray queues; each buffer stays within one storage binding.
+Memory, per path of a wave: twice :data:`PATH_BYTES` of state (the queue a step reads and
+the one it writes), :data:`SHADOW_BYTES` of shadow queue and :data:`HIT_BYTES` of extend
+hits; each buffer stays within one storage binding.
 """
 from __future__ import annotations
 
@@ -28,11 +29,6 @@ SHADOW_BYTES = 48     # WaveShadow: 3 vec4
 MAX_CAPACITY = 1 << 19
 STAGES = {"generate": 0, "step": 1, "shadow": 2, "extend": 3}
 HIT_BYTES = 16        # the extend stage's hit per path: vec4
-# storage bindings of the stages (the render kernel's scene holds 0-7)
-BINDING_PATHS, BINDING_QUEUE_IN, BINDING_QUEUE_OUT = \
-    bindings.SSBO_WAVE_PATHS, bindings.SSBO_WAVE_QUEUE_IN, bindings.SSBO_WAVE_QUEUE_OUT
-BINDING_SHADOWS, BINDING_COUNTERS, BINDING_HITS = \
-    bindings.SSBO_WAVE_SHADOWS, bindings.SSBO_WAVE_COUNTERS, bindings.SSBO_WAVE_HITS
 LOCAL_SIZE = 64
 
 
@@ -64,8 +60,7 @@ class Wavefront:
                 slots=slots, library=library)
             for name, stage in STAGES.items()}
         w = self.capacity
-        self.paths = self.gl.buffer(reserve=w * PATH_BYTES)
-        self.queues = [self.gl.buffer(reserve=w * 4), self.gl.buffer(reserve=w * 4)]
+        self.paths = [self.gl.buffer(reserve=w * PATH_BYTES), self.gl.buffer(reserve=w * PATH_BYTES)]
         self.shadows = self.gl.buffer(reserve=w * SHADOW_BYTES)
         self.counters = self.gl.buffer(reserve=16)
         self.hits = self.gl.buffer(reserve=w * HIT_BYTES)
@@ -94,10 +89,9 @@ class Wavefront:
         bound. ``should_stop`` is asked between waves: True stops (returns False) with the
         waves done so far added."""
         w = self.capacity
-        self.paths.bind_to_storage_buffer(BINDING_PATHS)
-        self.shadows.bind_to_storage_buffer(BINDING_SHADOWS)
-        self.counters.bind_to_storage_buffer(BINDING_COUNTERS)
-        self.hits.bind_to_storage_buffer(BINDING_HITS)
+        self.shadows.bind_to_storage_buffer(bindings.SSBO_WAVE_SHADOWS)
+        self.counters.bind_to_storage_buffer(bindings.SSBO_WAVE_COUNTERS)
+        self.hits.bind_to_storage_buffer(bindings.SSBO_WAVE_HITS)
         self.counters.write(np.zeros(4, np.uint32).tobytes())
         pixels = tiles * 64
         pass_ = (samples, first_sample, pixels, 0)
@@ -107,15 +101,15 @@ class Wavefront:
             if first and should_stop is not None and should_stop():
                 return False
             n = min(w, total - first)
-            out = 0
-            self.queues[out].bind_to_storage_buffer(BINDING_QUEUE_OUT)
+            out = 0   # the path buffer the next stage writes
+            self.paths[out].bind_to_storage_buffer(bindings.SSBO_WAVE_PATHS_OUT)
             self._run("generate", n, (0, n, w, first), pass_)
             front, back, _, _ = self._take_counters()
             bounces = stepped = shadows = 0
             while front + back:
-                self.queues[out].bind_to_storage_buffer(BINDING_QUEUE_IN)
+                self.paths[out].bind_to_storage_buffer(bindings.SSBO_WAVE_PATHS_IN)
                 out = 1 - out
-                self.queues[out].bind_to_storage_buffer(BINDING_QUEUE_OUT)
+                self.paths[out].bind_to_storage_buffer(bindings.SSBO_WAVE_PATHS_OUT)
                 if front:
                     self._run("extend", front, (front, back, w, 0), pass_)
                 self._run("step", front + back, (front, back, w, 0), pass_)
@@ -129,6 +123,6 @@ class Wavefront:
         return True
 
     def release(self) -> None:
-        for buf in [self.paths, self.shadows, self.counters, self.hits, *self.queues]:
+        for buf in [*self.paths, self.shadows, self.counters, self.hits]:
             buf.release()
-        self.queues = []
+        self.paths = []

@@ -36,13 +36,12 @@
 // photon mapping's tracing kernel and counters (photon/map_layout.glsl)
 #define SSBO_TRACED_PHOTONS 8
 #define SSBO_MAP_COUNTERS 12
-// the wavefront executor's paths, queues and hits (kernels/wavefront.comp.glsl)
-#define SSBO_WAVE_PATHS 8
-#define SSBO_WAVE_QUEUE_IN 9
-#define SSBO_WAVE_QUEUE_OUT 10
-#define SSBO_WAVE_SHADOWS 11
-#define SSBO_WAVE_COUNTERS 12
-#define SSBO_WAVE_HITS 13
+// the wavefront executor's paths (in and out), shadow rays, counters and hits (kernels/wavefront.comp.glsl)
+#define SSBO_WAVE_PATHS_IN 8
+#define SSBO_WAVE_PATHS_OUT 9
+#define SSBO_WAVE_SHADOWS 10
+#define SSBO_WAVE_COUNTERS 11
+#define SSBO_WAVE_HITS 12
 
 // ---- texture units ----------------------------------------------------------------------
 // the BVH (geometry/bvh_layout.glsl; unit 3 is reserved for geometry)

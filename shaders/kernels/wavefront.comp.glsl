@@ -7,8 +7,10 @@
 // work in it. Here every segment of every path in flight is a queue entry, and the
 // queues are binned by whether the ray meets the meshes' box (scene_meets_meshes): those
 // rays fill the queue from the front, the others from the back, so the vectors that
-// traverse the BVH have a ray in every lane. A wave holds a fixed set of samples (pixel,
-// sample index), each one path:
+// traverse the BVH have a ray in every lane. A queue entry is the path's whole state,
+// moved to its place in the next queue at every step (two buffers, in turn): reading
+// state through an index costs a cache miss per path and step, about as much as the
+// rest of a step. A wave holds a fixed set of samples (pixel, sample index), each one path:
 //
 // Each stage is its own program (kWaveStage):
 //   kStageGenerate  camera rays of the wave's paths into the ray queue;
@@ -18,7 +20,8 @@
 //                   the closest hit, emission, the light sample's shadow ray into the
 //                   shadow queue, the BSDF sample's ray into the next ray queue; a path
 //                   that ends adds its sample to the film (unless its shadow ray is
-//                   pending: then the shadow stage does);
+//                   pending: then it goes on in the queue's back, and the next step adds
+//                   its sample);
 //   kStageShadow    each shadow ray's any-hit query; what it brings joins its path's
 //                   radiance.
 //
@@ -69,18 +72,17 @@ struct WavePath {
 // A shadow ray waiting for its any-hit query, 3 vec4 (48 bytes).
 struct WaveShadow {
     vec4 o_tmax;
-    vec4 d_slot;       // direction, the path's slot (uint bits)
+    vec4 d_slot;       // direction, the path's entry in the next queue (uint bits)
     vec4 value_ignore; // what it brings (times the throughput), the primitive it aims at
 };
 
-layout(std430, binding = SSBO_WAVE_PATHS) buffer WavePaths { WavePath wave_paths[]; };
-layout(std430, binding = SSBO_WAVE_QUEUE_IN) readonly buffer WaveQueueIn { uint queue_in[]; };
-layout(std430, binding = SSBO_WAVE_QUEUE_OUT) writeonly buffer WaveQueueOut { uint queue_out[]; };
+layout(std430, binding = SSBO_WAVE_PATHS_IN) readonly buffer WavePathsIn { WavePath paths_in[]; };
+layout(std430, binding = SSBO_WAVE_PATHS_OUT) buffer WavePathsOut { WavePath paths_out[]; };
 layout(std430, binding = SSBO_WAVE_SHADOWS) buffer WaveShadows { WaveShadow wave_shadows[]; };
 // [0], [1]: entries of the next ray queue from the front (meeting the meshes) and the
 // back; [2], [3]: the same for the shadow queue
 layout(std430, binding = SSBO_WAVE_COUNTERS) buffer WaveCounters { uint wave_counters[]; };
-// the extend stage's BVH hit per path slot: t, triangle (uint bits), barycentrics
+// the extend stage's BVH hit per entry of the input queue: t, triangle (uint bits), barycentrics
 layout(std430, binding = SSBO_WAVE_HITS) buffer WaveHits { vec4 wave_hits[]; };
 
 // x, y: entries of the input queue at its front and its back; z: the queues' capacity
@@ -97,38 +99,48 @@ const uint kFlagEnded = 1u << 18u;
 void wave_store(uint slot, PathState st, SamplerState s, uint idx, float weight, bool ended) {
     uint flags = uint(st.depth) | (st.prev_delta ? kFlagPrevDelta : 0u) |
                  (st.aov_open ? kFlagAovOpen : 0u) | (ended ? kFlagEnded : 0u);
-    WavePath w;
-    w.o_tmax = vec4(st.o, st.t_max);
-    w.d_time = vec4(st.d, st.time);
-    w.L_eta = vec4(st.L, st.eta_product);
-    w.beta_pdf = vec4(st.beta, st.prev_pdf);
-    w.prev_flags = vec4(st.prev_p, uintBitsToFloat(flags));
-    w.sampler = uvec4(s.pixel_hash, s.index, s.dim, idx);
-    w.weight_aovw = vec4(weight, st.aov_weight);
-    w.albedo_depth = vec4(st.aov.albedo, st.aov.depth);
-    w.normal = vec4(st.aov.normal, 0.0);
-    w.emission = vec4(st.aov.emission, 0.0);
-    wave_paths[slot] = w;
+    paths_out[slot].o_tmax = vec4(st.o, st.t_max);
+    paths_out[slot].d_time = vec4(st.d, st.time);
+    paths_out[slot].L_eta = vec4(st.L, st.eta_product);
+    paths_out[slot].beta_pdf = vec4(st.beta, st.prev_pdf);
+    paths_out[slot].prev_flags = vec4(st.prev_p, uintBitsToFloat(flags));
+    paths_out[slot].sampler = uvec4(s.pixel_hash, s.index, s.dim, idx);
+    paths_out[slot].weight_aovw = vec4(weight, st.aov_weight);
+    if (kAovs) {
+        paths_out[slot].albedo_depth = vec4(st.aov.albedo, st.aov.depth);
+        paths_out[slot].normal = vec4(st.aov.normal, 0.0);
+        paths_out[slot].emission = vec4(st.aov.emission, 0.0);
+    }
 }
 
 PathState wave_load(uint slot, out SamplerState s, out uint idx, out float weight) {
-    WavePath w = wave_paths[slot];
-    PathState st = path_start(w.o_tmax.xyz, w.d_time.xyz, w.o_tmax.w, w.d_time.w);
-    st.L = w.L_eta.xyz;
-    st.eta_product = w.L_eta.w;
-    st.beta = w.beta_pdf.xyz;
-    st.prev_pdf = w.beta_pdf.w;
-    st.prev_p = w.prev_flags.xyz;
-    uint flags = floatBitsToUint(w.prev_flags.w);
+    vec4 o_tmax = paths_in[slot].o_tmax;
+    vec4 d_time = paths_in[slot].d_time;
+    PathState st = path_start(o_tmax.xyz, d_time.xyz, o_tmax.w, d_time.w);
+    vec4 L_eta = paths_in[slot].L_eta;
+    vec4 beta_pdf = paths_in[slot].beta_pdf;
+    vec4 prev_flags = paths_in[slot].prev_flags;
+    uvec4 sampler = paths_in[slot].sampler;
+    vec4 weight_aovw = paths_in[slot].weight_aovw;
+    st.L = L_eta.xyz;
+    st.eta_product = L_eta.w;
+    st.beta = beta_pdf.xyz;
+    st.prev_pdf = beta_pdf.w;
+    st.prev_p = prev_flags.xyz;
+    uint flags = floatBitsToUint(prev_flags.w);
     st.depth = int(flags & 0xFFFFu);
     st.prev_delta = (flags & kFlagPrevDelta) != 0u;
     st.aov_open = (flags & kFlagAovOpen) != 0u;
-    st.aov_weight = w.weight_aovw.yzw;
-    st.aov = Aov(w.albedo_depth.xyz, w.normal.xyz, w.albedo_depth.w, w.emission.xyz);
-    s = sampler_start(w.sampler.x, w.sampler.y, u_params.samples.z, u_params.samples.w);
-    s.dim = w.sampler.z;
-    idx = w.sampler.w;
-    weight = w.weight_aovw.x;
+    st.aov_weight = weight_aovw.yzw;
+    if (kAovs) {
+        vec4 albedo_depth = paths_in[slot].albedo_depth;
+        st.aov = Aov(albedo_depth.xyz, paths_in[slot].normal.xyz, albedo_depth.w,
+                     paths_in[slot].emission.xyz);
+    }
+    s = sampler_start(sampler.x, sampler.y, u_params.samples.z, u_params.samples.w);
+    s.dim = sampler.z;
+    idx = sampler.w;
+    weight = weight_aovw.x;
     return st;
 }
 
@@ -212,37 +224,46 @@ void stage_generate() {
         st = path_start(vec3(0.0), vec3(0.0, 0.0, 1.0), 0.0, 0.0);
     }
     uint k = wave_append(0u, inside, scene_meets_meshes(st.o, st.d, st.t_max));
-    if (inside) queue_out[k] = i;
-    wave_store(i, st, s, inside ? idx : 0u, weight, !inside);
+    if (inside) wave_store(k, st, s, idx, weight, false);
 }
 
 void stage_step() {
     uint e = wave_entry(gl_GlobalInvocationID.x);
     if (e == 0xFFFFFFFFu) return;
-    uint slot = queue_in[e];
     SamplerState s;
     uint idx;
     float weight;
-    PathState st = wave_load(slot, s, idx, weight);
+    PathState st = wave_load(e, s, idx, weight);
+    if ((floatBitsToUint(paths_in[e].prev_flags.w) & kFlagEnded) != 0u) {
+        wave_finish(idx, st, s, weight);   // ended last step; its shadow ray is in
+        return;
+    }
     if (e < u_wave.x) {   // a ray of the front: the extend stage traced it
-        vec4 h = wave_hits[slot];
+        vec4 h = wave_hits[e];
         g_wave_hit = BvhHit(h.x, floatBitsToUint(h.y), h.zw);
     }
     bool alive = path_step(st, s);
-    bool shadow = st.shadow.valid;
+    // a shadow ray that misses the meshes' box meets compiled primitives only: cheap and
+    // alike in every lane, it is traced here (added after this segment's emission, as the
+    // render kernel does); the others go to the shadow stage
     ShadowRay r = st.shadow;
-    uint j = wave_append(2u, shadow, scene_meets_meshes(r.o, r.d, r.t_max));
-    uint k = wave_append(0u, alive, scene_meets_meshes(st.o, st.d, st.t_max));
+    bool shadow = r.valid && scene_meets_meshes(r.o, r.d, r.t_max);
+    if (r.valid && !shadow) {
+        RAY_TICK();
+        if (!scene_occluded(r.o, r.d, r.t_max, st.time, r.ignore)) st.L += r.value;
+    }
+    bool carry = !alive && shadow;   // ended, waiting for its shadow ray
+    uint k = wave_append(0u, alive || carry, alive && scene_meets_meshes(st.o, st.d, st.t_max));
+    uint j = wave_append(2u, shadow, true);
     if (shadow) {
-        wave_shadows[j] = WaveShadow(vec4(r.o, r.t_max), vec4(r.d, uintBitsToFloat(slot)),
+        wave_shadows[j] = WaveShadow(vec4(r.o, r.t_max), vec4(r.d, uintBitsToFloat(k)),
                                      vec4(r.value, uintBitsToFloat(r.ignore)));
     }
-    if (alive) {
-        queue_out[k] = slot;
-    } else if (!shadow) {
+    if (alive || carry) {
+        wave_store(k, st, s, idx, weight, carry);
+    } else {
         wave_finish(idx, st, s, weight);
     }
-    wave_store(slot, st, s, idx, weight, !alive);
     wave_counts(idx);
 }
 
@@ -250,20 +271,13 @@ void stage_shadow() {
     uint e = wave_entry(gl_GlobalInvocationID.x);
     if (e == 0xFFFFFFFFu) return;
     WaveShadow r = wave_shadows[e];
-    uint slot = floatBitsToUint(r.d_slot.w);
+    uint k = floatBitsToUint(r.d_slot.w);
     RAY_TICK();
-    if (!scene_occluded(r.o_tmax.xyz, r.d_slot.xyz, r.o_tmax.w, wave_paths[slot].d_time.w,
+    if (!scene_occluded(r.o_tmax.xyz, r.d_slot.xyz, r.o_tmax.w, paths_out[k].d_time.w,
                         floatBitsToUint(r.value_ignore.w))) {
-        wave_paths[slot].L_eta.xyz += r.value_ignore.xyz;
+        paths_out[k].L_eta.xyz += r.value_ignore.xyz;
     }
-    if ((floatBitsToUint(wave_paths[slot].prev_flags.w) & kFlagEnded) != 0u) {
-        SamplerState s;
-        uint idx;
-        float weight;
-        PathState st = wave_load(slot, s, idx, weight);
-        wave_finish(idx, st, s, weight);
-    }
-    wave_counts(wave_paths[slot].sampler.w);
+    if (kCountLoops || kCountRays) wave_counts(paths_out[k].sampler.w);
 }
 
 // The BVH's nearest hit of each queued ray at the queue's front (those meeting the meshes'
@@ -271,12 +285,11 @@ void stage_shadow() {
 void stage_extend() {
     uint e = gl_GlobalInvocationID.x;
     if (e >= u_wave.x) return;
-    uint slot = queue_in[e];
-    vec4 o = wave_paths[slot].o_tmax;
-    vec4 d = wave_paths[slot].d_time;
+    vec4 o = paths_in[e].o_tmax;
+    vec4 d = paths_in[e].d_time;
     BvhHit h;
     scene_bvh_closest(o.xyz, d.xyz, o.w, d.w, h);
-    wave_hits[slot] = vec4(h.t, uintBitsToFloat(h.prim), h.bary);
+    wave_hits[e] = vec4(h.t, uintBitsToFloat(h.prim), h.bary);
 }
 
 void main() {
