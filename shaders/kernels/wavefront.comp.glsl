@@ -28,7 +28,7 @@
 // Each path draws the random numbers it would draw in the render kernel, in the same
 // order, and its sample is added to the exact fixed-point sums by atomics
 // (accumulate_atomic): the image is bitwise the render kernel's.
-layout(local_size_x = 64) in;
+layout(local_size_x = 256) in;
 
 #extension GL_ARB_shader_ballot : enable
 #extension GL_ARB_gpu_shader_int64 : enable

@@ -109,3 +109,10 @@ def test04_refused_settings_name_the_executor(gl_ctx):
             settings_from_scene(scene, executor="wavefront", **options)
     with pytest.raises(UsageError, match="executor: expected one of megakernel, wavefront"):
         settings_from_scene(scene, executor="streams")
+
+
+def test05_local_size_is_the_hosts():
+    from glrender.gl.shaders import packaged_root
+
+    src = (packaged_root() / "kernels" / "wavefront.comp.glsl").read_text()
+    assert f"layout(local_size_x = {wavefront.LOCAL_SIZE}) in;" in src
