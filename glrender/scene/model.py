@@ -386,6 +386,12 @@ class Film:
 INTEGRATORS = integrator_names()   # glrender/integrators.py: the one table of integrators
 STRATEGIES = ("light", "bsdf", "mis-balance", "mis-power")
 SPLIT_LIMIT = 16   # light samples per vertex and first-vertex branches of the path tracer
+# ... and their product: one invocation renders a whole sample with all its branches and
+# light samples, and llvmpipe stops an invocation silently after ~65,535 loop iterations of
+# its SIMD vector. At 16 x 16 the worst vector of a 48x48 bunny render took 57,771 (an
+# image of a million pixels would pass the cap); at 64 (16 x 4, 8 x 8, 4 x 16) at most
+# 20,385 (tests/render/test_splitting.py).
+SPLIT_WORK_LIMIT = 64
 
 
 def parse_rr(rule: str) -> tuple[str, float]:
@@ -449,6 +455,10 @@ class Integrator:
             if not isinstance(value, int) or not 1 <= value <= SPLIT_LIMIT:
                 raise SceneError(f"integrator.{name}: expected an integer in 1..{SPLIT_LIMIT}, "
                                  f"got {value!r}")
+        if self.split * self.light_samples > SPLIT_WORK_LIMIT:
+            raise SceneError(f"integrator.split x integrator.light_samples: at most "
+                             f"{SPLIT_WORK_LIMIT} (a sample's branches and light samples run in one "
+                             f"invocation), got {self.split} x {self.light_samples}")
         if not isinstance(self.max_depth, int) or (self.max_depth < 1 and self.max_depth != -1):
             raise SceneError(f"integrator.max_depth: expected -1 (unbounded) or an integer >= 1, "
                              f"got {self.max_depth!r}")

@@ -299,20 +299,24 @@ def test11_gpu_bvh_refuses_trees_deeper_than_the_stack(gl_ctx, monkeypatch):
         GpuBvh(gl_ctx, bvh)
 
 
-def trace_glsl8(gpu, o, d, t_max, has_ray, coop_lanes):
-    """Closest and any hit through geometry/bvh8.glsl; lanes without a ray ask nothing."""
+def trace_glsl8(gpu, o, d, t_max, has_ray, coop_lanes, count_loops=False):
+    """Closest and any hit through geometry/bvh8.glsl; lanes without a ray ask nothing.
+    With ``count_loops``, ``loops``: the SIMD vector's loop iterations over both queries."""
     from glrender.render.params import shader_defines
     from glrender.testing.harness import run_glsl
 
     body = ["BvhHit h;", "bool hit = bvh8_traverse(has != 0u, 0u, o, d, t_max, false, h);",
             "BvhHit h2;", "bool any = bvh8_traverse(has != 0u, 0u, o, d, t_max, true, h2);",
-            "float t = h.t;", "uint prim = h.prim;", "vec2 bary = h.bary;"]
+            "float t = h.t;", "uint prim = h.prim;", "vec2 bary = h.bary;", "uint loops = g_loop_count;"]
+    outputs = {"t": "float", "prim": "uint", "bary": "vec2", "hit": "bool", "any": "bool"}
+    if count_loops:
+        outputs["loops"] = "uint"
     gpu.bind()
     return run_glsl("\n".join(body), {"o": o, "d": d, "t_max": np.asarray(t_max, np.float32),
-                                       "has": has_ray.astype(np.uint32)},
-                    {"t": "float", "prim": "uint", "bary": "vec2", "hit": "bool", "any": "bool"},
+                                       "has": has_ray.astype(np.uint32)}, outputs,
                     includes=["geometry/bvh8.glsl"],
-                    defines={**shader_defines(), "GLRENDER_COOP_LANES": coop_lanes})
+                    defines={**shader_defines(), "GLRENDER_COOP_LANES": coop_lanes,
+                             "GLRENDER_COUNT_LOOPS": int(count_loops)})
 
 
 @pytest.mark.parametrize("coop_lanes", [0, 3, 8])
@@ -335,6 +339,29 @@ def test12_8_wide_traversal_per_lane_and_cooperative(gl_ctx, coop_lanes):
     sub = {k: v_[has_ray] for k, v_ in out.items()}
     ref = compare(bvh, o[has_ray], d[has_ray], t_max[has_ray], sub)
     assert 300 < np.count_nonzero(ref["prim"] >= 0) < has_ray.sum() - 300
+
+
+def test12d_cooperative_loop_counts_stay_far_below_the_cap(gl_ctx):
+    """Cooperatively a vector loops over all its rays one after another: the loop counter
+    (the vector's iterations, common/loop_counter.glsl) stays far below llvmpipe's cap for
+    a full vector of rays, and counts at least what the per-lane traversal takes."""
+    import trimesh
+
+    ROOT = Path(__file__).resolve().parents[2]
+    mesh = trimesh.load(ROOT / "scenes" / "cornell-bunny" / "bunny.ply", process=False)
+    v, f = np.asarray(mesh.vertices, np.float32), np.asarray(mesh.faces, np.int64)
+    bvh = build_bvh(v, f, width=8)
+    gpu = GpuBvh(gl_ctx, bvh)
+    rng = np.random.default_rng(5)
+    o, d = random_rays(rng, 4096, v.min(0), v.max(0), spread=0.9)
+    t_max = np.full(len(o), np.inf, np.float32)
+    has_ray = np.ones(len(o), bool)
+    coop = trace_glsl8(gpu, o, d, t_max, has_ray, 8, count_loops=True)["loops"]
+    lane = trace_glsl8(gpu, o, d, t_max, has_ray, 0, count_loops=True)["loops"]
+    per_vector = coop.reshape(-1, 8)
+    assert np.all(per_vector == per_vector[:, :1])   # one count per vector
+    assert np.all(coop.reshape(-1, 8).max(1) >= lane.reshape(-1, 8).max(1))
+    assert coop.max() < 6_000, coop.max()
 
 
 def test12b_gpu_bvh_takes_the_widths_a_traversal_reads(gl_ctx, monkeypatch):
