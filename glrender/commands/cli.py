@@ -99,6 +99,7 @@ def cmd_info(args) -> int:
     print(f"GL_VENDOR:       {info['GL_VENDOR']}")
     if info["llvmpipe_threads"] is not None:
         print(f"llvmpipe threads: {info['llvmpipe_threads']}")
+    print(f"traversal:       {info['traversal']}")
     print(f"shader cache:    {info['shader_cache']}")
     print("limits:")
     for key, value in info["limits"].items():

@@ -52,6 +52,7 @@ EXTENSIONS_OF_INTEREST = (
     "GL_NV_shader_atomic_float",
     "GL_ARB_gpu_shader_int64",
     "GL_ARB_shader_clock",
+    "GL_ARB_shader_ballot",
 )
 
 
@@ -124,6 +125,15 @@ class Context:
     def has_extension(self, name: str) -> bool:
         return name in self.gl.extensions
 
+    def traversal(self) -> str:
+        """Which BVH traversal the kernels run here, in words (``glrender info``)."""
+        ballot = self.has_extension("GL_ARB_shader_ballot") and \
+            self.has_extension("GL_ARB_gpu_shader_int64")
+        return ("4-wide BVH, per lane (render kernels); 8-wide cooperative traversal and the "
+                "wavefront's one-atomic-per-subgroup queues " +
+                ("available (subgroup ballots)" if ballot else
+                 "fall back to per lane and per path (no subgroup ballots)"))
+
     def info(self) -> dict:
         """Renderer, version, limits and the settings that decide speed."""
         info = self.gl.info
@@ -142,6 +152,7 @@ class Context:
             "GL_VERSION": info["GL_VERSION"],
             "limits": {k: list(v) if isinstance(v, tuple) else v for k, v in limits.items()},
             "extensions": {name: self.has_extension(name) for name in EXTENSIONS_OF_INTEREST},
+            "traversal": self.traversal(),
             "llvmpipe_threads": llvmpipe_threads() if self.is_llvmpipe else None,
             "shader_cache": shader_cache_location(),
             "bundled_mesa": mesa.active_root(),

@@ -66,6 +66,10 @@ def test05_cli_info_names_the_device():
     data = json.loads(result.stdout)
     assert data["device"]["kind"] == "cpu" and "llvmpipe" in data["GL_RENDERER"]
     assert data["devices"] and data["llvmpipe_threads"] >= 1
+    # which traversal runs: llvmpipe has the subgroup ballots the cooperative one needs
+    assert data["extensions"]["GL_ARB_shader_ballot"]
+    assert data["traversal"].startswith("4-wide BVH, per lane") and "available" in data["traversal"]
+    assert "traversal:       4-wide BVH" in run_cli("info", "--device", "cpu").stdout
 
 
 def test06_unavailable_device_fails_in_one_line():
