@@ -25,7 +25,6 @@ import argparse
 import datetime
 import multiprocessing as mp
 import os
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -33,6 +32,8 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from results_md import commit  # noqa: E402
 RESULTS = ROOT / "benchmarks" / "RESULTS.md"
 BUNNY = ROOT.parent / "shared" / "scenes" / "meshes" / "bunny.ply"
 SIZES = {"10k": 10_000, "100k": 100_000, "1M": 1_000_000}
@@ -230,10 +231,12 @@ class GlslTracer:
     def __init__(self, ctx, bvh):
         from glrender.gpu.bvh_upload import GpuBvh
         from glrender.gl.shaders import compile_compute
+        from glrender.render.params import shader_defines
 
         self.ctx, self.gl = ctx, ctx.gl
         self.gpu = GpuBvh(ctx, bvh)
-        self.programs = {q: compile_compute(ctx, source=KERNEL, defines={"ANY_HIT": int(q == "OCCLUDED")})
+        self.programs = {q: compile_compute(ctx, source=KERNEL, defines={**shader_defines(),
+                                                                           "ANY_HIT": int(q == "OCCLUDED")})
                          for q in ("INTERSECT", "OCCLUDED")}
 
     def trace(self, o, d, query):
@@ -257,14 +260,6 @@ class GlslTracer:
             for b in bufs:
                 b.release()
         return elapsed, hits
-
-
-def commit() -> str:
-    try:
-        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
-                              text=True, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
 
 
 def run_mesh(name, v, f, ctx, repeats, procs, reference, threads):

@@ -1,4 +1,4 @@
-"""Writing a benchmark's run into benchmarks/RESULTS.md.
+"""Writing a benchmark's run into benchmarks/RESULTS.md (and the commit it names).
 
 A benchmark's section is a level-2 heading, a paragraph saying how the run was made, its
 table, and then notes written by hand (earlier runs, what a run showed). A new run replaces
@@ -6,7 +6,19 @@ the heading, the paragraph and the table; the notes after the table stay.
 """
 from __future__ import annotations
 
+import subprocess
 from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def commit() -> str:
+    """The checkout's short commit hash, for a benchmark's table ("unknown" outside git)."""
+    try:
+        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
+                              text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
 
 
 def put_run(path: Path, marker: str, section: str) -> None:

@@ -51,6 +51,7 @@ vec3 bvh_triangle_vertex(uint prim, uint k) {
 
 // Whether the ray hits triangle prim (BVH order) in (0, t_max) where it is solid (not cut
 // out by an opacity texture): its distance t and barycentrics, in units of the ray's d.
+// The 8-wide traversal calls it; bvh_traverse's loop writes it out.
 bool bvh_triangle_hit(WatertightRay r, uint prim, float t_max, out float t, out vec2 bary) {
     int base = int(prim) * kBvhTexelsPerTriangle;
     vec4 uvwt;
@@ -91,7 +92,7 @@ vec4 bvh_plane_bytes(uint w) {
 // exact reals p + q s that contain the child boxes (glrender/accel/quantize.py).
 // Per node and axis, the affine map from a plane byte q to the ray distance of its plane:
 // t = q a + bn (near planes) or q a + bf (far planes), from the node's head texel (see
-// bvh_node_entry). The 8-wide nodes (geometry/bvh8.glsl) share it.
+// bvh_node_entry, which writes it out). The 8-wide traversal (geometry/bvh8.glsl) calls it.
 struct NodeFrame {
     vec3 a;
     vec3 bn;
@@ -108,12 +109,19 @@ NodeFrame bvh_node_frame(SlabRay r, uvec4 head) {
 }
 
 vec4 bvh_node_entry(SlabRay r, uint node, float t_max, out uvec4 child) {
+    const float kPlaneError = 5.0 * kMachineEpsilon;
     int base = int(node) * kBvhTexelsPerNode;
-    NodeFrame f = bvh_node_frame(r, texelFetch(u_bvh_nodes, base));
+    uvec4 head = texelFetch(u_bvh_nodes, base);
     child = texelFetch(u_bvh_nodes, base + 1);
     uvec4 xy = texelFetch(u_bvh_nodes, base + 2);  // lo.x, hi.x, lo.y, hi.y
     uvec2 z = texelFetch(u_bvh_nodes, base + 3).xy;  // lo.z, hi.z
-    vec3 a = f.a, bn = f.bn, bf = f.bf;
+    // as bvh_node_frame, written out: through the struct this loop measured ~3% slower
+    vec3 scale = uintBitsToFloat(((uvec3(head.w) >> uvec3(0u, 8u, 16u)) & 255u) << 23u);
+    vec3 a = scale * r.inv_d;
+    vec3 b = (uintBitsToFloat(head.xyz) - r.o) * r.inv_d;
+    vec3 pad = (abs(b) + 255.0 * abs(a)) * kPlaneError;
+    vec3 bn = b - pad;
+    vec3 bf = b + pad;
     // The near plane of an axis is its min plane unless the ray runs towards -axis.
     vec4 nx = fma(bvh_plane_bytes(r.neg.x ? xy.y : xy.x), vec4(a.x), vec4(bn.x));
     vec4 fx = fma(bvh_plane_bytes(r.neg.x ? xy.x : xy.y), vec4(a.x), vec4(bf.x));
@@ -157,13 +165,25 @@ bool bvh_traverse(uint root, vec3 o, vec3 d, float t_max, const bool any_hit, ou
         LOOP_TICK();
         // One triangle of the current leaf ...
         if (leaf_count > 0u) {
-            float t;
-            vec2 bary;
-            if (bvh_triangle_hit(tri_ray, leaf_first, hit.t, t, bary)) {
-                hit = BvhHit(t, leaf_first, bary);
-                found = true;
-                if (any_hit) {
-                    return true;
+            // as bvh_triangle_hit, written out: through the function this loop measured
+            // 4-5% slower (benchmarks/RESULTS.md, "Busy lanes")
+            int base = int(leaf_first) * kBvhTexelsPerTriangle;
+            vec4 uvwt;
+            if (watertight_candidate(tri_ray, texelFetch(u_bvh_triangles, base).xyz,
+                                     texelFetch(u_bvh_triangles, base + 1).xyz,
+                                     texelFetch(u_bvh_triangles, base + 2).xyz, hit.t, uvwt)) {
+                float t;
+                vec2 bary;
+                bool solid = watertight_resolve(uvwt, hit.t, t, bary);
+#if GLRENDER_ALPHA_CUTOUTS
+                solid = solid && bvh_alpha_pass(leaf_first, bary);
+#endif
+                if (solid) {
+                    hit = BvhHit(t, leaf_first, bary);
+                    found = true;
+                    if (any_hit) {
+                        return true;
+                    }
                 }
             }
             leaf_first++;
