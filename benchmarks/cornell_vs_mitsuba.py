@@ -1,8 +1,10 @@
 """glrender against Mitsuba 3 on the same CPU, in the same run, at equal time.
 
 Scenes: the Cornell box (shared reference), the Cornell box with the Stanford bunny
-(a BVH scene; its reference is rendered once by Mitsuba and cached), and the caustic
-scene (shared reference). Peers: Mitsuba 3 ``llvm_ad_rgb`` path tracer with its default
+(a BVH scene; its reference is rendered once by Mitsuba and cached), the same with the
+bunny split into 1.1M triangles (each triangle into 16 at its edges' midpoints, twice: the
+same surface, a BVH 16 times larger; made in the temporary folder, reference cached), and
+the caustic scene (shared reference). Peers: Mitsuba 3 ``llvm_ad_rgb`` path tracer with its default
 independent sampler and with multijitter (its best here). Every renderer runs in its
 own process, rounds alternate, and each config renders for the same wall time after a
 warm-up (kernel compilation excluded for everyone).
@@ -16,7 +18,7 @@ GL_RENDERER and the commit.
 Needs: the bench extra (``pip install -e .[bench]``: mitsuba), Debian's ``libllvm19``
 for Mitsuba's LLVM variant, and ../shared (refs, peers). Usage:
 
-    .venv/bin/python benchmarks/cornell_vs_mitsuba.py [--seconds 10] [--rounds 2] [--scenes cornell,bunny,caustic]
+    .venv/bin/python benchmarks/cornell_vs_mitsuba.py [--seconds 10] [--rounds 2] [--scenes cornell,bunny,bunny1m,caustic]
 """
 from __future__ import annotations
 
@@ -102,6 +104,12 @@ def scenes(tmp: Path) -> dict:
     bunny_xml = tmp / "cornell-bunny.xml"
     bunny_xml.write_text(xml[:large] + BUNNY_SHAPE.format(ply=ROOT / "scenes/cornell-bunny/bunny.ply") +
                          xml[end:])
+    ply_1m = bunny_1m(tmp)
+    bunny_1m_xml = tmp / "cornell-bunny-1m.xml"
+    bunny_1m_xml.write_text(xml[:large] + BUNNY_SHAPE.format(ply=ply_1m) + xml[end:])
+    bunny_1m_toml = tmp / "cornell-bunny-1m.toml"
+    bunny_1m_toml.write_text((ROOT / "scenes/cornell-bunny/scene.toml").read_text().replace(
+        'file = "bunny.ply"', f'file = "{ply_1m}"'))
     caustic_xml = tmp / "caustic.xml"
     caustic_xml.write_text((REFS / "caustic" / "caustic.xml").read_text().replace(
         "caustic-sphere.obj", str(REFS / "caustic" / "caustic-sphere.obj")))
@@ -109,8 +117,25 @@ def scenes(tmp: Path) -> dict:
         "cornell": (REFS / "cornell-box.xml", ROOT / "scenes/cornell-box/scene.toml",
                     REFS / "cornell-box-ref.npy", 7.8e-8),
         "bunny": (bunny_xml, ROOT / "scenes/cornell-bunny/scene.toml", CACHE / "cornell-bunny-ref.npy", None),
+        "bunny1m": (bunny_1m_xml, bunny_1m_toml, CACHE / "cornell-bunny-1m-ref.npy", None),
         "caustic": (caustic_xml, ROOT / "scenes/caustic/scene.toml", REFS / "caustic" / "caustic-ref.npy", None),
     }
+
+
+def bunny_1m(tmp: Path) -> Path:
+    """scenes/cornell-bunny/bunny.ply with every triangle split into 16 (binary PLY in tmp)."""
+    import trimesh
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from bvh import subdivide
+
+    mesh = trimesh.load(ROOT / "scenes/cornell-bunny/bunny.ply", process=False)
+    v, f = np.asarray(mesh.vertices, np.float64), np.asarray(mesh.faces, np.int64)
+    for _ in range(2):
+        v, f = subdivide(v, f)
+    out = tmp / "bunny-1m.ply"
+    trimesh.Trimesh(v.astype(np.float32), f, process=False).export(out)
+    return out
 
 
 def ensure_reference(name, xml, ref_path, tmp, seconds=600.0):
@@ -129,7 +154,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seconds", type=float, default=10.0, help="render time per config")
     ap.add_argument("--rounds", type=int, default=2, help="alternating rounds (medians reported)")
-    ap.add_argument("--scenes", default="cornell,bunny,caustic")
+    ap.add_argument("--scenes", default="cornell,bunny,bunny1m,caustic")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "RESULTS.md"))
     args = ap.parse_args()
     tmp = Path(tempfile.mkdtemp(prefix="glrender-bench-"))
@@ -177,6 +202,8 @@ def main():
 
 def write_results(path: Path, rows, device, commit, args):
     lines = [f"## Cornell box, Cornell + bunny, caustic: glrender vs Mitsuba 3 (equal time)", "",
+             "Scenes: cornell (compiled quads), bunny (69k triangles), bunny1m (the same bunny in "
+             "1.1M triangles), caustic (glass icosphere).", "",
              f"{datetime.date.today()}, commit `{commit}`, glrender on `{device}`; Mitsuba 3 `llvm_ad_rgb` "
              f"(path tracer, max depth 8) on the same CPU, {os.cpu_count()} cores. Each config renders "
              f"{args.seconds:.0f} s after a warm-up, {args.rounds} alternating rounds, medians. Efficiency = "

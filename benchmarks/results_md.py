@@ -21,10 +21,15 @@ def commit() -> str:
         return "unknown"
 
 
+#: ends a run of more than one table (or one followed by lines of its own) in its section
+END_OF_RUN = "<!-- end of run -->"
+
+
 def put_run(path: Path, marker: str, section: str) -> None:
     """Write ``section`` (heading, paragraph, table) into ``path`` in place of the run under
-    the heading that starts with ``marker``, keeping what followed that run's table; append
-    it when there is no such heading."""
+    the heading that starts with ``marker``, keeping what followed that run's table (or, for
+    a run that ends with :data:`END_OF_RUN`, what followed that line); append it when there
+    is no such heading."""
     text = path.read_text() if path.exists() else "# Benchmark results\n"
     start = text.find("\n" + marker)
     if start < 0:
@@ -33,10 +38,13 @@ def put_run(path: Path, marker: str, section: str) -> None:
     end = text.find("\n## ", start + 1)
     end = len(text) if end < 0 else end
     old = text[start + 1:end].split("\n")
-    first = next((i for i, line in enumerate(old) if line.startswith("|")), len(old))
-    last = first
-    while last < len(old) and old[last].startswith("|"):
-        last += 1
+    if END_OF_RUN in old:
+        last = old.index(END_OF_RUN) + 1
+    else:
+        first = next((i for i, line in enumerate(old) if line.startswith("|")), len(old))
+        last = first
+        while last < len(old) and old[last].startswith("|"):
+            last += 1
     rest = "\n".join(old[last:]).strip("\n")
     text = text[:start + 1] + section.rstrip("\n") + "\n" + ("\n" + rest + "\n" if rest else "") + text[end:]
     path.write_text(text.rstrip("\n") + "\n")

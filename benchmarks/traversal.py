@@ -30,7 +30,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from results_md import commit, put_run  # noqa: E402
+from results_md import END_OF_RUN, commit, put_run  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "RESULTS.md"
 MARKER = "## Busy lanes"
@@ -207,7 +207,7 @@ def format_section(trav, execs, device, repeats, rounds, spp):
                            for k, (t, n) in r["stages"].items())
         lines.append(f"| {r['scene']} | {r['megakernel']:.2f} | {r['wavefront']:.2f} | "
                      f"{r['ratio']:.2f}x | {stages} |")
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines + ["", END_OF_RUN]) + "\n"
 
 
 def main(argv=None) -> None:
