@@ -9,9 +9,10 @@ GLSL has no include mechanism, so entry points (``*.comp.glsl``, ``*.vert.glsl``
 - ``#include "path"`` is resolved against the shader roots (the packaged
   ``shaders/`` folder, plus any extra roots given); each file is included once,
   and an include cycle is an error naming the whole chain.
-- ``#extension`` lines, wherever they are, move to just after ``#version`` (the
-  driver accepts them only before the first declaration), each once; a file that
-  uses an extension says so itself, with ``enable`` where the code tests for it.
+- ``#extension`` lines, wherever they are (conditional blocks too: they are not
+  evaluated here), move to just after ``#version`` (the driver accepts them only before
+  the first declaration), each once; a file that uses an extension says so itself, with
+  ``enable`` where the code tests for it.
 - ``#include "@name"`` is a slot, filled at compile time from ``slots``
   (e.g. ``{"integrator": "integrators/path.glsl"}``).
 - ``#line`` directives carry a file id so that every compile or link error is

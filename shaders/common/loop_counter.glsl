@@ -12,10 +12,10 @@
 // and a lane that sat out a loop catches up at its next tick). Kernels write it to a debug
 // buffer, so tests can check the worst vector stays far below the cap. Without ballots
 // a tick counts the lane's own iterations; without the define it expands to nothing.
-uint g_loop_count = 0u;
-#if defined(GLRENDER_COUNT_LOOPS) && GLRENDER_COUNT_LOOPS
 #extension GL_ARB_shader_ballot : enable
 #extension GL_ARB_gpu_shader_int64 : enable
+uint g_loop_count = 0u;
+#if defined(GLRENDER_COUNT_LOOPS) && GLRENDER_COUNT_LOOPS
 #if defined(GL_ARB_shader_ballot) && defined(GL_ARB_gpu_shader_int64)
 // The largest c among the active lanes of the subgroup (constant lane indices for the
 // first 8: no loop, which llvmpipe's cap would count).
