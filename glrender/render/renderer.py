@@ -65,6 +65,16 @@ class RenderSettings:
     executor: str = "megakernel"          # how the path tracer runs: one render kernel, or
                                           # stages over binned queues (glrender/render/wavefront.py)
 
+    def __post_init__(self) -> None:
+        if self.executor not in EXECUTORS:
+            raise UsageError(f"executor: expected one of {', '.join(EXECUTORS)}, "
+                             f"got {self.executor!r}")
+        if self.executor == "wavefront":
+            why = wavefront.supports(self.integrator.kind, self.integrator.split,
+                                     self.integrator.light_samples)
+            if why is not None:
+                raise UsageError(f"executor: {why}")
+
 
 def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: int | None = None,
                         sampler: str | None = None, seed: int | None = None,
@@ -106,12 +116,6 @@ def settings_from_scene(scene: m.Scene, *, integrator: str | None = None, spp: i
                          f"{integ.kind}")
     if count_loops and count_rays:
         raise UsageError("count_loops and count_rays share one debug counter: ask for one")
-    if executor not in EXECUTORS:
-        raise UsageError(f"executor: expected one of {', '.join(EXECUTORS)}, got {executor!r}")
-    if executor == "wavefront":
-        why = wavefront.supports(integ.kind, integ.split, integ.light_samples)
-        if why is not None:
-            raise UsageError(f"executor: {why}")
     return RenderSettings(integ, samp, aovs=aovs, count_loops=count_loops, count_rays=count_rays,
                           samples_per_pass=samples_per_pass, time_target=time_target,
                           clamp=None if clamp is None else float(clamp),
@@ -295,10 +299,7 @@ class Renderer:
             self.ctx, "kernels/render.comp.glsl", defines=self.defines, slots=slots,
             library=library)
         self.wavefront: wavefront.Wavefront | None = None
-        if s.executor == "wavefront":
-            why = wavefront.supports(integ.kind, integ.split, integ.light_samples)
-            if why is not None:
-                raise UsageError(f"executor: {why}")
+        if s.executor == "wavefront":   # RenderSettings checked that it runs these settings
             self.wavefront = wavefront.Wavefront(self.ctx, self.defines, slots, library,
                                                  self.binding_limit())
         if s.samples_per_pass is not None:

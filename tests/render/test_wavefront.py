@@ -19,7 +19,7 @@ import glrender
 from glrender.accel import MotionInstance
 from glrender.errors import UsageError
 from glrender.render import wavefront
-from glrender.render.renderer import Renderer, settings_from_scene
+from glrender.render.renderer import Renderer, RenderSettings, settings_from_scene
 from glrender.scene import model as m
 
 from render_scenes import enclosure
@@ -103,6 +103,9 @@ def test04_refused_settings_name_the_executor(gl_ctx):
             settings_from_scene(scene, executor="wavefront", **options)
     with pytest.raises(UsageError, match="executor: expected one of megakernel, wavefront"):
         settings_from_scene(scene, executor="streams")
+    # settings made directly are checked the same way
+    with pytest.raises(UsageError, match="runs the path integrator, not bdpt"):
+        RenderSettings(m.Integrator(kind="bdpt"), m.Sampler(), executor="wavefront")
 
 
 def test05_local_size_is_the_hosts():
