@@ -11,12 +11,14 @@ from .errors import UsageError
 from .photon import PhotonRenderer, PhotonSettings, SppmRenderer, SppmSettings
 from .render.driver import RenderDriver
 from .render.renderer import Renderer, RenderSettings
+from .vcm import VcmRenderer, VcmSettings
 
 #: driver name (IntegratorSpec.driver) -> (class, the class of its own settings or None)
 DRIVERS: dict[str, tuple[type, type | None]] = {
     "kernel": (Renderer, None),
     "photon": (PhotonRenderer, PhotonSettings),
     "sppm": (SppmRenderer, SppmSettings),
+    "vcm": (VcmRenderer, VcmSettings),
 }
 
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 UBO_RENDER_PARAMS = 0       # RenderParams u_params (scene/layout.glsl): every kernel
 UBO_PHOTON_PARAMS = 1       # PhotonParams u_photon (photon/layout.glsl): SPPM's kernels
 UBO_PHOTON_MAP_PARAMS = 1   # PhotonMapParams u_map (photon/map_layout.glsl): photon mapping
+UBO_VCM_PARAMS = 1          # VcmParams u_vcm (integrators/vcm_layout.glsl): vcm's kernels
 
 # ---- storage blocks (std430) ------------------------------------------------------------
 # the scene and the accumulation (scene/layout.glsl)
@@ -47,6 +48,14 @@ SSBO_WAVE_PATHS_OUT = 9
 SSBO_WAVE_SHADOWS = 10
 SSBO_WAVE_COUNTERS = 11
 SSBO_WAVE_HITS = 12
+# vcm's stored light subpaths, merge points, their grid and counters (integrators/vcm_layout.glsl;
+# from 9: bdpt's strategy images keep 8)
+SSBO_VCM_VERTICES = 9
+SSBO_VCM_PATHS = 10
+SSBO_VCM_MERGE_KEYS = 11
+SSBO_VCM_MERGE_DATA = 12
+SSBO_VCM_GRID = 13
+SSBO_VCM_COUNTERS = 14
 
 # ---- texture units ----------------------------------------------------------------------
 # the BVH (geometry/bvh_layout.glsl; unit 3 is reserved for geometry)

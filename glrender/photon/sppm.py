@@ -51,6 +51,18 @@ MAX_RECORDS = (128 << 20) // pl.BYTES_PER_RECORD - 1   # emission records fit on
 DEFAULT_RADIUS_PIXELS = 2.0      # default initial radius, in pixel footprints at the scene's centre
 
 
+def footprint_radius(scene: m.Scene, sphere_bounds: Any, width: int, height: int,
+                     pixels: float = DEFAULT_RADIUS_PIXELS) -> float:
+    """A search radius of ``pixels`` pixel footprints at the scene's centre (its bounding
+    sphere's, ``sphere_bounds``): the default initial radius of SPPM and vcm."""
+    center, radius = sphere_bounds
+    cam = scene.camera.world_from_camera
+    dist = max(float(np.linalg.norm(np.asarray(center) - cam[:3, 3])), 1e-3 * radius)
+    _, screen_y = camera_screen(scene.camera, width, height)
+    reach = 1.0 if scene.camera.orthographic else dist   # an orthographic pixel's size is fixed
+    return pixels * 2 * screen_y * reach / height
+
+
 @dataclass(frozen=True)
 class SppmSettings:
     """SPPM's own parameters: ``photons_per_iteration`` (None: one per pixel, at
@@ -139,12 +151,7 @@ class SppmRenderer:
 
     # -- setup -------------------------------------------------------------------------------
     def _default_radius(self) -> float:
-        center, radius = self.base.packed.sphere_bounds
-        cam = self.scene.camera.world_from_camera
-        dist = max(float(np.linalg.norm(np.asarray(center) - cam[:3, 3])), 1e-3 * radius)
-        _, screen_y = camera_screen(self.scene.camera, self.width, self.height)
-        reach = 1.0 if self.scene.camera.orthographic else dist   # an orthographic pixel's size is fixed
-        return DEFAULT_RADIUS_PIXELS * 2 * screen_y * reach / self.height
+        return footprint_radius(self.scene, self.base.packed.sphere_bounds, self.width, self.height)
 
     def _compile(self) -> None:
         p = self.base.packed

@@ -293,8 +293,12 @@ class Renderer:
         if s.strategy_depth:
             self._check_strategy_images()
             self.defines["GLRENDER_STRATEGY_DEPTH"] = s.strategy_depth
-        self._source_fingerprint = (geometry, sorted(self.defines.items()), spec.glsl)
-        slots = {"integrator": spec.glsl, "scene": codegen.GENERATED_PATH}
+        self.defines.update(self._integrator_defines())
+        glsl = self._integrator_glsl(spec)
+        self._source_fingerprint = (geometry, sorted(self.defines.items()), glsl)
+        slots = {"integrator": glsl, "scene": codegen.GENERATED_PATH}
+        # what the kernels of a driver beside the render kernel compile against
+        self.library, self.slots = library, slots
         self.program: Any = shaders.compile_compute(
             self.ctx, "kernels/render.comp.glsl", defines=self.defines, slots=slots,
             library=library)
@@ -318,6 +322,16 @@ class Renderer:
             # product bounded (tests/render/test_splitting.py checks the largest settings).
             work = integ.split * integ.light_samples if spec.splitting else 1
             self.samples_per_pass = max(1, 8 // work)
+
+    def _integrator_glsl(self, spec: integrators.IntegratorSpec) -> str:
+        """The GLSL file that defines the camera kernel's integrator_pixel (the
+        integrator's own; vcm's bpt mode takes bdpt's)."""
+        assert spec.glsl is not None
+        return spec.glsl
+
+    def _integrator_defines(self) -> dict[str, int]:
+        """Optional defines of the driver's own (glrender.render.params OPTIONAL_DEFINES)."""
+        return {}
 
     def _check_strategy_images(self) -> None:
         s = self.settings

@@ -11,6 +11,7 @@
 #define UBO_RENDER_PARAMS 0
 #define UBO_PHOTON_PARAMS 1
 #define UBO_PHOTON_MAP_PARAMS 1
+#define UBO_VCM_PARAMS 1
 
 // ---- storage blocks (std430) ------------------------------------------------------------
 // the scene and the accumulation (scene/layout.glsl)
@@ -42,6 +43,14 @@
 #define SSBO_WAVE_SHADOWS 10
 #define SSBO_WAVE_COUNTERS 11
 #define SSBO_WAVE_HITS 12
+// vcm's stored light subpaths, merge points, their grid and counters
+// (integrators/vcm_layout.glsl; from 9: bdpt's strategy images keep 8)
+#define SSBO_VCM_VERTICES 9
+#define SSBO_VCM_PATHS 10
+#define SSBO_VCM_MERGE_KEYS 11
+#define SSBO_VCM_MERGE_DATA 12
+#define SSBO_VCM_GRID 13
+#define SSBO_VCM_COUNTERS 14
 
 // ---- texture units ----------------------------------------------------------------------
 // the BVH (geometry/bvh_layout.glsl; unit 3 is reserved for geometry)

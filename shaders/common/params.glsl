@@ -53,6 +53,9 @@
 #ifndef GLRENDER_COOP_LANES
 #define GLRENDER_COOP_LANES 0
 #endif
+#ifndef GLRENDER_VCM_MODE
+#define GLRENDER_VCM_MODE 0
+#endif
 // A material's normal map has Mitsuba's shadowing term (bsdf/bsdf.glsl
 // bsdf_normal_shadowing; bdpt's vertices keep the unperturbed normal for it).
 const bool kNormalShadowing = GLRENDER_NORMAL_SHADOWING != 0;
@@ -83,6 +86,11 @@ const uint kWaveStage = uint(GLRENDER_WAVE_STAGE);
 // The 8-wide traversal (geometry/bvh8.glsl) traces a vector's rays cooperatively when at
 // most this many of its lanes have one (0: never; benchmarks/traversal.py measures it).
 const uint kCoopLanes = uint(GLRENDER_COOP_LANES);
+// Vertex connection and merging (integrators/vcm.glsl): 0 the bidirectional strategies
+// alone in one kernel (bdpt, vcm's bpt mode), 1 connections and merges (vcm), 2 merges
+// alone (vm, progressive photon mapping); modes 1 and 2 read light subpaths that a light
+// pass stored (kernels/vcm_light.comp.glsl) and take their declarations by #if.
+const int kVcmMode = GLRENDER_VCM_MODE;
 
 // Sample generator (sampling/sampler.glsl).
 const int kSamplerIndependent = 0;

@@ -15,6 +15,9 @@
 #include "integrators/integrator_common.glsl"
 #include "integrators/shading.glsl"
 #include "camera/importance.glsl"
+#if GLRENDER_VCM_MODE != 0
+#include "integrators/vcm_layout.glsl"
+#endif
 
 // Subpath vertices stored per invocation: max_depth segments (at most kBdptDepthCap;
 // unbounded depth is capped there) need max_depth + 1 camera vertices.
@@ -198,6 +201,47 @@ float mis_ratio(float pdf_rev, float pdf_fwd) {
     return kStrategy == kStrategyMisBalance ? r : r * r;
 }
 
+// Vertex connection and merging (kVcmMode 1 and 2, integrators/vcm.glsl) adds a merge
+// strategy at every vertex x_j that both subpaths can reach (a non-delta surface point,
+// not on the light): its density is the connection strategy's that ends the camera
+// subpath at x_j times p_light(x_j) eta, eta = pi r^2 (light paths) (Georgiev et al. 2012,
+// eq. 10-12), so the recurrence adds (p_fwd(x_j) eta)^e beside each connection's term
+// (VM_TERM), and the merges-only mode (2) keeps of the connections only s = 0, the camera
+// subpath reaching a light (VC_ON, VC_AT). In bdpt (mode 0) the terms are not there at all.
+#if GLRENDER_VCM_MODE != 0
+#define VM_TERM(mergeable, pdf_fwd) + ((mergeable) ? vcm_merge_ratio(pdf_fwd) : 0.0)
+#else
+#define VM_TERM(mergeable, pdf_fwd)
+#endif
+#if GLRENDER_VCM_MODE == 2
+#define VC_ON 0.0
+#define VC_AT(i) ((i) == 0 ? 1.0 : 0.0)
+#else
+#define VC_ON 1.0
+#define VC_AT(i) 1.0
+#endif
+
+// Whether a vertex of this info word can be merged at: a surface point with a non-delta
+// BSDF (a light subpath's first vertex, on the light, is never one: callers check). At a
+// subpath's end that is all (the merge evaluates the BSDF there); a vertex inside a path
+// (info_merge_inside) must also have scattered it by a non-delta lobe.
+bool info_mergeable(uint info) {
+    return info_kind(info) == kVertexSurface && info_connectible(info);
+}
+
+bool info_merge_inside(uint info) {
+    return info_mergeable(info) && !info_delta(info);
+}
+
+#if GLRENDER_VCM_MODE != 0
+// (p eta)^e for the merge at a vertex of forward density p (a delta density counts as 1,
+// as in mis_ratio).
+float vcm_merge_ratio(float pdf_fwd) {
+    float r = u_vcm.merge.z * (pdf_fwd != 0.0 ? pdf_fwd : 1.0);
+    return kStrategy == kStrategyMisBalance ? r : r * r;
+}
+#endif
+
 // The densities a connection changes: of pt = g_camera[t - 1] and qs = g_light[s - 1]
 // from the other subpath's side, and of the vertices before them (pt_minus, qs_minus)
 // from the connection's side; per unit area (solid angle toward a vertex at infinity).
@@ -224,27 +268,57 @@ float mis_step(float ratio, float rest) {
     return rest > 0.0 ? ratio * rest : 0.0;
 }
 
-// Fills g_camera_mis and g_light_mis (and g_light_delta) for subpaths of n_camera and
-// n_light vertices whose densities are final.
-void bdpt_mis_prepare(int n_camera, int n_light) {
+// Fills g_camera_mis for a camera subpath of n_camera vertices whose densities are final.
+void bdpt_mis_prepare_camera(int n_camera) {
     float c = 0.0;
     g_camera_mis[0] = 0.0;
     for (int i = 1; i < n_camera; ++i) {
         LOOP_TICK();
         bool valid = !info_delta(g_camera[i].info) && !info_delta(g_camera[i - 1].info);
-        c = mis_step(mis_ratio(g_camera[i].pdf_rev, g_camera[i].pdf_fwd), c + (valid ? 1.0 : 0.0));
+        c = mis_step(mis_ratio(g_camera[i].pdf_rev, g_camera[i].pdf_fwd),
+                     c + (valid ? VC_ON : 0.0) VM_TERM(info_merge_inside(g_camera[i].info), g_camera[i].pdf_fwd));
         STORE_AT(g_camera_mis, i, c);
     }
+}
+
+// Fills g_light_mis and g_light_delta for a light subpath of n_light vertices whose
+// densities are final.
+void bdpt_mis_prepare_light(int n_light) {
     g_light_delta = n_light > 0 && light_is_delta(g_light[0]);
     float l = 0.0;
     bool before = g_light_delta;
     for (int i = 0; i < n_light; ++i) {
         LOOP_TICK();
         bool delta_i = info_delta(g_light[i].info);
-        l = mis_step(mis_ratio(g_light[i].pdf_rev, g_light[i].pdf_fwd), l + (!delta_i && !before ? 1.0 : 0.0));
+        l = mis_step(mis_ratio(g_light[i].pdf_rev, g_light[i].pdf_fwd),
+                     l + (!delta_i && !before ? VC_AT(i) : 0.0) VM_TERM(i >= 1 && info_merge_inside(g_light[i].info), g_light[i].pdf_fwd));
         STORE_AT(g_light_mis, i, l);
         before = delta_i;
     }
+}
+
+// Fills g_camera_mis and g_light_mis (and g_light_delta) for subpaths of n_camera and
+// n_light vertices whose densities are final.
+void bdpt_mis_prepare(int n_camera, int n_light) {
+    bdpt_mis_prepare_camera(n_camera);
+    bdpt_mis_prepare_light(n_light);
+}
+
+// The ratios of the strategies with fewer camera vertices than t (camera subpath
+// vertices x_{t-1} and x_{t-2} with the reverse densities pt_rev and pt_minus_rev, the rest
+// from g_camera_mis) to the strategy that ends the camera subpath at x_{t-1}, t >= 2;
+// merge_pt: whether a merge at x_{t-1} is among them.
+float camera_side_sum(int t, float pt_rev, float pt_minus_rev, bool merge_pt) {
+    bool delta_minus = info_delta(g_camera[t - 2].info);
+    float inner = 0.0;
+    if (t >= 3) {
+        float tail = g_camera_mis[max(t - 3, 0)];
+        bool valid = !delta_minus && !info_delta(g_camera[t - 3].info);
+        inner = mis_step(mis_ratio(pt_minus_rev, g_camera[t - 2].pdf_fwd),
+                         (valid ? VC_ON : 0.0) VM_TERM(info_merge_inside(g_camera[t - 2].info), g_camera[t - 2].pdf_fwd) + tail);
+    }
+    return mis_step(mis_ratio(pt_rev, g_camera[t - 1].pdf_fwd),
+                    (!delta_minus ? VC_ON : 0.0) VM_TERM(merge_pt && info_mergeable(g_camera[t - 1].info), g_camera[t - 1].pdf_fwd) + inner);
 }
 
 // MIS weight of strategy (s, t) given the densities its connection changes, the forward
@@ -253,18 +327,10 @@ void bdpt_mis_prepare(int n_camera, int n_light) {
 float bdpt_mis_weight_ends(int s, int t, ConnectionPdfs c, float qs_fwd, bool delta_light) {
     if (s + t == 2) return 1.0;
     // strategies with fewer camera vertices: x_{t-1}, x_{t-2} with the connection's
-    // reverse densities, the rest from the suffix sums
+    // reverse densities, the rest from the suffix sums (merges at x_{t-1} only where the
+    // light subpath reaches it: s >= 1)
     float cam = 0.0;
-    if (t >= 2) {
-        bool delta_minus = info_delta(g_camera[t - 2].info);
-        float inner = 0.0;
-        if (t >= 3) {
-            float tail = g_camera_mis[max(t - 3, 0)];
-            bool valid = !delta_minus && !info_delta(g_camera[t - 3].info);
-            inner = mis_step(mis_ratio(c.pt_minus_rev, g_camera[t - 2].pdf_fwd), (valid ? 1.0 : 0.0) + tail);
-        }
-        cam = mis_step(mis_ratio(c.pt_rev, g_camera[t - 1].pdf_fwd), (!delta_minus ? 1.0 : 0.0) + inner);
-    }
+    if (t >= 2) cam = camera_side_sum(t, c.pt_rev, c.pt_minus_rev, s >= 1);
     // strategies with fewer light vertices (a delta light's own point cannot be found
     // by the camera subpath)
     float light = 0.0;
@@ -275,9 +341,11 @@ float bdpt_mis_weight_ends(int s, int t, ConnectionPdfs c, float qs_fwd, bool de
             float tail = s >= 3 ? g_light_mis[max(s - 3, 0)] : 0.0;
             bool before = s >= 3 ? info_delta(g_light[max(s - 3, 0)].info) : delta_light;
             bool valid = !delta_minus && !before;
-            inner = mis_step(mis_ratio(c.qs_minus_rev, g_light[s - 2].pdf_fwd), (valid ? 1.0 : 0.0) + tail);
+            inner = mis_step(mis_ratio(c.qs_minus_rev, g_light[s - 2].pdf_fwd),
+                             (valid ? VC_AT(s - 2) : 0.0) VM_TERM(s >= 3 && info_merge_inside(g_light[max(s - 2, 0)].info), g_light[s - 2].pdf_fwd) + tail);
         }
-        light = mis_step(mis_ratio(c.qs_rev, qs_fwd), (!delta_minus ? 1.0 : 0.0) + inner);
+        light = mis_step(mis_ratio(c.qs_rev, qs_fwd),
+                         (!delta_minus ? VC_AT(s - 1) : 0.0) VM_TERM(s >= 2 && info_mergeable(g_light[max(s - 1, 0)].info), qs_fwd) + inner);
     }
     return 1.0 / (1.0 + cam + light);
 }

@@ -14,6 +14,7 @@ from glrender.drivers import create_driver, options_class
 from glrender.errors import UsageError
 from glrender.photon import PhotonSettings, SppmSettings
 from glrender.render.driver import RenderDriver
+from glrender.vcm import VcmSettings
 
 CORNELL = Path(__file__).resolve().parents[2] / "scenes" / "cornell-box" / "scene.toml"
 OPTIONS = {"photon": PhotonSettings(photons=20000), "sppm": SppmSettings(photons_per_iteration=5000)}
@@ -66,13 +67,13 @@ def test03_options_of_another_integrator_are_refused(gl_ctx):
 
 def test04_the_table_names_every_integrator_and_its_driver():
     assert integrators.names() == ("path", "direct", "ao", "lighttrace", "bdpt", "sppm",
-                                   "photon")
+                                   "photon", "vcm")
     assert glrender.scene.model.INTEGRATORS == integrators.names()
     for name in integrators.names():
         spec = integrators.get(name)
         assert (spec.glsl is None) == (spec.driver == "sppm")
         assert options_class(name) is {"kernel": None, "photon": PhotonSettings,
-                                       "sppm": SppmSettings}[spec.driver]
+                                       "sppm": SppmSettings, "vcm": VcmSettings}[spec.driver]
     assert integrators.running_on("kernel") == ("path", "direct", "ao", "lighttrace", "bdpt")
-    with pytest.raises(UsageError, match=r"integrator 'vcm': expected one of path, direct"):
-        integrators.get("vcm")
+    with pytest.raises(UsageError, match=r"integrator 'mlt': expected one of path, direct"):
+        integrators.get("mlt")

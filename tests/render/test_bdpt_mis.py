@@ -10,7 +10,9 @@ strategies that can make the path (no connection at a specular vertex or a delta
 light, s = 0 only on an area light, t >= 1, (1, 1) left out) must be 1 to float32
 precision, under the balance and the power heuristic, on scenes with glass, a
 roughplastic, a point light, an image environment and a directional light (paths with
-delta vertices and vertices at infinity included).
+delta vertices and vertices at infinity included). Vertex connection and merging adds a
+merge at each inner vertex (vcm_merge_weight from the merge point its light pass would
+store): the connections and merges sum to 1 the same way (test02).
 """
 import numpy as np
 import pytest
@@ -18,7 +20,9 @@ import pytest
 from glrender.gl import shaders
 from glrender.gpu import codegen
 from glrender.render.params import STRATEGIES
+from glrender.gpu.bindings import UBO_VCM_PARAMS
 from glrender.render.renderer import Renderer, settings_from_scene
+from glrender.vcm.layout import VCM_PARAMS
 
 from bidir_scenes import caustic, directional, environment, glossy, point_light
 
@@ -26,12 +30,27 @@ KERNEL = """#version 450
 layout(local_size_x = 64) in;
 #include "common/params.glsl"
 #include "scene/layout.glsl"
-#include "integrators/bdpt.glsl"
+#include "@bidir"
 layout(std430, binding = 8) buffer Results { vec4 results[]; };
 
 Vertex g_path[2 * kBdptVertices];
 float g_p_light[2 * kBdptVertices];   // density of x_i generated from x_{i-1} (light side)
 float g_p_camera[2 * kBdptVertices];  // density of x_i generated from x_{i+1} (camera side)
+
+// The path's first sl vertices as the light subpath, its last t as the camera subpath,
+// with the densities each would have stored.
+void split_path(int k, int sl, int t) {
+    for (int j = 0; j < sl; ++j) {
+        g_light[j] = g_path[j];
+        g_light[j].pdf_fwd = g_p_light[j];
+        g_light[j].pdf_rev = g_p_camera[j];
+    }
+    for (int j = 0; j < t; ++j) {
+        g_camera[j] = g_path[k - 1 - j];
+        g_camera[j].pdf_fwd = g_p_camera[k - 1 - j];
+        g_camera[j].pdf_rev = g_p_light[k - 1 - j];
+    }
+}
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
@@ -71,6 +90,16 @@ void main() {
         else if (j == k - 2) g_p_camera[j] = vertex_pdf(g_path[k - 1], g_path[k - 1], g_path[j]);
         else g_p_camera[j] = vertex_delta(g_path[j + 1]) ? 0.0 : vertex_pdf(g_path[j + 1], g_path[j + 2], g_path[j]);
     }
+#if GLRENDER_VCM_MODE != 0
+    // a merge evaluates the BSDF at its vertex: a path whose integrand is 0 there (a
+    // direction below a shading hemisphere) contributes nothing under any weights
+    for (int j = 1; j <= k - 2; ++j) {
+        float unused_to, unused_from;
+        if (info_merge_inside(g_path[j].info) &&
+            max_component(vertex_f(g_path[j], g_path[j + 1].p, g_path[j - 1].p, false, unused_to, unused_from)) <= 0.0)
+            return;
+    }
+#endif
     bool delta_light = light_is_delta(g_path[0]);
     float sum = 0.0;
     int strategies = 0;
@@ -82,43 +111,62 @@ void main() {
         else valid = !(sl == 1 && t == 1) && !vertex_delta(g_path[sl - 1]) && !vertex_delta(g_path[sl]) &&
                      vertex_connectible(g_path[sl - 1]) && vertex_connectible(g_path[sl]) &&
                      !(t == 1 && sl < 2);
-        if (!valid) continue;
-        for (int j = 0; j < sl; ++j) {
-            g_light[j] = g_path[j];
-            g_light[j].pdf_fwd = g_p_light[j];
-            g_light[j].pdf_rev = g_p_camera[j];
-        }
-        for (int j = 0; j < t; ++j) {
-            g_camera[j] = g_path[k - 1 - j];
-            g_camera[j].pdf_fwd = g_p_camera[k - 1 - j];
-            g_camera[j].pdf_rev = g_p_light[k - 1 - j];
-        }
+        if (!valid || (kVcmMode == 2 && sl != 0)) continue;   // merges alone: s = 0 and the merges
+        split_path(k, sl, t);
         // the light's point, reached by the camera (a light at infinity stays one)
         if (sl == 0 && !light_is_infinite(l)) vertex_set_kind(g_camera[t - 1], kVertexSurface);
         bdpt_mis_prepare(t, sl);
         sum += bdpt_mis_weight(sl, t);
         strategies += 1;
     }
+#if GLRENDER_VCM_MODE != 0
+    // merges at x_j, 1 <= j <= k - 2, where the path scatters by a non-delta lobe: the light
+    // subpath x_0 .. x_j (its merge point x_j) and the camera subpath x_{k-1} .. x_j
+    for (int j = 1; j <= k - 2; ++j) {
+        if (!info_merge_inside(g_path[j].info)) continue;
+        int sl = j + 1, t = k - j;
+        split_path(k, sl, t);
+        bdpt_mis_prepare(t, sl);
+        MergePoint mp = vcm_merge_point(j);
+        Vertex pt = g_camera[t - 1], pt_minus = g_camera[t - 2];
+        float pdf_light, pdf_back;
+        vertex_f(pt, pt_minus.p, pt.p + mp.wi, false, pdf_light, pdf_back);
+        sum += vcm_merge_weight(t, mp, pdf_light, solid_angle_to_area(pdf_back, pt, pt_minus));
+        strategies += 1;
+    }
+#endif
     results[i] = vec4(sum, float(strategies), float(k), any_delta ? 1.0 : 0.0);
 }
 """
 
 
-def weight_sums(gl_ctx, scene, heuristic, n=1 << 14):
+def weight_sums(gl_ctx, scene, heuristic, n=1 << 14, vcm_mode=0, eta=0.0):
+    """Per path: the sum of the weights, the strategies counted, the vertices, whether it
+    has delta vertices. vcm_mode 1 or 2: vcm's weights (merge density factor eta), with
+    its merges among the strategies."""
     # the scene on the device as the renderer binds it (its own kernel: the cheap path tracer)
     r = Renderer(scene, settings_from_scene(scene, integrator="path", spp=1, seed=1), ctx=gl_ctx)
     library = shaders.ShaderLibrary().with_generated(
         {codegen.GENERATED_PATH: codegen.generate(r.packed, has_bvh=r.packed.has_bvh, lights=r.lights_final)})
     defines = {**r.defines, "GLRENDER_STRATEGY": STRATEGIES[heuristic]}
+    if vcm_mode:
+        defines["GLRENDER_VCM_MODE"] = vcm_mode
+    bidir = "integrators/vcm.glsl" if vcm_mode else "integrators/bdpt.glsl"
     kernel = shaders.compile_compute(gl_ctx, source=KERNEL, name="<bdpt mis test>", defines=defines,
-                                     slots={"scene": codegen.GENERATED_PATH}, library=library)
+                                     slots={"scene": codegen.GENERATED_PATH, "bidir": bidir},
+                                     library=library)
     out = gl_ctx.gl.buffer(reserve=16 * n)
+    block = np.zeros(1, VCM_PARAMS)[0]
+    block["merge"] = (0.0, 0.0, eta, 0.0)
+    params = gl_ctx.gl.buffer(block.tobytes())
     r.bind()
     r.write_params(r.param_block(0, 1))
     out.bind_to_storage_buffer(8)
+    params.bind_to_uniform_block(UBO_VCM_PARAMS)
     kernel.run(group_x=n // 64)
     res = np.frombuffer(out.read(), np.float32).reshape(n, 4).astype(np.float64)
     out.release()
+    params.release()
     r.release()
     return res
 
@@ -133,3 +181,18 @@ def test01_weights_sum_to_one(gl_ctx, make, heuristic):
     np.testing.assert_allclose(res[made, 0], 1.0, atol=2e-4)
     if make is caustic:   # paths through the glass: specular vertices among them
         assert (res[made, 3] > 0).sum() > 50
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mode", [1, 2])
+@pytest.mark.parametrize("make", [glossy, caustic, point_light, environment, directional])
+def test02_vcm_weights_sum_to_one(gl_ctx, make, mode):
+    """The same paths under vertex connection and merging's weights: every connection
+    strategy and a merge at every inner vertex where the path scatters by a non-delta lobe
+    (vcm, mode 1), or s = 0 and the merges alone (vm, mode 2); the merges' density factor
+    eta = pi r^2 N at a value where merges and connections weigh alike (area densities of
+    order 1 in these scenes), under the power heuristic."""
+    res = weight_sums(gl_ctx, make(16), "mis-power", vcm_mode=mode, eta=0.7)
+    made = res[:, 1] > 0
+    assert made.sum() > 1000, made.sum()
+    np.testing.assert_allclose(res[made, 0], 1.0, atol=2e-4)

@@ -1,0 +1,27 @@
+"""Host mirror of ``shaders/integrators/vcm_layout.glsl``: the std140 uniform block of vcm's
+kernels and the sizes of its stored records (binding numbers: :mod:`glrender.gpu.bindings`)."""
+from __future__ import annotations
+
+import numpy as np
+
+VCM_PARAMS = np.dtype([
+    ("paths", "<u4", 4),       # light paths, vertex capacity, merge point capacity, iteration
+    ("grid_size", "<u4", 4),   # cells xyz, hash table size
+    ("grid_lo", "<f4", 4),     # corner xyz, cell edge
+    ("merge", "<f4", 4),       # radius, radius^2, eta = pi r^2 N, 1 / eta
+])
+assert VCM_PARAMS.itemsize == 64
+
+#: bytes per stored light vertex (kVcmVertexTexels records of 16 bytes; 7 in scenes whose
+#: normal maps have the shadowing term, which keeps the unperturbed normal)
+def vertex_bytes(normal_shadowing: bool) -> int:
+    return 16 * (7 if normal_shadowing else 6)
+
+
+MERGE_KEY_BYTES = 16       # position and (light path * 32 + vertex index)
+MERGE_DATA_BYTES = 64      # kVcmMergeTexels records: direction and density, throughput and
+                           # area factor, normal and light-side sum, strategy flag and segments
+MERGE_BYTES = MERGE_KEY_BYTES + MERGE_DATA_BYTES
+PATH_BYTES = 8             # per light path: first vertex slot, vertex count
+COUNTER_WORDS = 4          # vertices stored, merge points stored, candidates skipped, visited
+MAX_PATH_VERTICES = 32     # a key holds the vertex index in 5 bits (bdpt's cap: 17 vertices)

@@ -1,0 +1,281 @@
+"""Vertex connection and merging (Georgiev, Křivánek, Davidovič and Slusallek 2012) on the
+device: bdpt's connection strategies and photon mapping's merges under one MIS weight.
+
+Each iteration (one camera sample per pixel, its index i - 1) does three things:
+
+- a light pass (``shaders/kernels/vcm_light.comp.glsl``) traces one light subpath per
+  pixel, splats its lens connections (t = 1) onto the film, and stores its vertices and
+  its merge points (non-delta surface vertices past the light);
+- the host sorts the merge points into a hash grid of cell 2 r_i
+  (:func:`glrender.photon.grid.build_point_grid`), r_i = r_1 i^((alpha - 1) / 2);
+- the camera pass, the render kernel with ``integrators/vcm.glsl``, connects each camera
+  subpath to the light subpath of its pixel's index and merges at its vertices with the
+  merge points within r_i.
+
+The iterations accumulate like the render kernel's samples: sample i's radius and light
+paths depend on i and the seed alone, so progress, checkpoints, ``--resume`` and sample
+ranges rendered elsewhere are the Renderer's. The merges make the estimate biased; the
+bias falls with the radius (consistent for alpha in (0, 1)).
+
+``mode``: ``vcm`` (connections and merges), ``vm`` (merges and the camera subpath reaching
+the lights: progressive photon mapping under the same weights) or ``bpt`` (connections
+alone, both subpaths in one invocation: the bdpt integrator itself, bitwise).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+
+from ..errors import UsageError
+from ..gl import shaders
+from ..gl.context import current
+from ..gpu import bindings
+from ..photon.grid import build_point_grid
+from ..photon.sppm import footprint_radius
+from ..render.renderer import Renderer
+from . import layout as vl
+
+MODES = {"vcm": 1, "vm": 2, "bpt": 0}
+DEFAULT_ALPHA = 0.75        # SmallVCM's: the radius falls as i^-0.125
+VERTICES_PER_PATH = 4       # first guess of the vertex buffer (stored vertices per light path)
+MERGES_PER_PATH = 3         # and of the merge points'
+
+
+@dataclass(frozen=True)
+class VcmSettings:
+    """vcm's own parameters: ``mode`` (vcm, vm or bpt), ``initial_radius`` r_1 in scene
+    units (None: 2 pixel footprints at the scene's centre, as SPPM's) and ``alpha`` in
+    (0, 1), the radius schedule r_i = r_1 i^((alpha - 1) / 2)."""
+
+    mode: str = "vcm"
+    initial_radius: float | None = None
+    alpha: float = DEFAULT_ALPHA
+
+    def __post_init__(self) -> None:
+        if self.mode not in MODES:
+            raise UsageError(f"vcm mode: expected one of {', '.join(MODES)}, got {self.mode!r}")
+        r = self.initial_radius
+        if r is not None and not (isinstance(r, (int, float)) and not isinstance(r, bool)
+                                  and math.isfinite(r) and r > 0):
+            raise UsageError(f"initial radius: expected a positive number of scene units, got {r!r}")
+        a = self.alpha
+        if not (isinstance(a, (int, float)) and not isinstance(a, bool) and 0 < a < 1):
+            raise UsageError(f"alpha: expected a number in (0, 1), got {a!r}")
+
+    @property
+    def merges(self) -> bool:
+        return self.mode != "bpt"
+
+
+class VcmRenderer(Renderer):
+    """A scene on the device rendered by vertex connection and merging: :class:`Renderer`
+    with vcm's camera kernel, plus a light pass and a merge grid before every sample."""
+
+    driver = "vcm"
+
+    def __init__(self, scene: Any, settings: Any = None, vcm: VcmSettings | None = None, *,
+                 ctx: Any = None, device: Any = None, **overrides: Any) -> None:
+        self.vcm = vcm or VcmSettings()
+        if settings is None:
+            overrides.setdefault("integrator", "vcm")
+        if self.vcm.merges:
+            moving = [s.name or f"shape {k}" for k, s in enumerate(scene.shapes) if s.moving]
+            if moving:
+                raise UsageError(f"vcm --vcm-mode {self.vcm.mode}: {moving[0]} moves during the "
+                                 f"shutter, and merges would join light vertices of other times "
+                                 f"(use --vcm-mode bpt or --integrator bdpt)")
+        self.counters = {"vertices": 0, "merge_points": 0, "retraced": 0}
+        self.grid_seconds = 0.0
+        self.light_seconds = 0.0
+        super().__init__(scene, settings, ctx=ctx, device=device, **overrides)
+        self.radius_1 = float(self.vcm.initial_radius or footprint_radius(
+            scene, self.packed.sphere_bounds, self.width, self.height))
+
+    # -- setup -------------------------------------------------------------------------------
+    def _integrator_glsl(self, spec: Any) -> str:
+        return "integrators/bdpt.glsl" if not self.vcm.merges else super()._integrator_glsl(spec)
+
+    def _integrator_defines(self) -> dict[str, int]:
+        return {"GLRENDER_VCM_MODE": MODES[self.vcm.mode]} if self.vcm.merges else {}
+
+    def _compile(self) -> None:
+        super()._compile()
+        self.light_kernel: Any = None
+        if not self.vcm.merges:
+            return
+        # one iteration per pass: each sample has its own light pass, radius and grid
+        self.samples_per_pass = 1
+        self.light_kernel = shaders.compile_compute(
+            self.ctx, "kernels/vcm_light.comp.glsl", defines=self.defines, slots=self.slots,
+            library=self.library)
+        self.light_paths = self.width * self.height
+        self._vertex_bytes = vl.vertex_bytes(bool(self.defines.get("GLRENDER_NORMAL_SHADOWING")))
+        gl = self.gl
+        self._vcm_params = gl.buffer(reserve=vl.VCM_PARAMS.itemsize)
+        self._paths = gl.buffer(reserve=vl.PATH_BYTES * self.light_paths)
+        self._counters = gl.buffer(reserve=4 * vl.COUNTER_WORDS)
+        self._vertices: Any = None
+        self._keys: Any = None
+        self._data: Any = None
+        self._grid: Any = gl.buffer(reserve=16)
+        self._grid.clear()
+        self._allocate(VERTICES_PER_PATH * self.light_paths, MERGES_PER_PATH * self.light_paths)
+        self._block = np.zeros(1, vl.VCM_PARAMS)[0]
+        self._vcm_params.write(self._block.tobytes())
+
+    def _allocate(self, vertices: int, merges: int) -> None:
+        for buf in (self._vertices, self._keys, self._data):
+            if buf is not None:
+                buf.release()
+        limit = self.binding_limit()
+        if vertices * self._vertex_bytes > limit or merges * vl.MERGE_DATA_BYTES > limit:
+            raise UsageError(f"vcm: a light pass stores {vertices} vertices and {merges} merge "
+                             f"points, above one storage buffer's {limit} bytes on this device: "
+                             f"render a smaller image")
+        self.vertex_capacity, self.merge_capacity = vertices, merges
+        self._vertices = self.gl.buffer(reserve=max(16, self._vertex_bytes * vertices))
+        self._keys = self.gl.buffer(reserve=max(16, vl.MERGE_KEY_BYTES * merges))
+        self._data = self.gl.buffer(reserve=max(16, vl.MERGE_DATA_BYTES * merges))
+
+    def bind(self) -> None:
+        super().bind()
+        if getattr(self, "light_kernel", None) is None:
+            return
+        self._vcm_params.bind_to_uniform_block(bindings.UBO_VCM_PARAMS)
+        self._vertices.bind_to_storage_buffer(bindings.SSBO_VCM_VERTICES)
+        self._paths.bind_to_storage_buffer(bindings.SSBO_VCM_PATHS)
+        self._keys.bind_to_storage_buffer(bindings.SSBO_VCM_MERGE_KEYS)
+        self._data.bind_to_storage_buffer(bindings.SSBO_VCM_MERGE_DATA)
+        self._grid.bind_to_storage_buffer(bindings.SSBO_VCM_GRID)
+        self._counters.bind_to_storage_buffer(bindings.SSBO_VCM_COUNTERS)
+
+    def _warm_up(self) -> None:
+        super()._warm_up()
+        if self.light_kernel is not None:
+            self.bind()
+            self._vcm_params.write(self._block.tobytes())   # paths.x = 0: every invocation returns
+            self.light_kernel.run(group_x=1)
+            self.gl.finish()
+
+    # -- one iteration -----------------------------------------------------------------------
+    def radius(self, iteration: int) -> float:
+        """The merge radius of iteration ``iteration`` (1, 2, ...): r_1 i^((alpha - 1) / 2)."""
+        return self.radius_1 * iteration ** ((self.vcm.alpha - 1.0) / 2.0)
+
+    def _light_pass(self, sample: int) -> None:
+        """Trace sample ``sample``'s light paths, store them and build their merge grid."""
+        t0 = time.perf_counter()
+        r = self.radius(sample + 1)
+        eta = math.pi * r * r * self.light_paths
+        prm = self.param_block(sample, 1)
+        self.bind()
+        self.write_params(prm)
+        block = self._block
+        block["merge"] = (r, r * r, eta, 1.0 / eta)
+        block["grid_size"] = 0
+        splat = 1
+        while True:
+            self._counters.clear()
+            block["paths"] = (self.light_paths, self.vertex_capacity, self.merge_capacity, splat)
+            self._vcm_params.write(block.tobytes())
+            self.light_kernel.run(group_x=-(-self.light_paths // 64))
+            counts = np.frombuffer(self._counters.read(), np.uint32)
+            vertices, merges = int(counts[0]), int(counts[1])
+            if vertices <= self.vertex_capacity and merges <= self.merge_capacity:
+                break
+            # the lens connections are splatted already: the retrace only stores
+            self.counters["retraced"] += 1
+            splat = 0
+            self._allocate(max(vertices + vertices // 4, self.vertex_capacity),
+                           max(merges + merges // 4, self.merge_capacity))
+            self.bind()
+        self.counters["vertices"] += vertices
+        self.counters["merge_points"] += merges
+        t1 = time.perf_counter()
+        self.light_seconds += t1 - t0
+        self._build_grid(merges, r)
+        self.grid_seconds += time.perf_counter() - t1
+
+    def _build_grid(self, merges: int, r: float) -> None:
+        """The merge points' hash grid, in the order of their keys (light path, vertex):
+        the device appends them in any order, the grid and the sums over it do not."""
+        block = self._block
+        if merges == 0:
+            block["grid_size"] = 0
+            self._vcm_params.write(block.tobytes())
+            return
+        keys = np.frombuffer(self._keys.read(vl.MERGE_KEY_BYTES * merges), np.float32).reshape(merges, 4)
+        order = np.argsort(keys[:, 3].view(np.uint32), kind="stable")
+        grid = build_point_grid(keys[order, :3], r)
+        table = grid.offsets.astype(np.uint32) + np.uint32(grid.table_size + 1)
+        cells = np.concatenate([table, order[grid.order].astype(np.uint32)])
+        self._grid.release()
+        self._grid = self.gl.buffer(cells.tobytes())
+        block["grid_size"] = (*grid.size, grid.table_size)
+        block["grid_lo"] = (*grid.lo, grid.cell)
+        self._vcm_params.write(block.tobytes())
+        self._grid.bind_to_storage_buffer(bindings.SSBO_VCM_GRID)
+
+    def _run_pass(self, first_sample: int, samples: int,
+                  should_stop: Callable[[], bool] | None = None) -> bool:
+        """bpt: the render kernel's pass. Otherwise one iteration per sample: its light
+        pass, then the camera pass, whole (a stop is answered between iterations: the light
+        pass's splats are on the film already)."""
+        if not self.vcm.merges:
+            return super()._run_pass(first_sample, samples, should_stop)
+        for k in range(samples):
+            self._light_pass(first_sample + k)
+            super()._run_pass(first_sample + k, 1, None)
+        return True
+
+    # -- outputs -----------------------------------------------------------------------------
+    @current
+    def merge_counters(self) -> dict[str, int]:
+        """Merge candidates since the start: ``skipped`` by the per-vertex bound and
+        ``visited`` (the last iteration's), with the light passes' stored vertices and merge
+        points summed over the iterations and the light passes traced again."""
+        out = dict(self.counters)
+        if self.light_kernel is not None:
+            c = np.frombuffer(self._counters.read(), np.uint32)
+            out.update(skipped=int(c[2]), visited=int(c[3]))
+        return out
+
+    def stats(self) -> dict[str, Any]:
+        """``--stats`` entries: vcm's mode, radii, stored vertices and merge points, the
+        seconds of light passes and grid builds; merges make the estimate biased."""
+        done = max(self.spp_done, 1)
+        info: dict[str, Any] = {"mode": self.vcm.mode, "alpha": self.vcm.alpha}
+        if self.vcm.merges:
+            info.update(initial_radius=self.radius_1, final_radius=self.radius(done),
+                        light_paths=self.light_paths, counters=self.merge_counters(),
+                        bytes_per_vertex=self._vertex_bytes, bytes_per_merge_point=vl.MERGE_BYTES,
+                        light_pass_seconds=self.light_seconds, grid_seconds=self.grid_seconds)
+        return {"vcm": info, "biased": self.vcm.merges}
+
+    def fingerprint_parts(self) -> dict[str, str]:
+        from ..render.driver import part_digests
+        return {**super().fingerprint_parts(), **part_digests(self._vcm_inputs())}
+
+    def fingerprint(self) -> str:
+        import hashlib
+        h = hashlib.sha256(super().fingerprint().encode())
+        for _, data in self._vcm_inputs():
+            h.update(data)
+        return h.hexdigest()
+
+    def _vcm_inputs(self) -> list[tuple[str, bytes]]:
+        v = self.vcm
+        return [("vcm settings", repr(("vcm", v.mode, v.initial_radius, v.alpha)).encode())]
+
+    @current
+    def release(self) -> None:
+        if getattr(self, "light_kernel", None) is not None:
+            for buf in (self._vcm_params, self._paths, self._counters, self._vertices, self._keys,
+                        self._data, self._grid):
+                buf.release()
+            self.light_kernel = None
+        super().release()

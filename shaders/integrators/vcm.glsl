@@ -1,0 +1,275 @@
+// Vertex connection and merging (Georgiev, Křivánek, Davidovič and Slusallek 2012): the
+// camera pass of one iteration. Each iteration a light pass (kernels/vcm_light.comp.glsl)
+// traces one light subpath per pixel, splats its lens connections (t = 1) and stores its
+// vertices and merge points; the host sorts the merge points into a hash grid of cell
+// 2r (glrender/vcm/vcm.py). Here each pixel's camera subpath takes every strategy of
+// bdpt (integrators/bidir.glsl: s = 0, next-event estimation, connections to the light
+// subpath of the same index) and merges at each of its non-delta surface vertices with
+// the light vertices within the iteration's radius r:
+//     L_merge = beta_camera f(wo, wi_light) beta_light / (pi r^2 N),
+// N the iteration's light paths. Connections and merges share one MIS weight
+// (integrators/bdpt_vertex.glsl VM_TERM: a merge's density is a connection's times
+// p eta, eta = pi r^2 N), each O(1) from the subpaths' suffix sums and the quantities the
+// light pass stored with each merge point (vcm_merge_weight). kVcmMode 2 keeps the merges
+// and s = 0 alone (progressive photon mapping under the same weights).
+//
+// A light path and the camera subpath it connects to share a shutter time (the light
+// pass takes the camera sample's); scenes with moving geometry are refused (merges would
+// join light vertices of other times).
+#include "integrators/bidir.glsl"
+
+const int kVcmVertexTexels = GLRENDER_NORMAL_SHADOWING != 0 ? 7 : 6;   // records per stored light vertex (96 or 112 bytes)
+const int kVcmMergeTexels = 4;      // records per merge point (64 bytes, and 16 of its key)
+const uint kVcmMergeCandidates = 1024u;   // merge candidates visited per camera vertex at most
+const uint kVcmLightSeed = 0x2f6b8e13u;   // the light pass's sampler stream: the seed xor this
+
+// The light path that the camera samples of `pixel` connect to (one per pixel).
+uint vcm_light_path_of(uvec2 pixel) {
+    return pixel.y * u_params.image.x + pixel.x;
+}
+
+// Stored light vertex `slot`, and its light subpath suffix sum (g_light_mis).
+void vcm_store_vertex(uint slot, Vertex v, float mis) {
+    uint k = uint(kVcmVertexTexels) * slot;
+    vcm_vertices[k] = vec4(v.p, uintBitsToFloat(v.material));
+    vcm_vertices[k + 1u] = vec4(v.ng, uintBitsToFloat(v.info));
+    vcm_vertices[k + 2u] = vec4(v.ns, v.pdf_fwd);
+    vcm_vertices[k + 3u] = vec4(v.tangent, v.pdf_rev);
+    vcm_vertices[k + 4u] = vec4(v.beta, mis);
+    vcm_vertices[k + 5u] = vec4(v.uv, 0.0, 0.0);
+#if GLRENDER_NORMAL_SHADOWING
+    vcm_vertices[k + 6u] = vec4(v.ns0, 0.0);
+#endif
+}
+
+Vertex vcm_load_vertex(uint slot, out float mis) {
+    uint k = uint(kVcmVertexTexels) * slot;
+    vec4 a = vcm_vertices[k], b = vcm_vertices[k + 1u], c = vcm_vertices[k + 2u],
+         d = vcm_vertices[k + 3u], e = vcm_vertices[k + 4u], f = vcm_vertices[k + 5u];
+    mis = e.w;
+#if GLRENDER_NORMAL_SHADOWING
+    vec3 ns0 = vcm_vertices[k + 6u].xyz;
+#endif
+    return Vertex(a.xyz, b.xyz, c.xyz, VERTEX_NS0(ns0) d.xyz, e.xyz, f.xy, floatBitsToUint(a.w),
+                  floatBitsToUint(b.w), c.w, d.w);
+}
+
+// What a merge with light vertex q needs of the subpath behind it, stored by the light
+// pass with the merge point (glrender/vcm/layout.py MERGE_DATA):
+//   wi: the unit direction toward x_{q-1}; pdf_fwd: x_q's area density from its subpath;
+//   beta: the subpath's throughput at x_q; g: the factor from a solid-angle density at
+//   x_q toward x_{q-1} to an area density at x_{q-1} (|cos| / d^2; 1 / d^2 off surfaces,
+//   1 at infinity); a: the light side's sum of ratios beyond x_{q-1} over
+//   (p_fwd(x_{q-1}))^e; ref: 1 when the connection of x_{q-1} to the camera vertex is a
+//   strategy (x_{q-1} not delta, connections on), else 0; segments: q.
+struct MergePoint {
+    vec3 p;
+    vec3 wi;
+    float pdf_fwd;
+    vec3 beta;
+    float g;
+    vec3 ng;
+    float a;
+    float ref;
+    int segments;
+};
+
+void vcm_store_merge(uint index, MergePoint m, uint key) {
+    vcm_merge_keys[index] = vec4(m.p, uintBitsToFloat(key));
+    uint k = uint(kVcmMergeTexels) * index;
+    vcm_merge_data[k] = vec4(m.wi, m.pdf_fwd);
+    vcm_merge_data[k + 1u] = vec4(m.beta, m.g);
+    vcm_merge_data[k + 2u] = vec4(m.ng, m.a);
+    vcm_merge_data[k + 3u] = vec4(m.ref, float(m.segments), 0.0, 0.0);
+}
+
+MergePoint vcm_load_merge(uint index) {
+    uint k = uint(kVcmMergeTexels) * index;
+    vec4 a = vcm_merge_data[k], b = vcm_merge_data[k + 1u], c = vcm_merge_data[k + 2u],
+         d = vcm_merge_data[k + 3u];
+    return MergePoint(vcm_merge_keys[index].xyz, a.xyz, a.w, b.xyz, b.w, c.xyz, c.w, d.x, int(d.y));
+}
+
+// The merge point of light vertex q >= 1 (mergeable) of the subpath in g_light, after
+// bdpt_mis_prepare_light.
+MergePoint vcm_merge_point(int q) {
+    MergePoint m;
+    Vertex x = g_light[q];
+    Vertex prev = light_point(q - 1);
+    m.p = x.p;
+    m.ng = x.ng;
+    m.beta = x.beta;
+    m.pdf_fwd = x.pdf_fwd;
+    m.segments = q;
+    vec3 w = prev.p - x.p;
+    float d2 = dot(w, w);
+    m.wi = w * inversesqrt(d2);
+    if (vertex_kind(prev) == kVertexInfinite) {
+        m.g = 1.0;
+    } else {
+        m.g = 1.0 / d2;
+        if (vertex_on_surface(prev)) m.g *= abs(dot(prev.ng, m.wi));
+    }
+    // the light side beyond x_{q-1}: as bdpt_mis_weight_ends's for s = q, less the ratio of
+    // x_{q-1}'s reverse density (the camera vertex's BSDF decides it); x_{q-1} is inside
+    // the merged path, so the connection that ends the light subpath before it needs it
+    // not delta too
+    float fwd = g_light[q - 1].pdf_fwd;
+    bool delta_prev = info_delta(g_light[q - 1].info);
+    bool before = q >= 2 ? info_delta(g_light[max(q - 2, 0)].info) : g_light_delta;
+    float rest = (!before && !delta_prev ? VC_AT(q - 1) : 0.0) VM_TERM(q >= 2 && info_merge_inside(g_light[q - 1].info), fwd)
+               + (q >= 2 ? g_light_mis[max(q - 2, 0)] : 0.0);
+    m.a = rest > 0.0 ? rest / mis_ratio(fwd, 1.0) : 0.0;
+    m.ref = !delta_prev ? VC_ON : 0.0;
+    return m;
+}
+
+// The light pass of light path j (kernels/vcm_light.comp.glsl): its subpath at the
+// shutter time of the camera sample that connects to it, its lens connections (t = 1)
+// splatted, its vertices and merge points stored (merges alone: its merge points). A
+// path whose vertices find the buffer full stores none (vcm_paths[j].y = 0), and merge
+// points past the capacity are left out: the host reads the counters and traces the
+// iteration again into larger buffers.
+void vcm_light_path(uint j) {
+    uvec2 pixel = uvec2(j % u_params.image.x, j / u_params.image.x);
+    uint index = u_params.samples.x;
+    // the camera sample's time: its own sampler stream, as the camera pass draws it
+    SamplerState sc = pixel_sampler(sampler_pixel_hash(pixel, u_params.dispatch.z), index);
+    g_time = camera_sample(pixel, sc).time;
+    SamplerState s = pixel_sampler(sampler_pixel_hash(pixel, u_params.dispatch.z ^ kVcmLightSeed), index);
+    int n = light_subpath(s);
+    bdpt_mis_prepare_light(n);
+    if (kVcmMode == 1) {
+        strategy_begin(pixel);
+        for (int k = 2; k <= n; ++k) {
+            LOOP_TICK();
+            strategy_lens(k, s);
+        }
+        uint first = n > 0 ? atomicAdd(vcm_counters[0], uint(n)) : 0u;
+        bool stored = first + uint(n) <= u_vcm.paths.y;
+        vcm_paths[j] = uvec2(first, stored ? uint(n) : 0u);
+        if (stored) {
+            for (int i = 0; i < n; ++i) {
+                LOOP_TICK();
+                vcm_store_vertex(first + uint(i), g_light[i], g_light_mis[i]);
+            }
+        }
+    }
+    uint merges = 0u;
+    for (int q = 1; q < n; ++q)
+        if (info_mergeable(g_light[q].info)) merges += 1u;
+    if (merges == 0u) return;
+    uint at = atomicAdd(vcm_counters[1], merges);
+    if (at + merges > u_vcm.paths.z) return;
+    for (int q = 1; q < n; ++q) {
+        LOOP_TICK();
+        if (!info_mergeable(g_light[q].info)) continue;
+        vcm_store_merge(at, vcm_merge_point(q), j * 32u + uint(q));
+        at += 1u;
+    }
+}
+
+// The light subpath `j` into g_light and g_light_mis (g_light_delta): its vertex count.
+int vcm_load_light_path(uint j) {
+    if (j >= u_vcm.paths.x) return 0;
+    uvec2 range = vcm_paths[j];
+    int n = int(range.y);
+    for (int i = 0; i < n; ++i) {
+        LOOP_TICK();
+        float mis;
+        Vertex v = vcm_load_vertex(range.x + uint(i), mis);
+        STORE_AT(g_light, i, v);
+        STORE_AT(g_light_mis, i, mis);
+    }
+    g_light_delta = n > 0 && light_is_delta(g_light[0]);
+    return n;
+}
+
+// MIS weight of merging camera vertex t - 1 with merge point m: the connection strategy
+// that ends the light subpath at x_{q-1} and the camera subpath at x_{t-1} is the
+// reference (bdpt_mis_weight_ends), the merge's own term (pt_rev eta)^e over the sum.
+float vcm_merge_weight(int t, MergePoint m, float pdf_toward_light, float pt_minus_rev) {
+    float own = vcm_merge_ratio(m.pdf_fwd);
+    float cam = camera_side_sum(t, m.pdf_fwd, pt_minus_rev, false);
+    float qs_rev = pdf_toward_light * m.g;
+    float light = m.a > 0.0 ? mis_ratio(qs_rev, 1.0) * m.a : 0.0;
+    return own / (m.ref + cam + light + own);
+}
+
+// The merges at camera vertex t - 1 (a mergeable surface vertex): every merge point
+// within the radius in the 2 x 2 x 2 grid cells around it, at most kVcmMergeCandidates
+// visited (the rest counted, vcm_counters[2]).
+vec3 vcm_merge(int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus) {
+    uvec4 size = u_vcm.grid_size;
+    if (size.w == 0u) return vec3(0.0);
+    float r2 = u_vcm.merge.y;
+    ivec3 base = ivec3(floor((pt.p - u_vcm.grid_lo.xyz) / u_vcm.grid_lo.w - 0.5));
+    uint buckets[8];
+    for (int i = 0; i < 8; ++i) {
+        ivec3 c = base + ivec3(i & 1, (i >> 1) & 1, i >> 2);
+        buckets[i] = 0xffffffffu;
+        if (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(size.xyz)))) continue;
+        uvec3 u = uvec3(c);
+        uint h = ((u.x * 73856093u) ^ (u.y * 19349663u) ^ (u.z * 83492791u)) % size.w;
+        for (int j = 0; j < i; ++j)
+            if (buckets[j] == h) h = 0xffffffffu;
+        buckets[i] = h;
+    }
+    int max_light_segments = kBdptMaxSegments - (t - 1);
+    vec3 sum = vec3(0.0);
+    uint visited = 0u, skipped = 0u;
+    for (int i = 0; i < 8; ++i) {
+        if (buckets[i] == 0xffffffffu) continue;
+        uint begin = vcm_grid[buckets[i]], end = vcm_grid[buckets[i] + 1u];
+        uint visit = min(end - begin, kVcmMergeCandidates - visited);
+        skipped += end - begin - visit;
+        for (uint e = begin; e < begin + visit; ++e) {
+            LOOP_TICK();
+            uint index = vcm_grid[e];
+            vec3 d = vcm_merge_keys[index].xyz - pt.p;
+            if (dot(d, d) > r2) continue;
+            MergePoint m = vcm_load_merge(index);
+            if (m.segments > max_light_segments || !vertex_light_side_valid(pt, m.wi)) continue;
+            float pdf_light, pdf_back;
+            // f |cos| toward the light vertex, less the cosine: a density estimate's flux is per
+            // unit area of the surface already
+            float cos_i = abs(dot(m.wi, pt_bsdf.frame.z));
+            vec3 f = vertex_f_bsdf(pt, pt_bsdf, pt_minus.p, pt.p + m.wi, false, pdf_light, pdf_back);
+            if (max_component(f) <= 0.0 || !(cos_i > 0.0)) continue;
+            f /= cos_i;
+            float w = vcm_merge_weight(t, m, pdf_light, solid_angle_to_area(pdf_back, pt, pt_minus));
+            vec3 L = pt.beta * f * m.beta * (w * u_vcm.merge.w);
+            sum += L;
+        }
+        visited += visit;
+    }
+    if (skipped > 0u) atomicAdd(vcm_counters[2], skipped);
+    if (visited > 0u) atomicAdd(vcm_counters[3], visited);
+    return sum;
+}
+
+// One camera sample: its subpath, the light subpath of the pixel's index, every
+// connection strategy but the lens's (the light pass splatted those) and the merges.
+vec3 bidir_sample(uvec2 pixel, inout SamplerState s, inout Aov aov) {
+    strategy_begin(pixel);
+    int n_camera = camera_subpath(pixel, s, aov);
+    int n_light = kVcmMode == 1 ? vcm_load_light_path(vcm_light_path_of(pixel)) : 0;
+    if (kVcmMode != 1) g_light_delta = false;
+    bdpt_mis_prepare_camera(n_camera);
+
+    vec3 L = strategies_emission(n_camera, aov);
+    if (kVcmMode == 1) strategies_light_sample(n_camera, s, L);
+    for (int t = 2; t <= n_camera; ++t) {
+        Vertex pt = g_camera[t - 1];
+        if (!vertex_connectible(pt)) continue;
+        Vertex pt_minus = camera_point(t - 2);
+        VertexBsdf pt_bsdf = vertex_bsdf(pt);
+        int k_end = min(n_light, kBdptMaxSegments + 1 - t);
+        for (int k = 2; k <= k_end; ++k) {
+            LOOP_TICK();
+            L += strategy_connect(k, t, pt, pt_bsdf, pt_minus);
+        }
+        if (info_mergeable(pt.info) && t - 1 < kBdptMaxSegments) L += vcm_merge(t, pt, pt_bsdf, pt_minus);
+    }
+    return L;
+}

@@ -1,0 +1,42 @@
+// Bindings of vertex connection and merging's two kernels: the light pass
+// (kernels/vcm_light.comp.glsl) stores light subpaths and their merge points, the camera
+// pass (the render kernel with integrators/vcm.glsl) connects to them and merges with
+// them. The device side of their host/device contract, mirrored by glrender/vcm/layout.py.
+// Beside the render kernels' bindings (scene/layout.glsl: uniform block 0, storage blocks
+// 0-7; bdpt's strategy images: 8), named in common/bindings.glsl.
+#include "common/bindings.glsl"
+
+// ---- uniform block 1: one iteration's parameters (std140) -----------------------------
+layout(std140, binding = UBO_VCM_PARAMS) uniform VcmParams {
+    uvec4 paths;       // x: light paths of the iteration, y: vertex capacity, z: merge point
+                       // capacity, w: the iteration (1, 2, ...: its light paths' sample index + 1)
+    uvec4 grid_size;   // the merge points' grid: xyz cells along each axis, w: hash table size (0: empty)
+    vec4 grid_lo;      // xyz: corner of cell (0, 0, 0), w: cell edge (twice the radius at least)
+    vec4 merge;        // x: radius, y: radius^2, z: eta = pi r^2 (light paths), the merges' density
+                       // factor in the MIS weights, w: 1 / eta, the merge's kernel normalisation
+} u_vcm;
+
+// ---- storage blocks (std430) ----------------------------------------------------------
+// 9: the light subpaths' vertices, kVcmVertexTexels records each (integrators/vcm.glsl
+// vcm_store_vertex: position, normals, frame, throughput, densities, suffix sum), each
+// path's vertices one after another from its first slot.
+layout(std430, binding = SSBO_VCM_VERTICES) buffer VcmVertices { vec4 vcm_vertices[]; };
+
+// 10: per light path: (first vertex slot, vertex count).
+layout(std430, binding = SSBO_VCM_PATHS) buffer VcmPaths { uvec2 vcm_paths[]; };
+
+// 11: merge points, appended in any order: (position xyz, key as uint bits: light path
+// index * 32 + vertex index, the canonical order the host sorts them by).
+layout(std430, binding = SSBO_VCM_MERGE_KEYS) buffer VcmMergeKeys { vec4 vcm_merge_keys[]; };
+
+// 12: what a merge needs of a merge point, kVcmMergeTexels records each (vcm_store_merge).
+layout(std430, binding = SSBO_VCM_MERGE_DATA) buffer VcmMergeData { vec4 vcm_merge_data[]; };
+
+// 13: the merge points' grid (glrender/photon/grid.py build_point_grid): vcm_grid[h] ..
+// vcm_grid[h + 1] index vcm_grid itself, for each hash h < table size, and the entries
+// there are merge point indices (into 11 and 12).
+layout(std430, binding = SSBO_VCM_GRID) readonly buffer VcmGrid { uint vcm_grid[]; };
+
+// 14: counters: [0] vertices stored, [1] merge points stored, [2] merge candidates skipped
+// by the bound, [3] merge candidates visited.
+layout(std430, binding = SSBO_VCM_COUNTERS) buffer VcmCounters { uint vcm_counters[]; };
