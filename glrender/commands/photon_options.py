@@ -1,5 +1,6 @@
-"""The command line's photon mapping options (``glrender render --integrator photon`` and
-``--integrator sppm``)."""
+"""The command line's options of the integrators with settings of their own: photon mapping
+(``glrender render --integrator photon`` and ``--integrator sppm``) and vertex connection and
+merging (``--integrator vcm``, which shares SPPM's iterations and radius schedule)."""
 from __future__ import annotations
 
 from typing import Any
@@ -7,17 +8,22 @@ from typing import Any
 from ..errors import UsageError
 from ..photon.photon import PhotonSettings
 from ..photon.sppm import SppmSettings
+from ..vcm.vcm import DEFAULT_ALPHA, MODES, VcmSettings
 
 SPPM_OPTIONS = ("iterations", "initial_radius", "alpha")
 PHOTON_OPTIONS = ("caustic_photons", "radius", "knn", "final_gather")
 SHARED_OPTIONS = ("photons_per_iteration", "kernel")   # --photons: per iteration (sppm) or per map
-OPTIONS = SHARED_OPTIONS + SPPM_OPTIONS + PHOTON_OPTIONS   # saved in checkpoints
+VCM_OPTIONS = ("vcm_mode",)          # vcm takes SPPM_OPTIONS too
+OPTIONS = SHARED_OPTIONS + SPPM_OPTIONS + PHOTON_OPTIONS + VCM_OPTIONS   # saved in checkpoints
+#: the options each of these integrators takes
+TAKES = {"sppm": SHARED_OPTIONS + SPPM_OPTIONS, "photon": SHARED_OPTIONS + PHOTON_OPTIONS,
+         "vcm": SPPM_OPTIONS + VCM_OPTIONS}
 AOVS = ("radius", "photons")   # SPPM's search radius; the photon-map view (sppm and photon)
 
 
 def add_arguments(parser: Any) -> None:
     """The photon mapping options, as an argument group of ``glrender render``."""
-    g = parser.add_argument_group("photon mapping (--integrator photon, --integrator sppm)")
+    g = parser.add_argument_group("photon mapping and vcm (--integrator photon, sppm, vcm)")
     g.add_argument("--photons-per-iteration", "--photons", dest="photons_per_iteration", type=int,
                    default=None, metavar="N",
                    help="sppm: photons per iteration (default: one per pixel, at least 16384); "
@@ -25,13 +31,18 @@ def add_arguments(parser: Any) -> None:
     g.add_argument("--kernel", choices=("uniform", "cone", "epanechnikov"), default=None,
                    help="density estimation kernel over each search disk (default: uniform)")
     g.add_argument("--iterations", type=int, default=None, metavar="N",
-                   help="sppm: iterations (one camera sample per pixel and a photon pass each; "
-                        "default: the scene's spp)")
+                   help="sppm, vcm: iterations (one camera sample per pixel and a photon or light "
+                        "pass each; default: the scene's spp)")
     g.add_argument("--initial-radius", type=float, default=None, metavar="R",
-                   help="sppm: initial search radius in scene units (default: 2 pixel footprints "
-                        "at the scene's centre)")
+                   help="sppm, vcm: initial search (merge) radius in scene units (default: 2 pixel "
+                        "footprints at the scene's centre)")
     g.add_argument("--alpha", type=float, default=None, metavar="A",
-                   help="sppm: fraction of new photons kept per iteration, in (0, 1) (default 0.7)")
+                   help="sppm: fraction of new photons kept per iteration, in (0, 1) (default "
+                        f"0.7); vcm: the radius falls as iteration^((A - 1) / 2) (default "
+                        f"{DEFAULT_ALPHA})")
+    g.add_argument("--vcm-mode", choices=tuple(MODES), default=None,
+                   help="vcm: connections and merges (vcm, the default), connections alone (bpt: "
+                        "bdpt itself) or merges alone (vm: progressive photon mapping)")
     g.add_argument("--caustic-photons", type=int, default=None, metavar="N",
                    help="photon: photons traced for the caustic map (default: as --photons)")
     g.add_argument("--radius", type=float, default=None, metavar="R",
@@ -55,16 +66,26 @@ def photon_options(args: Any, kind: str) -> tuple[int | None, SppmSettings | Pho
     settings from ``args`` (None for the others, whose photon options are refused)."""
     given = [name for name in OPTIONS if getattr(args, name, None) is not None]
     aovs = [n.strip() for n in (getattr(args, "aov", None) or "").split(",") if n.strip() in AOVS]
-    if kind not in ("sppm", "photon"):
-        if given:
-            raise UsageError(f"{_flag(given[0])}: only with --integrator sppm or photon")
-        if aovs:
-            raise UsageError(f"--aov {aovs[0]}: only with --integrator sppm or photon")
-        return None, None
-    other = PHOTON_OPTIONS if kind == "sppm" else SPPM_OPTIONS
     for name in given:
-        if name in other:
-            raise UsageError(f"{_flag(name)}: only with --integrator {'photon' if kind == 'sppm' else 'sppm'}")
+        if name not in TAKES.get(kind, ()):
+            takers = [k for k, names in TAKES.items() if name in names]
+            raise UsageError(f"{_flag(name)}: only with --integrator {' or '.join(takers)}")
+    if kind not in ("sppm", "photon") and aovs:
+        raise UsageError(f"--aov {aovs[0]}: only with --integrator sppm or photon")
+    if kind not in TAKES:
+        return None, None
+    iterations = getattr(args, "iterations", None)
+    if iterations is not None and iterations < 1:
+        raise UsageError(f"--iterations {iterations}: expected a positive number of iterations")
+    if kind == "vcm":
+        radius, alpha = getattr(args, "initial_radius", None), getattr(args, "alpha", None)
+        if radius is not None and not radius > 0:
+            raise UsageError(f"--initial-radius {radius}: expected a positive number of scene units")
+        if alpha is not None and not 0 < alpha < 1:
+            raise UsageError(f"--alpha {alpha}: expected a number in (0, 1)")
+        return iterations, VcmSettings(mode=getattr(args, "vcm_mode", None) or "vcm",
+                                       initial_radius=radius,
+                                       alpha=DEFAULT_ALPHA if alpha is None else alpha)
     if kind == "photon":
         if "radius" in aovs:
             raise UsageError("--aov radius: only with --integrator sppm (the photon integrator's "
@@ -87,9 +108,6 @@ def photon_options(args: Any, kind: str) -> tuple[int | None, SppmSettings | Pho
                                     kernel=getattr(args, "kernel", None) or "uniform",
                                     final_gather=bool(getattr(args, "final_gather", None)),
                                     photon_view="photons" in aovs, **kw)
-    iterations = getattr(args, "iterations", None)
-    if iterations is not None and iterations < 1:
-        raise UsageError(f"--iterations {iterations}: expected a positive number of iterations")
     sppm = SppmSettings(photons_per_iteration=getattr(args, "photons_per_iteration", None),
                         initial_radius=getattr(args, "initial_radius", None),
                         alpha=0.7 if getattr(args, "alpha", None) is None else args.alpha,

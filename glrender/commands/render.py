@@ -83,6 +83,7 @@ def _saved_kinds() -> dict:
     or a tuple of the choices."""
     from ..render.params import STRATEGIES
     from ..scene.model import INTEGRATORS, SAMPLER_KINDS
+    from ..vcm.vcm import MODES
 
     kinds: dict = dict.fromkeys(("spp", "seed", "max_depth", "width", "height", "rr_depth",
                                  "light_samples", "split", "strategy_depth",
@@ -91,7 +92,8 @@ def _saved_kinds() -> dict:
     kinds.update(dict.fromkeys(("clamp", "initial_radius", "alpha", "radius"), float))
     kinds.update(rr=str, strategy_images=str, crop=str | list, final_gather=bool,
                  sampler=tuple(SAMPLER_KINDS), integrator=tuple(INTEGRATORS),
-                 strategy=tuple(STRATEGIES), kernel=("uniform", "cone", "epanechnikov"))
+                 strategy=tuple(STRATEGIES), kernel=("uniform", "cone", "epanechnikov"),
+                 vcm_mode=tuple(MODES))
     return kinds
 
 
