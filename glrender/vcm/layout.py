@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 VCM_PARAMS = np.dtype([
-    ("paths", "<u4", 4),       # light paths, vertex capacity, merge point capacity, iteration
+    ("paths", "<u4", 4),       # light paths, vertex capacity, merge point capacity, splat (1)
     ("grid_size", "<u4", 4),   # cells xyz, hash table size
     ("grid_lo", "<f4", 4),     # corner xyz, cell edge
     ("merge", "<f4", 4),       # radius, radius^2, eta = pi r^2 N, 1 / eta

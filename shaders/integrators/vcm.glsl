@@ -141,7 +141,7 @@ void vcm_light_path(uint j) {
     bdpt_mis_prepare_light(n);
     if (kVcmMode == 1) {
         strategy_begin(pixel);
-        for (int k = 2; k <= n; ++k) {
+        for (int k = 2; k <= n && u_vcm.paths.w != 0u; ++k) {   // not again when traced again
             LOOP_TICK();
             strategy_lens(k, s);
         }

@@ -9,7 +9,8 @@
 // ---- uniform block 1: one iteration's parameters (std140) -----------------------------
 layout(std140, binding = UBO_VCM_PARAMS) uniform VcmParams {
     uvec4 paths;       // x: light paths of the iteration, y: vertex capacity, z: merge point
-                       // capacity, w: the iteration (1, 2, ...: its light paths' sample index + 1)
+                       // capacity, w: splat the lens connections (1; 0 when an iteration whose
+                       // buffers overflowed is traced again)
     uvec4 grid_size;   // the merge points' grid: xyz cells along each axis, w: hash table size (0: empty)
     vec4 grid_lo;      // xyz: corner of cell (0, 0, 0), w: cell edge (twice the radius at least)
     vec4 merge;        // x: radius, y: radius^2, z: eta = pi r^2 (light paths), the merges' density

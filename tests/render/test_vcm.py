@@ -1,0 +1,197 @@
+"""Vertex connection and merging (glrender.vcm): against the path tracer and the closed form
+per block, its bpt mode bitwise bdpt, its consistency on the caustic scene, and the
+properties every integrator keeps (one dispatch or many, a seed's determinism, resume, the
+loop cap, bounded storage).
+
+Error bars come from independent seeds only (TESTING.md): a merge spreads a light vertex
+over the pixels within its radius and a light path's connections over the film, so the
+pixels of a render are correlated and each block's sigma is the spread of the seeds' own
+block means (compare_images correlated_blocks, Student t with seeds - 1 degrees of freedom).
+"""
+import math
+
+import numpy as np
+import pytest
+
+import glrender
+from glrender.drivers import create_driver
+from glrender.errors import UsageError
+from glrender.render.renderer import settings_from_scene
+from glrender.scene import model as m
+from glrender.testing.images import compare_images
+from glrender.vcm import VcmSettings, vcm as vcm_module
+
+from bidir_scenes import caustic, closed_enclosure, cornell, renders, thin_lens
+
+SEEDS = tuple(range(100, 116))
+SEEDS_PATH = (11, 12, 13, 14)
+# name: (scene, block, path spp, vcm iterations, vcm mode)
+SCENES = {
+    "cornell": (cornell, 16, 256, 64, "vcm"),
+    "enclosure": (closed_enclosure, 8, 0, 16, "vcm"),
+    "thin-lens": (thin_lens, 16, 256, 64, "vcm"),
+    "cornell-vm": (cornell, 16, 256, 64, "vm"),
+}
+
+
+def vcm_renders(scene, iterations, seeds, mode="vcm", **options):
+    return np.stack([glrender.render(scene, spp=iterations, integrator="vcm", seed=seed,
+                                     sampler="independent", progress=False,
+                                     integrator_options=VcmSettings(mode=mode, **options)).mean
+                     for seed in seeds])
+
+
+def block_tests(scene, block):
+    f = scene.film
+    return 3 * -(-f.width // block) * -(-f.height // block) + 2
+
+
+@pytest.fixture(scope="module")
+def all_tests():
+    return sum(block_tests(SCENES[name][0](32), SCENES[name][1]) for name in SCENES)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", SCENES)
+def test01_vcm_matches_path_and_closed_form(gl_ctx, all_tests, name):
+    """32x32 images, 16 seeds; the default radius (two pixel footprints, alpha 0.75), whose
+    bias after 64 iterations (16 in the enclosure) is below what the tests can see: each
+    block and channel and the image mean at a Šidák alpha of 0.01 over all of this file's
+    comparisons. The image-mean test detects a bias of 2.2% on the Cornell box (1.7% merges
+    alone), 2.0% with the thin lens and 0.27% in the enclosure, whose radiance is
+    Le / (1 - albedo) = 2 everywhere (2 (1 - 2^-16) at the 16-segment cap)."""
+    make, block, spp_path, iterations, mode = SCENES[name]
+    scene = make(32)
+    extra = all_tests - block_tests(scene, block)
+    v = vcm_renders(scene, iterations, SEEDS, mode)
+    if name == "enclosure":
+        ref, ref_se = np.full(v.shape[1:], 2.0), None
+    else:
+        paths = renders(scene, "path", spp_path, SEEDS_PATH)
+        ref, ref_se = paths.mean(axis=0), paths.std(axis=0, ddof=1) / np.sqrt(len(SEEDS_PATH))
+    c = compare_images(v, ref, ref_se, block=block, extra_tests=extra, correlated_blocks=True)
+    assert c.passed, c.summary() + " " + "; ".join(c.messages)
+    assert c.detectable_bias < (0.005 if name == "enclosure" else 0.025), c.summary()
+
+
+@pytest.mark.parametrize("make", [cornell, caustic])
+def test02_bpt_mode_is_bdpt_bitwise(gl_ctx, make):
+    """--vcm-mode bpt runs bdpt's kernel: the same image, bit for bit."""
+    scene = make(16)
+    images = []
+    for integrator, options in (("bdpt", None), ("vcm", VcmSettings(mode="bpt"))):
+        r = create_driver(scene, settings_from_scene(scene, integrator=integrator, spp=4, seed=9),
+                          options, ctx=gl_ctx)
+        r.step(4)
+        images.append(r.film().mean)
+        r.release()
+    assert np.array_equal(images[0], images[1]) and images[0].max() > 0
+
+
+def vcm_image(gl_ctx, scene, spp, options=None, **settings):
+    r = create_driver(scene, settings_from_scene(scene, integrator="vcm", spp=spp, seed=5,
+                                                 **settings), options or VcmSettings(), ctx=gl_ctx)
+    r.step(spp)
+    film = r.film()
+    stats = r.stats()
+    r.release()
+    return film, stats
+
+
+@pytest.mark.parametrize("mode", ["vcm", "vm"])
+def test03_one_dispatch_or_many_and_the_seed_bitwise(gl_ctx, mode):
+    """The merge grid is sorted by light path and vertex, merges sum in that order and
+    splats in integers: the image does not depend on how a pass is dispatched, nor on the
+    order in which the light pass's atomics stored the vertices."""
+    scene = caustic(16)
+    a = vcm_image(gl_ctx, scene, 3, VcmSettings(mode=mode), time_target=1e-9)[0].mean
+    b = vcm_image(gl_ctx, scene, 3, VcmSettings(mode=mode), time_target=10.0)[0].mean
+    c = vcm_image(gl_ctx, scene, 3, VcmSettings(mode=mode), time_target=10.0)[0].mean
+    assert np.array_equal(a, b) and np.array_equal(b, c) and a.max() > 0
+
+
+def test04_storage_grows_and_the_image_stays(gl_ctx, monkeypatch):
+    """Buffers first sized for 1 vertex and 1 merge point per light path overflow; the light
+    pass is traced again into larger ones (its lens splats not repeated) and the image is
+    bitwise the one with room from the start. Stored bytes: 96 per vertex, 80 per merge
+    point (its key and data)."""
+    scene = caustic(16)
+    roomy, stats = vcm_image(gl_ctx, scene, 2)
+    assert stats["vcm"]["counters"]["retraced"] == 0
+    assert stats["vcm"]["bytes_per_vertex"] == 96 and stats["vcm"]["bytes_per_merge_point"] == 80
+    monkeypatch.setattr(vcm_module, "VERTICES_PER_PATH", 1)
+    monkeypatch.setattr(vcm_module, "MERGES_PER_PATH", 1)
+    tight, stats = vcm_image(gl_ctx, scene, 2)
+    assert stats["vcm"]["counters"]["retraced"] >= 1
+    assert np.array_equal(roomy.mean, tight.mean)
+
+
+def test05_resume_continues_bitwise(gl_ctx):
+    """An iteration's light paths and radius depend on its index and the seed alone: 3
+    iterations, saved and restored in a new renderer, then 2 more, are the 5 of one run."""
+    scene = caustic(16)
+    settings = settings_from_scene(scene, integrator="vcm", spp=5, seed=2)
+    whole = create_driver(scene, settings, VcmSettings(), ctx=gl_ctx)
+    whole.step(5)
+    want = whole.film().mean
+    whole.release()
+    first = create_driver(scene, settings, VcmSettings(), ctx=gl_ctx)
+    first.step(3)
+    state = first.state()
+    first.release()
+    second = create_driver(scene, settings, VcmSettings(), ctx=gl_ctx)
+    second.restore(state)
+    second.step(2)
+    assert np.array_equal(second.film().mean, want)
+    second.release()
+
+
+@pytest.mark.parametrize("make", [caustic, closed_enclosure])
+def test06_loop_counts_far_below_the_cap(gl_ctx, make):
+    """The worst invocation of the camera pass (connections and up to 1,024 merge
+    candidates per vertex): the caustic scene and the enclosure at bdpt's 16-segment cap."""
+    film, _ = vcm_image(gl_ctx, make(16), 2, count_loops=True)
+    worst = int(film.loop_counts.max())
+    assert 0 < worst < 30_000, worst
+
+
+def test07_refusals(gl_ctx):
+    with pytest.raises(UsageError, match=r"vcm mode: expected one of vcm, vm, bpt"):
+        VcmSettings(mode="both")
+    with pytest.raises(UsageError, match=r"alpha: expected a number in \(0, 1\)"):
+        VcmSettings(alpha=1.0)
+    with pytest.raises(UsageError, match=r"initial radius: expected a positive number"):
+        VcmSettings(initial_radius=0.0)
+    scene = caustic(16)
+    ball = next(s for s in scene.shapes if s.kind == "mesh")
+    ball.world_from_object_close = m.translate((0.0, 0.1, 0.0)) @ ball.world_from_object
+    with pytest.raises(UsageError, match=r"moves during the shutter"):
+        create_driver(scene, settings_from_scene(scene, integrator="vcm", spp=1), VcmSettings(),
+                      ctx=gl_ctx)
+    r = create_driver(scene, settings_from_scene(scene, integrator="vcm", spp=1),
+                      VcmSettings(mode="bpt"), ctx=gl_ctx)    # bdpt renders motion
+    r.release()
+
+
+@pytest.mark.slow
+def test08_caustic_error_falls_with_iterations(gl_ctx):
+    """Consistency: on the caustic scene (24x24), the MSE against a bdpt reference (8 seeds
+    of 1024 spp), less the reference's own variance, over 2, 4, 8, 16 and 32 iterations of
+    8 seeds each: the slope of log(MSE) against log(iterations), fitted over the 40
+    renders, is below 0 by more than 3 standard errors of the fit."""
+    scene = caustic(24)
+    ref_renders = renders(scene, "bdpt", 1024, range(200, 208))
+    ref = ref_renders.mean(axis=0)
+    ref_var = float((ref_renders.var(axis=0, ddof=1) / len(ref_renders)).mean())
+    xs, ys = [], []
+    for n in (2, 4, 8, 16, 32):
+        for img in vcm_renders(scene, n, range(300, 308)):
+            mse = float(((img - ref) ** 2).mean()) - ref_var
+            assert mse > 0, (n, mse)
+            xs.append(math.log(n))
+            ys.append(math.log(mse))
+    x, y = np.array(xs), np.array(ys)
+    slope, intercept = np.polyfit(x, y, 1)
+    resid = y - (slope * x + intercept)
+    se = math.sqrt(resid.var(ddof=2) / ((x - x.mean()) ** 2).sum())
+    assert slope + 3 * se < 0, (slope, se)
