@@ -121,6 +121,6 @@ register(IntegratorSpec("sppm", None, driver="sppm",
 register(IntegratorSpec("photon", "integrators/photon.glsl", driver="photon", uses_strategy=False,
                         summary="photon mapping: global and caustic maps, then camera paths"))
 register(IntegratorSpec("vcm", "integrators/vcm.glsl", driver="vcm", splatting=True,
-                        depth_cap=16, counts_truncation=True,
+                        strategies=True, depth_cap=16, counts_truncation=True,
                         summary="vertex connection and merging: bdpt's connections and photon "
                                 "merges under one MIS (iterations as spp)"))

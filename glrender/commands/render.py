@@ -67,7 +67,7 @@ def _strategy_depth(options: dict, scene) -> int:
     integrator = options.get("integrator") or scene.integrator.kind
     if not integrators.get(integrator).strategies:
         have = [n for n in integrators.names() if integrators.get(n).strategies]
-        raise UsageError(f"--strategy-images: only the {' and '.join(have)} integrator has "
+        raise UsageError(f"--strategy-images: only the {' and '.join(have)} integrators have "
                          f"strategies (s, t), not {integrator} (add --integrator {have[0]})")
     from ..film.io import check_writable
 
@@ -221,8 +221,10 @@ def _write(args, job, film, output: Path, aov_names: list, options: dict, say) -
             folder = Path(options["strategy_images"])
             if partial and folder.is_dir() and any(folder.iterdir()):
                 folder = partial_path(folder)   # nor partial strategy images complete ones
+            merges = getattr(job.driver, "merge_strategy_images", None)
             written += strategies.write(folder, job.driver.strategy_images(), job.settings.strategy_depth,
-                                        exposure=args.exposure, curve=args.tonemap, srgb=args.srgb)
+                                        exposure=args.exposure, curve=args.tonemap, srgb=args.srgb,
+                                        merge_images=merges() if merges is not None else None)
     return {"outputs": written, "denoise": denoise_info}
 
 

@@ -34,12 +34,14 @@ class Accumulation:
     ``binding_limit()`` answers the bytes one storage-buffer binding may hold."""
 
     def __init__(self, gl: Any, width: int, height: int, *, aovs: bool, counting: bool,
-                 splatting: bool, strategy_depth: int, binding_limit: Callable[[], int]) -> None:
+                 splatting: bool, strategy_depth: int, binding_limit: Callable[[], int],
+                 strategy_merges: bool = False) -> None:
         self.gl = gl
         self.width, self.height = width, height
         self.tiles_x, self.tiles_y = -(-width // TILE), -(-height // TILE)
         self.aovs, self.counting, self.splatting = aovs, counting, splatting
         self.strategy_depth = strategy_depth
+        self.strategy_merges = strategy_merges     # vcm's merges have images too
         self.binding_limit = binding_limit
         self.rows = (0, self.tiles_y)      # the tile rows accumulated: (first, count)
         self._snapshot: list[Any] | None = None
@@ -64,7 +66,8 @@ class Accumulation:
         self.splat = gl.buffer(reserve=24 * self.width * self.height if self.splatting else 16)
         depth = self.strategy_depth
         self.strategies = gl.buffer(
-            reserve=strategies.buffer_bytes(depth, self.width, self.height) if depth else 16)
+            reserve=strategies.buffer_bytes(depth, self.width, self.height, self.strategy_merges)
+            if depth else 16)
         for buf in self.buffers():
             buf.clear()
 
@@ -132,7 +135,7 @@ class Accumulation:
         if self.splatting:
             per += 24
         if self.strategy_depth:
-            per += strategies.buffer_bytes(self.strategy_depth, 1, 1)
+            per += strategies.buffer_bytes(self.strategy_depth, 1, 1, self.strategy_merges)
         return 2 * per
 
     # -- undoing a stopped pass ------------------------------------------------------------

@@ -214,7 +214,8 @@ class Renderer:
         self.accumulation = Accumulation(
             self.gl, self.width, self.height, aovs=s.aovs,
             counting=s.count_loops or s.count_rays, splatting=self.splatting,
-            strategy_depth=s.strategy_depth, binding_limit=lambda: self.binding_limit())
+            strategy_depth=s.strategy_depth, binding_limit=lambda: self.binding_limit(),
+            strategy_merges=self._strategy_merges())
         self.tiles_x, self.tiles_y = self.accumulation.tiles_x, self.accumulation.tiles_y
         self.spp_done = 0
         self._tile_rate: float | None = None    # measured seconds per tile-sample
@@ -329,6 +330,10 @@ class Renderer:
         assert spec.glsl is not None
         return spec.glsl
 
+    def _strategy_merges(self) -> bool:
+        """Whether the strategy images include merges (vcm's)."""
+        return False
+
     def _integrator_defines(self) -> dict[str, int]:
         """Optional defines of the driver's own (glrender.render.params OPTIONAL_DEFINES)."""
         return {}
@@ -336,10 +341,11 @@ class Renderer:
     def _check_strategy_images(self) -> None:
         s = self.settings
         if not integrators.get(s.integrator.kind).strategies:
-            raise UsageError(f"strategy images: only the bdpt integrator has strategies (s, t), "
+            raise UsageError(f"strategy images: only bdpt and vcm have strategies (s, t), "
                              f"not {s.integrator.kind}")
         strategies.check_depth(s.strategy_depth, s.integrator.max_depth, BDPT_DEPTH_CAP)
-        need, limit = strategies.buffer_bytes(s.strategy_depth, self.width, self.height), \
+        need, limit = strategies.buffer_bytes(s.strategy_depth, self.width, self.height,
+                                              self._strategy_merges()), \
             self.binding_limit()
         if need > limit:
             raise UsageError(f"strategy images of depth {s.strategy_depth} at {self.width}x"

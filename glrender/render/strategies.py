@@ -7,6 +7,11 @@ length add up to that length's part of the bdpt image, and each unweighted image
 estimate of it on its own, noisier where the strategy is a poor way to find the paths
 (Veach 1997, fig. 10.3). (1, 1), the lens joined to a light point, is not a bdpt strategy
 here (s = 0, t = 2 sees the lights), so its images stay black.
+
+vcm adds the merges: a path of k segments can also be made by merging at each of its inner
+vertices, q light subpath segments and t camera subpath vertices with q + t - 1 = k (q = 1
+.. k - 1). Their images follow the connections' in the buffer and make a pyramid of their
+own, where merging takes over (caustics) shows as the connections' images fade.
 """
 from __future__ import annotations
 
@@ -26,8 +31,15 @@ def strategies(depth: int) -> list[tuple[int, int]]:
     return [(s, k + 1 - s) for k in range(1, depth + 1) for s in range(k + 1)]
 
 
-def buffer_bytes(depth: int, width: int, height: int) -> int:
-    return 4 * WORDS_PER_PIXEL * len(strategies(depth)) * width * height
+def merges(depth: int) -> list[tuple[int, int]]:
+    """(q, t) of vcm's merges of the path lengths 2 .. depth, in the buffer's order (after
+    the connections)."""
+    return [(q, k + 1 - q) for k in range(2, depth + 1) for q in range(1, k)]
+
+
+def buffer_bytes(depth: int, width: int, height: int, with_merges: bool = False) -> int:
+    count = len(strategies(depth)) + (len(merges(depth)) if with_merges else 0)
+    return 4 * WORDS_PER_PIXEL * count * width * height
 
 
 def check_depth(depth: int, max_depth: int, cap: int) -> None:
@@ -43,7 +55,8 @@ def read(words: np.ndarray, depth: int, width: int, height: int, spp: int,
     """{(s, t): (weighted, unweighted)}, each (H, W, 3) float64, from the block's words:
     camera-side sums over the samples per pixel, splat sums over the light paths (one per
     camera sample of every pixel)."""
-    per = words.reshape(len(strategies(depth)), height, width, WORDS_PER_PIXEL)
+    n = len(strategies(depth))
+    per = words[:n * height * width * WORDS_PER_PIXEL].reshape(n, height, width, WORDS_PER_PIXEL)
     out = {}
     for j, (s, t) in enumerate(strategies(depth)):
         if t >= 2:
@@ -52,6 +65,19 @@ def read(words: np.ndarray, depth: int, width: int, height: int, spp: int,
             sums = fixed_sums(per[j]).reshape(height, width, 6)
             v = sums.astype(np.float64) / (splat_scale * max(spp, 1) * width * height)
         out[(s, t)] = (v[..., :3], v[..., 3:])
+    return out
+
+
+def read_merges(words: np.ndarray, depth: int, width: int, height: int,
+                spp: int) -> dict[tuple[int, int], tuple[np.ndarray, np.ndarray]]:
+    """{(q, t): (weighted, unweighted)} of vcm's merges, each (H, W, 3) float64: sums over
+    the samples per pixel, from the words after the connections'."""
+    first = len(strategies(depth)) * width * height * WORDS_PER_PIXEL
+    per = words[first:].reshape(len(merges(depth)), height, width, WORDS_PER_PIXEL)
+    out = {}
+    for j, qt in enumerate(merges(depth)):
+        v = per[j, ..., :6].copy().view(np.float32).astype(np.float64) / max(spp, 1)
+        out[qt] = (v[..., :3], v[..., 3:])
     return out
 
 
@@ -70,29 +96,36 @@ def _label(tile: np.ndarray, text: str) -> np.ndarray:
     return np.asarray(img)
 
 
-def pyramid(images: dict[tuple[int, int], np.ndarray], depth: int, encode) -> np.ndarray:
+def pyramid(images: dict[tuple[int, int], np.ndarray], depth: int, encode,
+            merged: bool = False) -> np.ndarray:
     """Veach's pyramid: row k holds the strategies of length k, s = 0 .. k from the left,
-    centred; ``encode`` turns a float image into 8-bit RGB."""
-    tiles = {st: _label(encode(img), f"({st[0]},{st[1]})") for st, img in images.items()}
+    centred (``merged``: the merges, q = 1 .. k - 1, from length 2); ``encode`` turns a
+    float image into 8-bit RGB."""
+    name = "m" if merged else ""
+    tiles = {st: _label(encode(img), f"{name}({st[0]},{st[1]})") for st, img in images.items()}
     th, tw = next(iter(tiles.values())).shape[:2]
     gap = 4
     rows = []
     width = (depth + 1) * (tw + gap)
-    for k in range(1, depth + 1):
+    for k in range(2 if merged else 1, depth + 1):
         row = np.zeros((th, width, 3), np.uint8)
-        x0 = (width - (k + 1) * (tw + gap)) // 2
-        for s in range(k + 1):
+        firsts = range(1, k) if merged else range(k + 1)
+        x0 = (width - len(firsts) * (tw + gap)) // 2
+        for i, s in enumerate(firsts):
             tile = tiles[(s, k + 1 - s)]
-            x = x0 + s * (tw + gap)
+            x = x0 + i * (tw + gap)
             row[:tile.shape[0], x:x + tile.shape[1]] = tile
         rows += [row, np.zeros((gap, width, 3), np.uint8)]
     return np.concatenate(rows)
 
 
 def write(folder: Path, images: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]],
-          depth: int, *, exposure: float = 0.0, curve: str = "clamp", srgb: bool = True) -> list[str]:
+          depth: int, *, exposure: float = 0.0, curve: str = "clamp", srgb: bool = True,
+          merge_images: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] | None = None) -> list[str]:
     """``weighted.png`` and ``unweighted.png`` (the pyramids, all at the same exposure as
-    the render) and ``strategies.npz`` (the float images, keys w_S_T and u_S_T) in folder."""
+    the render) and ``strategies.npz`` (the float images, keys w_S_T and u_S_T) in folder;
+    with vcm's ``merge_images`` also ``merges-weighted.png`` and ``merges-unweighted.png``
+    and their float images (keys wm_Q_T and um_Q_T)."""
     from PIL import Image
 
     from ..film.io import atomic_write
@@ -104,13 +137,17 @@ def write(folder: Path, images: dict[tuple[int, int], tuple[np.ndarray, np.ndarr
         return tonemap(img.astype(np.float32), exposure, curve, srgb)
 
     written = []
-    for which, name in ((0, "weighted"), (1, "unweighted")):
-        grid = pyramid({st: pair[which] for st, pair in images.items()}, depth, encode)
-        path = folder / f"{name}.png"
-        atomic_write(path, lambda tmp, grid=grid: Image.fromarray(grid).save(tmp, format="PNG"))
-        written.append(str(path))
+    sets = [("", images, False)] + ([("merges-", merge_images, True)] if merge_images and depth >= 2 else [])
+    for prefix, imgs, merged in sets:
+        for which, name in ((0, "weighted"), (1, "unweighted")):
+            grid = pyramid({st: pair[which] for st, pair in imgs.items()}, depth, encode, merged)
+            path = folder / f"{prefix}{name}.png"
+            atomic_write(path, lambda tmp, grid=grid: Image.fromarray(grid).save(tmp, format="PNG"))
+            written.append(str(path))
     arrays = {f"{p}_{s}_{t}": pair[i].astype(np.float32) for (s, t), pair in images.items()
               for i, p in enumerate("wu")}
+    arrays.update({f"{p}m_{q}_{t}": pair[i].astype(np.float32) for (q, t), pair in (merge_images or {}).items()
+                   for i, p in enumerate("wu")})
 
     def write_arrays(tmp: Path) -> None:
         with open(tmp, "wb") as f:

@@ -36,6 +36,7 @@ from ..gl.context import current
 from ..gpu import bindings
 from ..photon.grid import build_point_grid
 from ..photon.sppm import footprint_radius
+from ..render import strategies
 from ..render.renderer import Renderer
 from . import layout as vl
 
@@ -98,6 +99,9 @@ class VcmRenderer(Renderer):
     # -- setup -------------------------------------------------------------------------------
     def _integrator_glsl(self, spec: Any) -> str:
         return "integrators/bdpt.glsl" if not self.vcm.merges else super()._integrator_glsl(spec)
+
+    def _strategy_merges(self) -> bool:
+        return self.vcm.merges
 
     def _integrator_defines(self) -> dict[str, int]:
         return {"GLRENDER_VCM_MODE": MODES[self.vcm.mode]} if self.vcm.merges else {}
@@ -233,6 +237,20 @@ class VcmRenderer(Renderer):
         return True
 
     # -- outputs -----------------------------------------------------------------------------
+    @current
+    def merge_strategy_images(self) -> dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] | None:
+        """{(q, t): (weighted, unweighted)} images of the merges (q light subpath segments,
+        t camera subpath vertices) of path lengths 2 .. ``strategy_depth``
+        (glrender/render/strategies.py): with :meth:`strategy_images`' connections, the
+        weighted ones add up to ``film().mean`` when the depth is the render's max depth.
+        None in bpt mode (no merges)."""
+        if not self.vcm.merges:
+            return None
+        if not self.settings.strategy_depth:
+            raise UsageError("merge_strategy_images: render with strategy_depth >= 1")
+        return strategies.read_merges(self.accumulation.strategy_words(), self.settings.strategy_depth,
+                                      self.width, self.height, self.spp_done)
+
     @current
     def merge_counters(self) -> dict[str, int]:
         """Merge candidates since the start: ``skipped`` by the per-vertex bound and

@@ -12,7 +12,10 @@
 // sums in words 0-2 (weighted rgb) and 3-5 (unweighted), added by the invocation that
 // owns the pixel, in sample order. The t = 1 strategies land anywhere on the film: six
 // 64-bit fixed-point sums (weighted rgb, unweighted rgb) as word pairs, added with
-// integer atomics through the pixel filter as integrators/splat.glsl does.
+// integer atomics through the pixel filter as integrators/splat.glsl does. vcm's merges
+// (kVcmMode 1, 2) follow the connections of every length: merge (q, t), q light subpath
+// segments and t camera vertices, of length k = q + t - 1 >= 2 is number
+// kStrategyDepth (kStrategyDepth + 3) / 2 + (k - 2)(k - 1) / 2 + q - 1, camera-side sums.
 #include "common/params.glsl"
 #include "integrators/splat.glsl"
 
@@ -37,6 +40,18 @@ uint strategy_word(int s, int t, uint i) {
 void strategy_record(int s, int t, vec3 L, float w) {
     uint b = strategy_word(s, t, g_strategy_pixel);
     if (b == ~0u || !is_finite(L * w) || !is_finite(L)) return;
+    for (int c = 0; c < 3; ++c) {
+        strategy_data[b + c] = floatBitsToUint(uintBitsToFloat(strategy_data[b + c]) + L[c] * w);
+        strategy_data[b + 3 + c] = floatBitsToUint(uintBitsToFloat(strategy_data[b + 3 + c]) + L[c]);
+    }
+}
+
+// A merge's (q light segments, t camera vertices) unweighted contribution L and weight w.
+void strategy_merge(int q, int t, vec3 L, float w) {
+    int k = q + t - 1;
+    if (k < 2 || k > kStrategyDepth || !is_finite(L * w) || !is_finite(L)) return;
+    uint j = uint(kStrategyDepth * (kStrategyDepth + 3) / 2 + (k - 2) * (k - 1) / 2 + q - 1);
+    uint b = 12u * (j * u_params.image.x * u_params.image.y + g_strategy_pixel);
     for (int c = 0; c < 3; ++c) {
         strategy_data[b + c] = floatBitsToUint(uintBitsToFloat(strategy_data[b + c]) + L[c] * w);
         strategy_data[b + 3 + c] = floatBitsToUint(uintBitsToFloat(strategy_data[b + 3 + c]) + L[c]);
@@ -72,5 +87,6 @@ void strategy_splat(int s, vec2 film, vec3 L, float w) {
 #else
 void strategy_begin(uvec2 pixel) {}
 void strategy_record(int s, int t, vec3 L, float w) {}
+void strategy_merge(int q, int t, vec3 L, float w) {}
 void strategy_splat(int s, vec2 film, vec3 L, float w) {}
 #endif

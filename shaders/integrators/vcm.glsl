@@ -238,8 +238,9 @@ vec3 vcm_merge(int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus) {
             if (max_component(f) <= 0.0 || !(cos_i > 0.0)) continue;
             f /= cos_i;
             float w = vcm_merge_weight(t, m, pdf_light, solid_angle_to_area(pdf_back, pt, pt_minus));
-            vec3 L = pt.beta * f * m.beta * (w * u_vcm.merge.w);
-            sum += L;
+            vec3 L = pt.beta * f * m.beta * u_vcm.merge.w;
+            strategy_merge(m.segments, t, L, w);
+            sum += L * w;
         }
         visited += visit;
     }

@@ -130,7 +130,7 @@ def test05_refusals(gl_ctx):
     from glrender.errors import UsageError
 
     scene = cornell(8)
-    with pytest.raises(UsageError, match="only the bdpt integrator"):
+    with pytest.raises(UsageError, match="only bdpt and vcm have strategies"):
         Renderer(scene, settings_from_scene(scene, integrator="path", strategy_depth=2), ctx=gl_ctx)
     with pytest.raises(UsageError, match="--strategy-depth 6: expected a path length in 1..5"):
         Renderer(scene, settings_from_scene(scene, integrator="bdpt", max_depth=5, strategy_depth=6),
@@ -162,7 +162,7 @@ def test06_command_line(tmp_path):
     total = sum(data[f"w_{s}_{t}"].astype(np.float64) for s, t in strategies.strategies(3))
     np.testing.assert_allclose(total, np.load(out), rtol=1e-4, atol=1e-5)
     for args, message in [
-            (("--strategy-images", tmp_path / "x"), "--strategy-images: only the bdpt integrator"),
+            (("--strategy-images", tmp_path / "x"), "--strategy-images: only the bdpt and vcm integrators have"),
             (("--integrator", "bdpt", "--strategy-depth", "2"), "--strategy-depth 2: only with"),
             (("--integrator", "bdpt", "--max-depth", "2", "--strategy-images", tmp_path / "y",
               "--strategy-depth", "3"), "--strategy-depth 3: expected a path length in 1..2"),

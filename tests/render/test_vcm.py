@@ -195,3 +195,34 @@ def test08_caustic_error_falls_with_iterations(gl_ctx):
     resid = y - (slope * x + intercept)
     se = math.sqrt(resid.var(ddof=2) / ((x - x.mean()) ** 2).sum())
     assert slope + 3 * se < 0, (slope, se)
+
+
+@pytest.mark.parametrize("mode", ["vcm", "vm"])
+def test09_strategy_images_with_merges_partition_the_render(gl_ctx, mode):
+    """At strategy depth = max depth (3) the weighted images of the connections (splats
+    included) and of the merges add up to the film: the camera side to float32 summation
+    order (a bound from the sample and strategy counts), the splats exactly (the same
+    fixed-point integers). The merges' unweighted images are at least their weighted part,
+    and the caustic's merges carry light (the glass's L S D E paths)."""
+    from glrender.render import strategies
+
+    scene = caustic(16)
+    spp, depth = 4, 3
+    r = create_driver(scene, settings_from_scene(scene, integrator="vcm", spp=spp, seed=4,
+                                                 max_depth=depth, strategy_depth=depth),
+                      VcmSettings(mode=mode), ctx=gl_ctx)
+    r.step(spp)
+    film, splat = r.film(), r.splat_image()
+    images, merges = r.strategy_images(), r.merge_strategy_images()
+    r.release()
+    assert set(merges) == set(strategies.merges(depth)) == {(1, 2), (1, 3), (2, 2)}
+    camera = sum(w for (s, t), (w, u) in images.items() if t >= 2) + sum(w for w, u in merges.values())
+    magnitude = sum(np.abs(w) for (s, t), (w, u) in images.items() if t >= 2) + \
+        sum(np.abs(w) for w, u in merges.values())
+    bound = 4 * (spp + len(images) + len(merges)) * 2.0 ** -24 * (magnitude + np.abs(film.mean))
+    err = np.abs(camera - (film.mean - splat))
+    assert np.all(err <= bound + 1e-7), float((err - bound).max())
+    assert all(np.all(u >= w - 1e-6) for w, u in merges.values())
+    assert sum(w.sum() for w, u in merges.values()) > 0
+    if mode == "vm":   # merges alone: no connection but s = 0 carries light
+        assert all(w.max() == 0 for (s, t), (w, u) in images.items() if s > 0)
