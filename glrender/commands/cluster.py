@@ -53,6 +53,7 @@ def run_distributed(args, signals) -> int:
                           parse_defines)
     from .outputs import check_checkpoint, write_outputs, write_stats
     from .photon_options import photon_options
+    from ..drivers import options_class
     from ..render.job import JobOptions, UnitsJob
     from ..scene.animation import frame_range
     from ..distributed import client as cl
@@ -108,7 +109,7 @@ def run_distributed(args, signals) -> int:
     settings = units_job.settings
     cl.check_integrator(settings, photon)
     job = cl.Job(source, settings, width, height, args.device,
-                 photon if settings.integrator.kind == "photon" else None)
+                 photon if options_class(settings.integrator.kind) is not None else None)
     # the unit size: --unit-size, else the one the checkpoint recorded (--resume), else
     # the calibrated one (glrender.distributed.calibrate, once the cluster is up)
     unit_size, unit_from, calibration = args.unit_size, "option", None

@@ -162,11 +162,13 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
     ``source`` (the SceneSource workers load, when ``scene`` is that source's Scene),
     ``stop()`` (asked while waiting: True ends the render early, with the finished
     bands in the result), ``progress(units_done, units, pixel_samples_done, seconds)``,
-    ``photon`` (PhotonSettings of the photon integrator; None: its defaults): every worker
-    traces the same photon maps from the seed, so the image is the one process's.
+    ``photon`` (the integrator's own settings: PhotonSettings, VcmSettings; None: its
+    defaults): every worker traces the same photon maps (vcm: the same light passes) from
+    the seed, so the image is the one process's.
     """
     distributed = _dask()
     from ..render.job import JobOptions, job_settings
+    from ..drivers import options_class
     from . import source as src
 
     if source is not None:        # a SceneSource of `scene` (a Scene) made by the caller
@@ -188,7 +190,7 @@ def render(scene, *, client, settings=None, spp: int | None = None, frames=None,
         photon = PhotonSettings()
     check_integrator(settings, photon)
     job = Job(source, settings, width, height, device,
-              photon if settings.integrator.kind == "photon" else None)
+              photon if options_class(settings.integrator.kind) is not None else None)
     done = dict(done or {})
     t0 = time.perf_counter()
 

@@ -41,6 +41,7 @@ PREVIEW_DRIVERS = {
     "kernel": (Progressive, True, lambda: None),
     "photon": (Progressive, True, lambda: PhotonSettings(photons=PREVIEW_PHOTONS)),
     "sppm": (SppmProgressive, False, lambda: None),
+    "vcm": (Progressive, True, lambda: None),
 }
 STRATEGY_ORDER = tuple(STRATEGIES)
 DEPTH_STEPS_MAX = 16            # ] past this goes to unbounded (-1)

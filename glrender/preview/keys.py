@@ -8,7 +8,7 @@ KEYS = (
     (("W", "A", "S", "D"), None, "fly forward / left / back / right while held (Shift: 4x)"),
     (("Q", "E"), None, "fly down / up while held"),
     (("R",), "reset_camera", "back to the scene's camera"),
-    (("I",), "next_integrator", "integrator: path, direct, ao, lighttrace, bdpt, sppm, photon (Shift: back)"),
+    (("I",), "next_integrator", "integrator: path, direct, ao, lighttrace, bdpt, sppm, photon, vcm (Shift: back)"),
     (("M",), "next_strategy", "direct lighting: light, bsdf, mis-balance, mis-power (Shift: back)"),
     (("LEFT_BRACKET",), "depth_down", "max depth - 1 (from unbounded: 16)"),
     (("RIGHT_BRACKET",), "depth_up", "max depth + 1 (after 16: unbounded)"),

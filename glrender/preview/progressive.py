@@ -71,6 +71,7 @@ class Progressive:
         if k <= 0:
             return False
         self.pass_samples, self.next_tile = k, 0
+        r.prepare_pass(r.spp_done, k)     # vcm: the iteration's light pass and merge grid
         self._params = r.param_block(r.spp_done, k)
         return True
 

@@ -550,6 +550,11 @@ class Renderer:
         preview)."""
         self.accumulation.load(sums, squares)
 
+    def prepare_pass(self, first_sample: int, samples: int) -> None:
+        """What the kernel needs before the dispatches of a pass rendering samples
+        [first_sample, first_sample + samples) (nothing here; vcm: its light pass and merge
+        grid). The preview's frame-budgeted passes call it too."""
+
     def _run_pass(self, first_sample: int, samples: int,
                   should_stop: Callable[[], bool] | None = None) -> bool:
         """Render samples [first_sample, first_sample + samples) in every pixel.

@@ -232,9 +232,17 @@ class VcmRenderer(Renderer):
         if not self.vcm.merges:
             return super()._run_pass(first_sample, samples, should_stop)
         for k in range(samples):
-            self._light_pass(first_sample + k)
+            self.prepare_pass(first_sample + k, 1)
             super()._run_pass(first_sample + k, 1, None)
         return True
+
+    def prepare_pass(self, first_sample: int, samples: int) -> None:
+        """The light pass and merge grid of iteration ``first_sample`` + 1 (a pass is one
+        iteration: ``samples_per_pass`` is 1)."""
+        if self.vcm.merges:
+            if samples != 1:
+                raise UsageError(f"vcm: a pass renders one iteration, not {samples} samples")
+            self._light_pass(first_sample)
 
     # -- outputs -----------------------------------------------------------------------------
     @current

@@ -69,6 +69,19 @@ def test01c_photon_integrator_writes_the_same_exr(tmp_path):
 
 
 @pytest.mark.slow
+def test01d_vcm_writes_the_same_exr(tmp_path):
+    """--integrator vcm on 2 workers: an iteration's light paths and radius depend on its
+    index and the seed alone, so the workers' sample ranges (whole frames: vcm splats) add
+    up to the single process's EXR, byte for byte."""
+    vcm = ["--integrator", "vcm", "--alpha", 0.6]
+    out, ref = tmp_path / "cluster.exr", tmp_path / "single.exr"
+    r = run("render", CORNELL, *SMALL, *vcm, "-o", out, "--workers", 2, "--unit-size", 4096)
+    assert r.returncode == 0, r.stderr
+    assert run("render", CORNELL, *SMALL, *vcm, "-o", ref, "--quiet").returncode == 0
+    assert out.read_bytes() == ref.read_bytes()
+
+
+@pytest.mark.slow
 def test02_dask_scheduler_and_workers(tmp_path):
     """`dask scheduler` and two `dask worker` processes on 127.0.0.1: the same file."""
     cluster = DaskProcesses(tmp_path)

@@ -1,4 +1,5 @@
-"""``glrender render --integrator sppm``: options, one-line errors, checkpoints."""
+"""``glrender render --integrator sppm`` (and photon, vcm): options, one-line errors,
+checkpoints."""
 import sys
 from pathlib import Path
 
@@ -97,6 +98,7 @@ def test05_photon_map_options_need_photon(tmp_path):
 @pytest.mark.parametrize("integrator, options", [
     ("photon", ("--photons", 20000, "--knn", 16, "--kernel", "cone", "--final-gather")),
     ("sppm", ("--photons", 4096, "--alpha", 0.5, "--initial-radius", 0.04)),
+    ("vcm", ("--vcm-mode", "vm", "--alpha", 0.6, "--initial-radius", 0.05)),
 ])
 def test06_resume_keeps_the_photon_options(tmp_path, integrator, options):
     """A checkpoint saves the photon options: --resume without them continues the same
@@ -134,3 +136,22 @@ def test07_photon_integrator_writes_the_photon_view(tmp_path):
 
     layers = read_exr_layers(out)
     assert layers["RGB"].mean() > 0.1 and layers["photons"].mean() > 0
+
+
+@pytest.mark.parametrize("args, message", [
+    (("--vcm-mode", "both"), "--vcm-mode: invalid choice"),
+    (("--initial-radius", 0), "--initial-radius 0.0: expected a positive number"),
+    (("--alpha", 1.5), "--alpha 1.5: expected a number in (0, 1)"),
+    (("--iterations", -2), "--iterations -2"),
+    (("--photons", 100), "--photons-per-iteration: only with --integrator sppm or photon"),
+    (("--knn", 4), "--knn: only with --integrator photon"),
+])
+def test08_vcm_bad_parameters_one_line_exit_2(tmp_path, args, message):
+    line = one_error_line(glrender("render", CORNELL, "-o", tmp_path / "x.exr", "--integrator", "vcm",
+                                   *SMALL, *args))
+    assert message in line
+
+
+def test09_vcm_mode_needs_vcm(tmp_path):
+    line = one_error_line(glrender("render", CORNELL, "-o", tmp_path / "x.exr", "--vcm-mode", "vm", *SMALL))
+    assert "--vcm-mode: only with --integrator vcm" in line

@@ -1,8 +1,8 @@
-"""The photon integrators in the preview, in a real window under Xvfb (as
+"""The photon integrators and vcm in the preview, in a real window under Xvfb (as
 tests/preview/test_window.py). SPPM: the preview drives SppmRenderer iteration by
 iteration, a piece of work per frame, so the window keeps answering keys while it
 renders; photon: a PhotonRenderer (its maps traced once) accumulated like the path
-tracer. The screenshot is the headless renderer's image at the same spp (SPPM's float
+tracer; vcm: a VcmRenderer, one iteration (light pass, grid, camera pass) per pass. The screenshot is the headless renderer's image at the same spp (SPPM's float
 atomics: equal to their summation order); a drag restarts it from the new view."""
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ import glrender
 from glrender.photon import PhotonRenderer, PhotonSettings, SppmRenderer
 from glrender.preview.app import PREVIEW_PHOTONS
 from glrender.render.renderer import settings_from_scene
+from glrender.vcm import VcmRenderer, VcmSettings
 
 from preview_x11 import Xvfb, missing_tools
 from test_window import CORNELL, Preview
@@ -23,7 +24,7 @@ pytestmark = pytest.mark.slow
 SIZE, ITERATIONS = 48, 12
 
 
-@pytest.fixture(scope="module", params=["sppm", "photon"])
+@pytest.fixture(scope="module", params=["sppm", "photon", "vcm"])
 def preview(request, tmp_path_factory):
     missing = missing_tools()
     if missing:
@@ -48,6 +49,8 @@ def headless(meta: dict) -> np.ndarray:
                                    sampler=meta["sampler"], seed=meta["seed"], spp=meta["spp"])
     if kind == "sppm":
         r = SppmRenderer(scene, settings)
+    elif kind == "vcm":
+        r = VcmRenderer(scene, replace(settings, aovs=True), VcmSettings())
     else:
         r = PhotonRenderer(scene, replace(settings, aovs=True), PhotonSettings(photons=PREVIEW_PHOTONS))
     try:
@@ -61,8 +64,8 @@ def test01_screenshot_is_the_headless_image(preview):
     title = preview.wait_title(f"{ITERATIONS}/{ITERATIONS} spp - done", timeout=180)
     shot = preview.screenshot()
     meta, mean = shot["meta"], shot["layers"]["RGB"]
-    assert f"{meta['integrator']}, depth" in title
-    assert meta["spp"] == ITERATIONS and meta["integrator"] in ("sppm", "photon")
+    assert f"- {meta['integrator']}, " in title and ", depth" in title
+    assert meta["spp"] == ITERATIONS and meta["integrator"] in ("sppm", "photon", "vcm")
     assert mean.shape == (SIZE, SIZE, 3) and mean.mean() > 0.1
     np.testing.assert_allclose(mean, headless(meta), rtol=1e-4, atol=1e-5)
 
