@@ -44,7 +44,7 @@ SCENES = {"cornell": "scenes/cornell-box/scene.toml",
           "bunny": "scenes/cornell-bunny/scene.toml",
           "caustic": "scenes/caustic/scene.toml",
           "door": "scenes/door/scene.toml"}
-INTEGRATORS = ("path", "direct", "ao", "lighttrace", "bdpt", "photon", "sppm")
+INTEGRATORS = ("path", "direct", "ao", "lighttrace", "bdpt", "photon", "sppm", "vcm")
 SIZE = ("--width", "24", "--height", "24")
 # photon: a small map; sppm: 4 iterations of a small photon count
 PHOTON_ARGS = {"photon": ("--photons", "20000"), "sppm": ("--photons", "5000")}
