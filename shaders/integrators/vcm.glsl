@@ -17,11 +17,13 @@
 // pass takes the camera sample's); scenes with moving geometry are refused (merges would
 // join light vertices of other times).
 #include "integrators/bidir.glsl"
+#include "photon/density.glsl"
 
 const int kVcmVertexTexels = GLRENDER_NORMAL_SHADOWING != 0 ? 7 : 6;   // records per stored light vertex (96 or 112 bytes)
 const int kVcmMergeTexels = 4;      // records per merge point (64 bytes, and 16 of its key)
 const uint kVcmMergeCandidates = 1024u;   // merge candidates visited per camera vertex at most
 const uint kVcmLightSeed = 0x2f6b8e13u;   // the light pass's sampler stream: the seed xor this
+const float kDiscThickness = 0.25;        // a merge disk's half thickness over its radius
 
 // The light path that the camera samples of `pixel` connect to (one per pixel).
 uint vcm_light_path_of(uvec2 pixel) {
@@ -196,6 +198,19 @@ float vcm_merge_weight(int t, MergePoint m, float pdf_toward_light, float pt_min
     return own / (m.ref + cam + light + own);
 }
 
+// Whether merge point m is in sight of camera vertex pt: a wall or a partition between
+// them (its two sides within r, a room lit on one of them) would leak light through. Both
+// ends are offset off their surfaces to the side the light arrives from (m.wi), not by the
+// direction between them: that runs along the surface, and either side would do.
+bool vcm_merge_visible(Vertex pt, MergePoint m) {
+    vec3 o = offset_ray_origin(pt.p, pt.ng, m.wi);
+    vec3 e = offset_ray_origin(m.p, m.ng, m.wi);
+    vec3 w = e - o;
+    float dist = length(w);
+    if (!(dist > 0.0)) return true;
+    return !scene_occluded(o, w / dist, dist * (1.0 - kShadowEpsilon), g_time, kNoPrimitive);
+}
+
 // The merges at camera vertex t - 1 (a mergeable surface vertex): every merge point
 // within the radius in the 2 x 2 x 2 grid cells around it, at most kVcmMergeCandidates
 // visited (the rest counted, vcm_counters[2]).
@@ -228,15 +243,23 @@ vec3 vcm_merge(int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus) {
             uint index = vcm_grid[e];
             vec3 d = vcm_merge_keys[index].xyz - pt.p;
             if (dot(d, d) > r2) continue;
+            // a disk on pt's surface, as photon mapping's (photon/photon_gather.glsl): light
+            // vertices off it or on a surface facing another way (the other wall of a
+            // corner) are not of this surface's density
+            float h = dot(d, pt.ng);
+            if (h * h > kDiscThickness * kDiscThickness * r2) continue;
             MergePoint m = vcm_load_merge(index);
-            if (m.segments > max_light_segments || !vertex_light_side_valid(pt, m.wi)) continue;
+            if (abs(dot(m.ng, pt.ng)) < kNormalAgreement || m.segments > max_light_segments ||
+                !vertex_light_side_valid(pt, m.wi)) continue;
             float pdf_light, pdf_back;
-            // f |cos| toward the light vertex, less the cosine: a density estimate's flux is per
-            // unit area of the surface already
-            float cos_i = abs(dot(m.wi, pt_bsdf.frame.z));
+            // f |cos| toward the light vertex over |cos| at the geometric normal: light
+            // vertices land on the geometric surface, their density is per unit of its area
+            // (photon/density.glsl photon_bsdf)
+            float cos_i = abs(dot(m.wi, pt.ng));
             vec3 f = vertex_f_bsdf(pt, pt_bsdf, pt_minus.p, pt.p + m.wi, false, pdf_light, pdf_back);
             if (max_component(f) <= 0.0 || !(cos_i > 0.0)) continue;
             f /= cos_i;
+            if (!vcm_merge_visible(pt, m)) continue;
             float w = vcm_merge_weight(t, m, pdf_light, solid_angle_to_area(pdf_back, pt, pt_minus));
             vec3 L = pt.beta * f * m.beta * u_vcm.merge.w;
             strategy_merge(m.segments, t, L, w);
