@@ -131,6 +131,7 @@ class VcmRenderer(Renderer):
         self._data: Any = None
         self._grid: Any = gl.buffer(reserve=16)
         self._grid.clear()
+        self._ordered: Any = None     # the camera pass's grid-ordered merge points
         self._allocate(VERTICES_PER_PATH * self.light_paths, MERGES_PER_PATH * self.light_paths)
         self._block = np.zeros(1, vl.VCM_PARAMS)[0]
         self._vcm_params.write(self._block.tobytes())
@@ -156,7 +157,9 @@ class VcmRenderer(Renderer):
         self._vcm_params.bind_to_uniform_block(bindings.UBO_VCM_PARAMS)
         self._vertices.bind_to_storage_buffer(bindings.SSBO_VCM_VERTICES)
         self._paths.bind_to_storage_buffer(bindings.SSBO_VCM_PATHS)
-        self._keys.bind_to_storage_buffer(bindings.SSBO_VCM_MERGE_KEYS)
+        # the light pass appends to the keys, the camera pass reads their grid-ordered copy
+        keys = self._ordered if self._ordered is not None else self._keys
+        keys.bind_to_storage_buffer(bindings.SSBO_VCM_MERGE_KEYS)
         self._data.bind_to_storage_buffer(bindings.SSBO_VCM_MERGE_DATA)
         self._grid.bind_to_storage_buffer(bindings.SSBO_VCM_GRID)
         self._counters.bind_to_storage_buffer(bindings.SSBO_VCM_COUNTERS)
@@ -180,6 +183,9 @@ class VcmRenderer(Renderer):
         r = self.radius(sample + 1)
         eta = math.pi * r * r * self.light_paths
         prm = self.param_block(sample, 1)
+        if self._ordered is not None:     # the light pass appends to the keys themselves
+            self._ordered.release()
+            self._ordered = None
         self.bind()
         self.write_params(prm)
         block = self._block
@@ -219,14 +225,21 @@ class VcmRenderer(Renderer):
         keys = np.frombuffer(self._keys.read(vl.MERGE_KEY_BYTES * merges), np.float32).reshape(merges, 4)
         order = np.argsort(keys[:, 3].view(np.uint32), kind="stable")
         grid = build_point_grid(keys[order, :3], r)
-        table = grid.offsets.astype(np.uint32) + np.uint32(grid.table_size + 1)
-        cells = np.concatenate([table, order[grid.order].astype(np.uint32)])
-        self._grid.release()
-        self._grid = self.gl.buffer(cells.tobytes())
+        # the positions in the grid's order, each with its merge point's index: a lookup
+        # reads its cells' entries one after another
+        index = order[grid.order]
+        ordered = keys[index].copy()
+        ordered[:, 3] = index.astype(np.uint32).view(np.float32)
+        for buf in (self._grid, self._ordered):
+            if buf is not None:
+                buf.release()
+        self._grid = self.gl.buffer(grid.offsets.astype(np.uint32).tobytes())
+        self._ordered = self.gl.buffer(ordered.tobytes())
         block["grid_size"] = (*grid.size, grid.table_size)
         block["grid_lo"] = (*grid.lo, grid.cell)
         self._vcm_params.write(block.tobytes())
         self._grid.bind_to_storage_buffer(bindings.SSBO_VCM_GRID)
+        self._ordered.bind_to_storage_buffer(bindings.SSBO_VCM_MERGE_KEYS)
 
     def _run_pass(self, first_sample: int, samples: int,
                   should_stop: Callable[[], bool] | None = None) -> bool:
@@ -305,7 +318,8 @@ class VcmRenderer(Renderer):
     def release(self) -> None:
         if getattr(self, "light_kernel", None) is not None:
             for buf in (self._vcm_params, self._paths, self._counters, self._vertices, self._keys,
-                        self._data, self._grid):
-                buf.release()
+                        self._data, self._grid, self._ordered):
+                if buf is not None:
+                    buf.release()
             self.light_kernel = None
         super().release()

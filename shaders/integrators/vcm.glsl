@@ -85,11 +85,12 @@ void vcm_store_merge(uint index, MergePoint m, uint key) {
     vcm_merge_data[k + 3u] = vec4(m.ref, float(m.segments), 0.0, 0.0);
 }
 
-MergePoint vcm_load_merge(uint index) {
+// Merge point `index` at position p (the camera pass reads positions in the grid's order).
+MergePoint vcm_load_merge(uint index, vec3 p) {
     uint k = uint(kVcmMergeTexels) * index;
     vec4 a = vcm_merge_data[k], b = vcm_merge_data[k + 1u], c = vcm_merge_data[k + 2u],
          d = vcm_merge_data[k + 3u];
-    return MergePoint(vcm_merge_keys[index].xyz, a.xyz, a.w, b.xyz, b.w, c.xyz, c.w, d.x, int(d.y));
+    return MergePoint(p, a.xyz, a.w, b.xyz, b.w, c.xyz, c.w, d.x, int(d.y));
 }
 
 // The merge point of light vertex q >= 1 (mergeable) of the subpath in g_light, after
@@ -240,15 +241,15 @@ vec3 vcm_merge(int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus) {
         skipped += end - begin - visit;
         for (uint e = begin; e < begin + visit; ++e) {
             LOOP_TICK();
-            uint index = vcm_grid[e];
-            vec3 d = vcm_merge_keys[index].xyz - pt.p;
+            vec4 key = vcm_merge_keys[e];
+            vec3 d = key.xyz - pt.p;
             if (dot(d, d) > r2) continue;
             // a disk on pt's surface, as photon mapping's (photon/photon_gather.glsl): light
             // vertices off it or on a surface facing another way (the other wall of a
             // corner) are not of this surface's density
             float h = dot(d, pt.ng);
             if (h * h > kDiscThickness * kDiscThickness * r2) continue;
-            MergePoint m = vcm_load_merge(index);
+            MergePoint m = vcm_load_merge(floatBitsToUint(key.w), key.xyz);
             if (abs(dot(m.ng, pt.ng)) < kNormalAgreement || m.segments > max_light_segments ||
                 !vertex_light_side_valid(pt, m.wi)) continue;
             float pdf_light, pdf_back;

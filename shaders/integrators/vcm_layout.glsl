@@ -26,16 +26,18 @@ layout(std430, binding = SSBO_VCM_VERTICES) buffer VcmVertices { vec4 vcm_vertic
 // 10: per light path: (first vertex slot, vertex count).
 layout(std430, binding = SSBO_VCM_PATHS) buffer VcmPaths { uvec2 vcm_paths[]; };
 
-// 11: merge points, appended in any order: (position xyz, key as uint bits: light path
-// index * 32 + vertex index, the canonical order the host sorts them by).
+// 11: merge points' positions. The light pass appends them in any order: (position xyz,
+// key as uint bits: light path index * 32 + vertex index, the canonical order the host
+// sorts them by); the camera pass reads them in the grid's order: (position xyz, the merge
+// point's index into 12 as uint bits).
 layout(std430, binding = SSBO_VCM_MERGE_KEYS) buffer VcmMergeKeys { vec4 vcm_merge_keys[]; };
 
 // 12: what a merge needs of a merge point, kVcmMergeTexels records each (vcm_store_merge).
 layout(std430, binding = SSBO_VCM_MERGE_DATA) buffer VcmMergeData { vec4 vcm_merge_data[]; };
 
 // 13: the merge points' grid (glrender/photon/grid.py build_point_grid): vcm_grid[h] ..
-// vcm_grid[h + 1] index vcm_grid itself, for each hash h < table size, and the entries
-// there are merge point indices (into 11 and 12).
+// vcm_grid[h + 1] are the positions in 11 (grid-ordered) of the merge points under hash
+// h, for each hash h < table size.
 layout(std430, binding = SSBO_VCM_GRID) readonly buffer VcmGrid { uint vcm_grid[]; };
 
 // 14: counters: [0] vertices stored, [1] merge points stored, [2] merge candidates skipped
