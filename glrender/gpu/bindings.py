@@ -56,6 +56,7 @@ SSBO_VCM_MERGE_KEYS = 11
 SSBO_VCM_MERGE_DATA = 12
 SSBO_VCM_GRID = 13
 SSBO_VCM_COUNTERS = 14
+SSBO_VCM_MERGE_SORT = 15
 
 # ---- texture units ----------------------------------------------------------------------
 # the BVH (geometry/bvh_layout.glsl; unit 3 is reserved for geometry)

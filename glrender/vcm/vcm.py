@@ -34,7 +34,7 @@ from ..errors import UsageError
 from ..gl import shaders
 from ..gl.context import current
 from ..gpu import bindings
-from ..photon.grid import build_point_grid
+from ..photon.grid import stable_argsort_u32
 from ..photon.sppm import footprint_radius
 from ..render import strategies
 from ..render.renderer import Renderer
@@ -48,6 +48,7 @@ DEFAULT_ALPHA = 0.75        # SmallVCM's: the radius falls as i^-0.125
 DEFAULT_RADIUS_PIXELS = 1.0
 VERTICES_PER_PATH = 4       # first guess of the vertex buffer (stored vertices per light path)
 MERGES_PER_PATH = 3         # and of the merge points'
+GRID_SLACK = 1e-3           # the merge grid's cells are 2 r (1 + this)
 
 
 @dataclass(frozen=True)
@@ -120,6 +121,7 @@ class VcmRenderer(Renderer):
         self.light_kernel = shaders.compile_compute(
             self.ctx, "kernels/vcm_light.comp.glsl", defines=self.defines, slots=self.slots,
             library=self.library)
+        self.order_kernel: Any = shaders.compile_compute(self.ctx, "kernels/vcm_order.comp.glsl")
         self.light_paths = self.width * self.height
         self._vertex_bytes = vl.vertex_bytes(bool(self.defines.get("GLRENDER_NORMAL_SHADOWING")))
         gl = self.gl
@@ -129,6 +131,7 @@ class VcmRenderer(Renderer):
         self._vertices: Any = None
         self._keys: Any = None
         self._data: Any = None
+        self._sort: Any = None
         self._grid: Any = gl.buffer(reserve=16)
         self._grid.clear()
         self._ordered: Any = None     # the camera pass's grid-ordered merge points
@@ -137,7 +140,7 @@ class VcmRenderer(Renderer):
         self._vcm_params.write(self._block.tobytes())
 
     def _allocate(self, vertices: int, merges: int) -> None:
-        for buf in (self._vertices, self._keys, self._data):
+        for buf in (self._vertices, self._keys, self._data, self._sort):
             if buf is not None:
                 buf.release()
         limit = self.binding_limit()
@@ -149,6 +152,7 @@ class VcmRenderer(Renderer):
         self._vertices = self.gl.buffer(reserve=max(16, self._vertex_bytes * vertices))
         self._keys = self.gl.buffer(reserve=max(16, vl.MERGE_KEY_BYTES * merges))
         self._data = self.gl.buffer(reserve=max(16, vl.MERGE_DATA_BYTES * merges))
+        self._sort = self.gl.buffer(reserve=max(16, vl.MERGE_SORT_BYTES * merges))
 
     def bind(self) -> None:
         super().bind()
@@ -163,6 +167,7 @@ class VcmRenderer(Renderer):
         self._data.bind_to_storage_buffer(bindings.SSBO_VCM_MERGE_DATA)
         self._grid.bind_to_storage_buffer(bindings.SSBO_VCM_GRID)
         self._counters.bind_to_storage_buffer(bindings.SSBO_VCM_COUNTERS)
+        self._sort.bind_to_storage_buffer(bindings.SSBO_VCM_MERGE_SORT)
 
     def _warm_up(self) -> None:
         super()._warm_up()
@@ -170,6 +175,11 @@ class VcmRenderer(Renderer):
             self.bind()
             self._vcm_params.write(self._block.tobytes())   # paths.x = 0: every invocation returns
             self.light_kernel.run(group_x=1)
+            one = self.gl.buffer(np.zeros(1, np.uint32).tobytes())   # one entry: merge point 0
+            one.bind_to_storage_buffer(bindings.SSBO_VCM_GRID)
+            self.order_kernel.run(group_x=1)
+            one.release()
+            self.bind()
             self.gl.finish()
 
     # -- one iteration -----------------------------------------------------------------------
@@ -190,9 +200,9 @@ class VcmRenderer(Renderer):
         self.write_params(prm)
         block = self._block
         block["merge"] = (r, r * r, eta, 1.0 / eta)
-        block["grid_size"] = 0
         splat = 1
         while True:
+            self._grid_geometry(r)
             self._counters.clear()
             block["paths"] = (self.light_paths, self.vertex_capacity, self.merge_capacity, splat)
             self._vcm_params.write(block.tobytes())
@@ -211,35 +221,50 @@ class VcmRenderer(Renderer):
         self.counters["merge_points"] += merges
         t1 = time.perf_counter()
         self.light_seconds += t1 - t0
-        self._build_grid(merges, r)
+        self._build_grid(merges)
         self.grid_seconds += time.perf_counter() - t1
 
-    def _build_grid(self, merges: int, r: float) -> None:
-        """The merge points' hash grid, in the order of their keys (light path, vertex):
-        the device appends them in any order, the grid and the sums over it do not."""
+    def _grid_geometry(self, r: float) -> None:
+        """The merge grid of radius r into the parameter block, before the light pass hashes
+        its merge points into it: cells of edge 2r (with the slack of the photon grids, so a
+        float32 lookup near a cell boundary finds what it should) over a box around the
+        scene's bounding sphere, a hash table of one entry per merge point of capacity."""
+        center, radius = self.packed.sphere_bounds
+        cell = 2.0 * r * (1.0 + GRID_SLACK)
+        lo = np.asarray(center, np.float64) - radius - cell
+        size = min(int((2.0 * radius + 2.0 * cell) // cell) + 1, 1 << 30)
+        self._block["grid_size"] = (size, size, size, self.merge_capacity)
+        self._block["grid_lo"] = (*lo, cell)
+
+    def _build_grid(self, merges: int) -> None:
+        """The merge points in the grid's order: by cell hash, and within a hash by key
+        (light path, vertex): the device appends them in any order, the grid and the sums
+        over it do not depend on it. The light pass hashed them (vcm_merge_sort); here two
+        stable integer sorts and the offsets per hash, and kernels/vcm_order.comp.glsl
+        copies the positions in that order."""
         block = self._block
         if merges == 0:
-            block["grid_size"] = 0
+            block["grid_size"][3] = 0
             self._vcm_params.write(block.tobytes())
             return
-        keys = np.frombuffer(self._keys.read(vl.MERGE_KEY_BYTES * merges), np.float32).reshape(merges, 4)
-        order = np.argsort(keys[:, 3].view(np.uint32), kind="stable")
-        grid = build_point_grid(keys[order, :3], r)
-        # the positions in the grid's order, each with its merge point's index: a lookup
-        # reads its cells' entries one after another
-        index = order[grid.order]
-        ordered = keys[index].copy()
-        ordered[:, 3] = index.astype(np.uint32).view(np.float32)
+        pairs = np.frombuffer(self._sort.read(8 * merges), np.uint32).reshape(merges, 2)
+        by_key = stable_argsort_u32(pairs[:, 0])
+        order = by_key[stable_argsort_u32(pairs[by_key, 1])].astype(np.uint32)
+        table = int(block["grid_size"][3])
+        offsets = np.zeros(table + 1, np.uint32)
+        np.cumsum(np.bincount(pairs[:, 1], minlength=table), out=offsets[1:])
         for buf in (self._grid, self._ordered):
             if buf is not None:
                 buf.release()
-        self._grid = self.gl.buffer(grid.offsets.astype(np.uint32).tobytes())
-        self._ordered = self.gl.buffer(ordered.tobytes())
-        block["grid_size"] = (*grid.size, grid.table_size)
-        block["grid_lo"] = (*grid.lo, grid.cell)
-        self._vcm_params.write(block.tobytes())
-        self._grid.bind_to_storage_buffer(bindings.SSBO_VCM_GRID)
-        self._ordered.bind_to_storage_buffer(bindings.SSBO_VCM_MERGE_KEYS)
+        self._ordered = self.gl.buffer(reserve=vl.MERGE_KEY_BYTES * merges)
+        order_buf = self.gl.buffer(order.tobytes())
+        self._keys.bind_to_storage_buffer(bindings.SSBO_VCM_MERGE_KEYS)
+        order_buf.bind_to_storage_buffer(bindings.SSBO_VCM_GRID)
+        self._ordered.bind_to_storage_buffer(bindings.SSBO_VCM_MERGE_SORT)
+        self.order_kernel.run(group_x=-(-merges // 64))
+        order_buf.release()
+        self._grid = self.gl.buffer(offsets.tobytes())
+        self.bind()
 
     def _run_pass(self, first_sample: int, samples: int,
                   should_stop: Callable[[], bool] | None = None) -> bool:
@@ -318,7 +343,7 @@ class VcmRenderer(Renderer):
     def release(self) -> None:
         if getattr(self, "light_kernel", None) is not None:
             for buf in (self._vcm_params, self._paths, self._counters, self._vertices, self._keys,
-                        self._data, self._grid, self._ordered):
+                        self._data, self._sort, self._grid, self._ordered):
                 if buf is not None:
                     buf.release()
             self.light_kernel = None

@@ -51,6 +51,7 @@
 #define SSBO_VCM_MERGE_DATA 12
 #define SSBO_VCM_GRID 13
 #define SSBO_VCM_COUNTERS 14
+#define SSBO_VCM_MERGE_SORT 15
 
 // ---- texture units ----------------------------------------------------------------------
 // the BVH (geometry/bvh_layout.glsl; unit 3 is reserved for geometry)

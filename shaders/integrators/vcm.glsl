@@ -1,8 +1,9 @@
 // Vertex connection and merging (Georgiev, Křivánek, Davidovič and Slusallek 2012): the
 // camera pass of one iteration. Each iteration a light pass (kernels/vcm_light.comp.glsl)
 // traces one light subpath per pixel, splats its lens connections (t = 1) and stores its
-// vertices and merge points; the host sorts the merge points into a hash grid of cell
-// 2r (glrender/vcm/vcm.py). Here each pixel's camera subpath takes every strategy of
+// vertices and merge points, each with its cell's hash in a grid of cell 2r; the host
+// orders them by cell (glrender/vcm/vcm.py) and kernels/vcm_order.comp.glsl copies them
+// in that order. Here each pixel's camera subpath takes every strategy of
 // bdpt (integrators/bidir.glsl: s = 0, next-event estimation, connections to the light
 // subpath of the same index) and merges at each of its non-delta surface vertices with
 // the light vertices within the iteration's radius r:
@@ -167,7 +168,10 @@ void vcm_light_path(uint j) {
     for (int q = 1; q < n; ++q) {
         LOOP_TICK();
         if (!info_mergeable(g_light[q].info)) continue;
-        vcm_store_merge(at, vcm_merge_point(q), j * 32u + uint(q));
+        MergePoint m = vcm_merge_point(q);
+        uint key = j * 32u + uint(q);
+        vcm_store_merge(at, m, key);
+        vcm_merge_sort[at] = uvec2(key, vcm_grid_hash(vcm_grid_cell(m.p)));
         at += 1u;
     }
 }
@@ -225,8 +229,7 @@ vec3 vcm_merge(int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus) {
         ivec3 c = base + ivec3(i & 1, (i >> 1) & 1, i >> 2);
         buckets[i] = 0xffffffffu;
         if (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(size.xyz)))) continue;
-        uvec3 u = uvec3(c);
-        uint h = ((u.x * 73856093u) ^ (u.y * 19349663u) ^ (u.z * 83492791u)) % size.w;
+        uint h = vcm_grid_hash(c);
         for (int j = 0; j < i; ++j)
             if (buckets[j] == h) h = 0xffffffffu;
         buckets[i] = h;

@@ -11,7 +11,8 @@ layout(std140, binding = UBO_VCM_PARAMS) uniform VcmParams {
     uvec4 paths;       // x: light paths of the iteration, y: vertex capacity, z: merge point
                        // capacity, w: splat the lens connections (1; 0 when an iteration whose
                        // buffers overflowed is traced again)
-    uvec4 grid_size;   // the merge points' grid: xyz cells along each axis, w: hash table size (0: empty)
+    uvec4 grid_size;   // the merge points' grid: xyz cells along each axis, w: hash table size
+                       // (the merge point capacity; 0 in the camera pass: no merge points)
     vec4 grid_lo;      // xyz: corner of cell (0, 0, 0), w: cell edge (twice the radius at least)
     vec4 merge;        // x: radius, y: radius^2, z: eta = pi r^2 (light paths), the merges' density
                        // factor in the MIS weights, w: 1 / eta, the merge's kernel normalisation
@@ -35,11 +36,28 @@ layout(std430, binding = SSBO_VCM_MERGE_KEYS) buffer VcmMergeKeys { vec4 vcm_mer
 // 12: what a merge needs of a merge point, kVcmMergeTexels records each (vcm_store_merge).
 layout(std430, binding = SSBO_VCM_MERGE_DATA) buffer VcmMergeData { vec4 vcm_merge_data[]; };
 
-// 13: the merge points' grid (glrender/photon/grid.py build_point_grid): vcm_grid[h] ..
-// vcm_grid[h + 1] are the positions in 11 (grid-ordered) of the merge points under hash
-// h, for each hash h < table size.
+// 13: the merge points' grid: vcm_grid[h] .. vcm_grid[h + 1] are the positions in 11
+// (grid-ordered) of the merge points under hash h, for each hash h < table size.
 layout(std430, binding = SSBO_VCM_GRID) readonly buffer VcmGrid { uint vcm_grid[]; };
 
 // 14: counters: [0] vertices stored, [1] merge points stored, [2] merge candidates skipped
 // by the bound, [3] merge candidates visited.
 layout(std430, binding = SSBO_VCM_COUNTERS) buffer VcmCounters { uint vcm_counters[]; };
+
+// 15: per merge point as the light pass stored it: (key, as in 11; its grid cell's hash
+// < grid_size.w). The host orders the merge points by key, then stably by hash (two
+// integer sorts), and kernels/vcm_order.comp.glsl writes 11's grid-ordered copy.
+layout(std430, binding = SSBO_VCM_MERGE_SORT) buffer VcmMergeSort { uvec2 vcm_merge_sort[]; };
+
+// The grid cell of world point p (the merge grid of u_vcm: fixed before the light pass, a
+// box around the scene's bounding sphere with cells of edge grid_lo.w), clamped to it.
+ivec3 vcm_grid_cell(vec3 p) {
+    return clamp(ivec3(floor((p - u_vcm.grid_lo.xyz) / u_vcm.grid_lo.w)), ivec3(0),
+                 ivec3(u_vcm.grid_size.xyz) - 1);
+}
+
+// Spatial hash of a grid cell (Teschner et al. 2003) into the table of grid_size.w entries.
+uint vcm_grid_hash(ivec3 c) {
+    uvec3 u = uvec3(c);
+    return ((u.x * 73856093u) ^ (u.y * 19349663u) ^ (u.z * 83492791u)) % u_vcm.grid_size.w;
+}

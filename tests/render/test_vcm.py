@@ -124,12 +124,12 @@ def test03_one_dispatch_or_many_and_the_seed_bitwise(gl_ctx, mode):
 def test04_storage_grows_and_the_image_stays(gl_ctx, monkeypatch):
     """Buffers first sized for 1 vertex and 1 merge point per light path overflow; the light
     pass is traced again into larger ones (its lens splats not repeated) and the image is
-    bitwise the one with room from the start. Stored bytes: 96 per vertex, 80 per merge
-    point (its key and data)."""
+    bitwise the one with room from the start. Stored bytes: 96 per vertex, 88 per merge
+    point (its position and key, its data, its key and cell hash for the sorts)."""
     scene = caustic(16)
     roomy, stats = vcm_image(gl_ctx, scene, 2)
     assert stats["vcm"]["counters"]["retraced"] == 0
-    assert stats["vcm"]["bytes_per_vertex"] == 96 and stats["vcm"]["bytes_per_merge_point"] == 80
+    assert stats["vcm"]["bytes_per_vertex"] == 96 and stats["vcm"]["bytes_per_merge_point"] == 88
     monkeypatch.setattr(vcm_module, "VERTICES_PER_PATH", 1)
     monkeypatch.setattr(vcm_module, "MERGES_PER_PATH", 1)
     tight, stats = vcm_image(gl_ctx, scene, 2)
