@@ -38,20 +38,25 @@ CAUSTIC_WINDOW = (slice(130, 170), slice(130, 200))
 
 GLRENDER_SCRIPT = r"""
 import json, sys, time, numpy as np, glrender
-from glrender.render.renderer import Renderer, settings_from_scene
+from glrender.drivers import create_driver, options_class
+from glrender.render.renderer import settings_from_scene
 toml, integrator, seconds, seed, out = sys.argv[1:6]
 seconds, seed = float(seconds), int(seed)
 scene = glrender.load(toml)
-r = Renderer(scene, settings_from_scene(scene, integrator=integrator, seed=seed, spp=1 << 20))
+options = options_class(integrator)      # the integrator's own settings (sppm, vcm): defaults
+r = create_driver(scene, settings_from_scene(scene, integrator=integrator, seed=seed, spp=1 << 20),
+                  None if options is None else options())
 r.step(r.samples_per_pass)   # warm-up: the first pass's dispatches
 r.reset()
+before = r.stats()           # what the warm-up counted (vcm's light pass and grid seconds)
 t0 = time.perf_counter()
 while time.perf_counter() - t0 < seconds:
     r.step(r.samples_per_pass)
 t = time.perf_counter() - t0
 f = r.film()
 np.save(out, f.mean)
-print(json.dumps({"seconds": t, "spp": f.spp, "device": r.ctx.renderer}))
+print(json.dumps({"seconds": t, "spp": f.spp, "device": r.ctx.renderer, "stats_before": before,
+                  "stats": r.stats()}, default=str))
 """
 
 
@@ -79,25 +84,32 @@ def mse_of(img, ref, ref_var, window=None):
     return max(err - noise, 1e-30)
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def arguments(doc: str) -> argparse.Namespace:
+    """--seconds, --rounds and --scenes of an equal-time benchmark (``doc``: its docstring)."""
+    ap = argparse.ArgumentParser(description=doc.split("\n\n")[0])
     ap.add_argument("--seconds", type=float, default=20.0, help="render time per config")
     ap.add_argument("--rounds", type=int, default=1, help="alternating rounds (medians reported)")
     ap.add_argument("--scenes", default="cornell,door,caustic")
-    args = ap.parse_args()
-    tmp = Path(tempfile.mkdtemp(prefix="glrender-bdpt-bench-"))
+    return ap.parse_args()
+
+
+def equal_time(tmp: Path, args, integrators, extra=None):
+    """Per scene of ``args.scenes``: render glrender's ``integrators`` and, where the scene
+    has a Mitsuba XML, Mitsuba's path tracer (independent, multijitter), each config in its
+    own process for ``args.seconds`` after its warm-up, in ``args.rounds`` rounds that
+    alternate the configs. Yields (scene, label -> the rounds' medians, the device glrender
+    ran on); a median record holds seconds, spp, mse, mse_window, spp_s, mean, eff,
+    eff_window and what ``extra(info)`` adds from the config's JSON output."""
     table = scenes(tmp)
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                            cwd=ROOT).stdout.strip()
-    rows, device = [], None
     for name in args.scenes.split(","):
         toml, xml, ref_path, ref_var = table[name]
         ref = np.load(ref_path).astype(np.float64)[..., :3]
-        configs = [(f"glrender {k}", "glrender", k) for k in ("path", "bdpt", "lighttrace")]
+        configs = [(f"glrender {k}", "glrender", k) for k in integrators]
         if xml is not None:
             configs += [("Mitsuba path, independent", "mitsuba", "independent"),
                         ("Mitsuba path, multijitter", "mitsuba", "multijitter")]
         results: dict[str, list[dict]] = {}
+        device = None
         for rnd in range(args.rounds):
             for label, who, what in configs:
                 out = tmp / f"{name}-{label.replace(' ', '_').replace(',', '')}-{rnd}.npy"
@@ -113,13 +125,24 @@ def main() -> None:
                 mse_w = mse_of(img, ref, ref_var, CAUSTIC_WINDOW)
                 results.setdefault(label, []).append({
                     "seconds": info["seconds"], "spp": info["spp"], "mse": mse, "mse_window": mse_w,
-                    "spp_s": info["spp"] / info["seconds"], "mean": float(img.mean() / ref.mean() - 1)})
+                    "spp_s": info["spp"] / info["seconds"], "mean": float(img.mean() / ref.mean() - 1),
+                    **(extra(info) if extra is not None else {})})
                 print(f"[{name}] round {rnd + 1} {label:28s} {info['spp']:6d} spp  RMSE {mse ** 0.5:.4g} "
                       f"(window {mse_w ** 0.5:.4g})  mean {img.mean() / ref.mean() - 1:+.2%}", flush=True)
         med = {label: {k: float(np.median([r[k] for r in rs])) for k in rs[0]} for label, rs in results.items()}
         for m in med.values():
             m["eff"] = 1.0 / (m["mse"] * m["seconds"])
             m["eff_window"] = 1.0 / (m["mse_window"] * m["seconds"])
+        yield name, med, device
+
+
+def main() -> None:
+    args = arguments(__doc__)
+    tmp = Path(tempfile.mkdtemp(prefix="glrender-bdpt-bench-"))
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                            cwd=ROOT).stdout.strip()
+    rows = []
+    for name, med, device in equal_time(tmp, args, ("path", "bdpt", "lighttrace")):
         path = med["glrender path"]
         mitsuba = med.get("Mitsuba path, independent")
         for label, m in med.items():
@@ -130,16 +153,24 @@ def main() -> None:
     write_results(rows, device, commit, args)
 
 
+def conditions(commit, device, args, load=None) -> str:
+    """The opening of a run's header paragraph: date, commit, devices, ``load`` (the load
+    average at the start and the end) where given, the time each config renders and how the
+    error and the efficiency are measured."""
+    load = "" if load is None else f"; load average {load[0]:.2f} at the start, {load[1]:.2f} at the end"
+    return (f"{datetime.date.today()}, commit `{commit}`, glrender on `{device}`, Mitsuba 3 `llvm_ad_rgb` "
+            f"on the same CPU ({os.cpu_count()} cores, shared with other work: timings are noisy{load}). "
+            f"Each config renders {args.seconds:g} s after its warm-up, {args.rounds} round(s), "
+            f"medians. MSE against the scene's reference minus the reference's own noise where "
+            f"known (Cornell, door); 'window' = the caustic window, rows 130-170 x columns 130-200. "
+            f"Efficiency = 1/(MSE x time)")
+
+
 def write_results(rows, device, commit, args) -> None:
     ratio = lambda r: "—" if r is None else f"{r:.2f}x"  # noqa: E731
     lines = [f"{MARKER}: bdpt and lighttrace vs the path tracer and Mitsuba 3 (equal time)", "",
-             f"{datetime.date.today()}, commit `{commit}`, glrender on `{device}`, Mitsuba 3 `llvm_ad_rgb` "
-             f"on the same CPU ({os.cpu_count()} cores, shared with other work: timings are noisy). "
-             f"Each config renders {args.seconds:.0f} s after its warm-up, {args.rounds} round(s), "
-             f"medians. MSE against the scene's reference minus the reference's own noise where "
-             f"known (Cornell, door); 'window' = the caustic window, rows 130-170 x columns 130-200. "
-             f"Efficiency = 1/(MSE x time); 'time to path MSE' = the time to reach our path tracer's "
-             f"equal-time MSE. Rerun: `.venv/bin/python benchmarks/bdpt.py`.", "",
+             conditions(commit, device, args) + "; 'time to path MSE' = the time to reach our path "
+             "tracer's equal-time MSE. Rerun: `.venv/bin/python benchmarks/bdpt.py`.", "",
              "| scene | renderer | spp/s | RMSE | RMSE window | mean vs ref | eff. vs our path | "
              "window eff. vs our path | eff. vs Mitsuba | window eff. vs Mitsuba | time to path MSE |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
