@@ -4,7 +4,7 @@ Scenes: the Cornell box and the caustic scene (shared Mitsuba references) and th
 scene (reference: benchmarks/door_reference.py, its own noise subtracted), as in
 benchmarks/bdpt.py. No scene with participating media exists yet, so none is measured.
 Configs: glrender path, bdpt, sppm (default SppmSettings) and vcm (default VcmSettings:
-connections and merges, alpha 0.75, initial radius two pixel footprints), the scenes'
+connections and merges, alpha 0.75, initial radius one pixel footprint), the scenes'
 sampler and max depth, and Mitsuba 3's path tracer (llvm_ad_rgb, independent and
 multijitter) where the scene exists in Mitsuba's format (Cornell box, caustic; not the
 door). Each config renders in its own process for the same wall time after its kernels
@@ -15,8 +15,9 @@ Reported per scene and config: spp/s (iterations/s), RMSE against the reference 
 image and the caustic window, rows 130-170 x columns 130-200), mean against the
 reference, efficiency 1 / (MSE x time), vcm's efficiency over the best of glrender path,
 bdpt and sppm, and every config's over Mitsuba's independent path tracer. For vcm also
-the share of the render time spent building the merge grid on the host (sort, grid,
-upload; the merge points' read-back included) and in the light pass (from an iteration's
+the share of the render time spent ordering the merge points into their grid (the
+read-back of their keys and cell hashes, the host's two integer sorts, the offsets'
+upload and the ordering dispatch) and in the light pass (from an iteration's
 start to its counters' read-back: the dispatch, any retrace, and whatever of the previous
 camera pass the device still runs). Targets printed under the table: on the door and the
 caustic, vcm's equal-time RMSE within 1.25x of the best of path, bdpt and sppm; on the
