@@ -103,8 +103,11 @@ case "$cmd" in
     test)
         system_packages test
         python_env test,exr,preview,lab,distributed,denoise,docs
-        # pytest exits 5 when it collects no tests: that is a failure here too.
-        exec .venv/bin/python -m pytest "$@"
+        # pytest exits 5 when it collects no tests: that is a failure here too. Two workers
+        # (pytest-xdist), each test file whole in one of them (its module fixtures made once):
+        # shader compilation is single-threaded, so two cores compile two kernels at once.
+        # GLRENDER_TEST_WORKERS=0 (or "-n 0" among the arguments) runs in one process.
+        exec .venv/bin/python -m pytest -n "${GLRENDER_TEST_WORKERS:-2}" --dist loadfile "$@"
         ;;
     *)
         echo "usage: ./dev.sh render [glrender render options] | ./dev.sh test [pytest args]" >&2
