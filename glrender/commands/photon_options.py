@@ -8,12 +8,12 @@ from typing import Any
 from ..errors import UsageError
 from ..photon.photon import PhotonSettings
 from ..photon.sppm import SppmSettings
-from ..vcm.vcm import DEFAULT_ALPHA, MODES, VcmSettings
+from ..vcm.vcm import DEFAULT_ALPHA, MAX_LIGHT_PATHS, MODES, VcmSettings
 
 SPPM_OPTIONS = ("iterations", "initial_radius", "alpha")
 PHOTON_OPTIONS = ("caustic_photons", "radius", "knn", "final_gather")
 SHARED_OPTIONS = ("photons_per_iteration", "kernel")   # --photons: per iteration (sppm) or per map
-VCM_OPTIONS = ("vcm_mode",)          # vcm takes SPPM_OPTIONS too
+VCM_OPTIONS = ("vcm_mode", "light_paths")          # vcm takes SPPM_OPTIONS too
 OPTIONS = SHARED_OPTIONS + SPPM_OPTIONS + PHOTON_OPTIONS + VCM_OPTIONS   # saved in checkpoints
 #: the options each of these integrators takes
 TAKES = {"sppm": SHARED_OPTIONS + SPPM_OPTIONS, "photon": SHARED_OPTIONS + PHOTON_OPTIONS,
@@ -43,6 +43,9 @@ def add_arguments(parser: Any) -> None:
     g.add_argument("--vcm-mode", choices=tuple(MODES), default=None,
                    help="vcm: connections and merges (vcm, the default), connections alone (bpt: "
                         "bdpt itself) or merges alone (vm: progressive photon mapping)")
+    g.add_argument("--light-paths", type=int, default=None, metavar="N",
+                   help="vcm: light paths per iteration (default: one per pixel; more: more merge "
+                        "points and lens connections, fewer: pixels share the one they connect to)")
     g.add_argument("--caustic-photons", type=int, default=None, metavar="N",
                    help="photon: photons traced for the caustic map (default: as --photons)")
     g.add_argument("--radius", type=float, default=None, metavar="R",
@@ -83,9 +86,13 @@ def photon_options(args: Any, kind: str) -> tuple[int | None, SppmSettings | Pho
             raise UsageError(f"--initial-radius {radius}: expected a positive number of scene units")
         if alpha is not None and not 0 < alpha < 1:
             raise UsageError(f"--alpha {alpha}: expected a number in (0, 1)")
+        paths = getattr(args, "light_paths", None)
+        if paths is not None and not 1 <= paths <= MAX_LIGHT_PATHS:
+            raise UsageError(f"--light-paths {paths}: expected an integer in [1, {MAX_LIGHT_PATHS}]")
         return iterations, VcmSettings(mode=getattr(args, "vcm_mode", None) or "vcm",
                                        initial_radius=radius,
-                                       alpha=DEFAULT_ALPHA if alpha is None else alpha)
+                                       alpha=DEFAULT_ALPHA if alpha is None else alpha,
+                                       light_paths=paths)
     if kind == "photon":
         if "radius" in aovs:
             raise UsageError("--aov radius: only with --integrator sppm (the photon integrator's "

@@ -9,8 +9,9 @@ VCM_PARAMS = np.dtype([
     ("grid_size", "<u4", 4),   # cells xyz, hash table size
     ("grid_lo", "<f4", 4),     # corner xyz, cell edge
     ("merge", "<f4", 4),       # radius, radius^2, eta = pi r^2 N, 1 / eta
+    ("lens", "<f4", 4),        # N / (W H), W H / N (the lens connections' density, splat weight)
 ])
-assert VCM_PARAMS.itemsize == 64
+assert VCM_PARAMS.itemsize == 80
 
 #: bytes per stored light vertex (kVcmVertexTexels records of 16 bytes; 7 in scenes whose
 #: normal maps have the shadowing term, which keeps the unperturbed normal)

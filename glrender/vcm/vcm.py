@@ -49,19 +49,34 @@ DEFAULT_RADIUS_PIXELS = 1.0
 VERTICES_PER_PATH = 4       # first guess of the vertex buffer (stored vertices per light path)
 MERGES_PER_PATH = 3         # and of the merge points'
 GRID_SLACK = 1e-3           # the merge grid's cells are 2 r (1 + this)
+MAX_LIGHT_PATHS = 1 << 26   # a merge point's key holds the light path index in 27 bits
+
+
+def groups_2d(invocations: int) -> tuple[int, int]:
+    """Work groups of 64 for ``invocations``, in rows of at most 65,535 (GL's guaranteed
+    count along one axis): (x, y); the kernels number them row by row."""
+    groups = max(1, -(-invocations // 64))
+    rows = -(-groups // 65535)
+    return -(-groups // rows), rows
 
 
 @dataclass(frozen=True)
 class VcmSettings:
     """vcm's own parameters: ``mode`` (vcm, vm or bpt), ``initial_radius`` r_1 in scene
-    units (None: DEFAULT_RADIUS_PIXELS pixel footprints at the scene's centre) and ``alpha`` in
-    (0, 1), the radius schedule r_i = r_1 i^((alpha - 1) / 2)."""
+    units (None: DEFAULT_RADIUS_PIXELS pixel footprints at the scene's centre), ``alpha`` in
+    (0, 1), the radius schedule r_i = r_1 i^((alpha - 1) / 2), and ``light_paths`` traced
+    per iteration (None: one per pixel; fewer: pixels share the one they connect to)."""
 
     mode: str = "vcm"
     initial_radius: float | None = None
     alpha: float = DEFAULT_ALPHA
+    light_paths: int | None = None     # per iteration (None: one per pixel)
 
     def __post_init__(self) -> None:
+        n = self.light_paths
+        if n is not None and (not isinstance(n, (int, np.integer)) or isinstance(n, bool)
+                              or not 1 <= n <= MAX_LIGHT_PATHS):
+            raise UsageError(f"light paths: expected an integer in [1, {MAX_LIGHT_PATHS}], got {n!r}")
         if self.mode not in MODES:
             raise UsageError(f"vcm mode: expected one of {', '.join(MODES)}, got {self.mode!r}")
         r = self.initial_radius
@@ -122,7 +137,7 @@ class VcmRenderer(Renderer):
             self.ctx, "kernels/vcm_light.comp.glsl", defines=self.defines, slots=self.slots,
             library=self.library)
         self.order_kernel: Any = shaders.compile_compute(self.ctx, "kernels/vcm_order.comp.glsl")
-        self.light_paths = self.width * self.height
+        self.light_paths = int(self.vcm.light_paths or self.width * self.height)
         self._vertex_bytes = vl.vertex_bytes(bool(self.defines.get("GLRENDER_NORMAL_SHADOWING")))
         gl = self.gl
         self._vcm_params = gl.buffer(reserve=vl.VCM_PARAMS.itemsize)
@@ -200,13 +215,15 @@ class VcmRenderer(Renderer):
         self.write_params(prm)
         block = self._block
         block["merge"] = (r, r * r, eta, 1.0 / eta)
+        per_sample = self.light_paths / (self.width * self.height)
+        block["lens"] = (per_sample, 1.0 / per_sample, 0.0, 0.0)
         splat = 1
         while True:
             self._grid_geometry(r)
             self._counters.clear()
             block["paths"] = (self.light_paths, self.vertex_capacity, self.merge_capacity, splat)
             self._vcm_params.write(block.tobytes())
-            self.light_kernel.run(group_x=-(-self.light_paths // 64))
+            self.light_kernel.run(*groups_2d(self.light_paths))
             counts = np.frombuffer(self._counters.read(), np.uint32)
             vertices, merges = int(counts[0]), int(counts[1])
             if vertices <= self.vertex_capacity and merges <= self.merge_capacity:
@@ -261,7 +278,7 @@ class VcmRenderer(Renderer):
         self._keys.bind_to_storage_buffer(bindings.SSBO_VCM_MERGE_KEYS)
         order_buf.bind_to_storage_buffer(bindings.SSBO_VCM_GRID)
         self._ordered.bind_to_storage_buffer(bindings.SSBO_VCM_MERGE_SORT)
-        self.order_kernel.run(group_x=-(-merges // 64))
+        self.order_kernel.run(*groups_2d(merges))
         order_buf.release()
         self._grid = self.gl.buffer(offsets.tobytes())
         self.bind()
@@ -337,7 +354,8 @@ class VcmRenderer(Renderer):
 
     def _vcm_inputs(self) -> list[tuple[str, bytes]]:
         v = self.vcm
-        return [("vcm settings", repr(("vcm", v.mode, v.initial_radius, v.alpha)).encode())]
+        return [("vcm settings", repr(("vcm", v.mode, v.initial_radius, v.alpha,
+                                       v.light_paths)).encode())]
 
     @current
     def release(self) -> None:

@@ -220,6 +220,21 @@ float mis_ratio(float pdf_rev, float pdf_fwd) {
 #define VC_ON 1.0
 #define VC_AT(i) 1.0
 #endif
+// The connection that ends the camera subpath after t vertices (VC_CAM(t)), relative to the
+// others: vcm's light pass traces N light paths for the W H camera samples of an iteration,
+// so its lens connections (t = 1) have N / (W H) times the density of one per sample
+// (vcm_lens_ratio); a t = 1 strategy's own weight divides the others' ratios by it
+// (VC_SELF_DIV). bdpt has one light path per sample: the factor is not there.
+#if GLRENDER_VCM_MODE == 1
+#define VC_CAM(t) ((t) == 1 ? vcm_lens_ratio() : 1.0)
+#define VC_SELF_DIV(t, x) ((t) == 1 ? (x) / vcm_lens_ratio() : (x))
+#elif GLRENDER_VCM_MODE == 2
+#define VC_CAM(t) 0.0
+#define VC_SELF_DIV(t, x) x
+#else
+#define VC_CAM(t) 1.0
+#define VC_SELF_DIV(t, x) x
+#endif
 
 // Whether a vertex of this info word can be merged at: a surface point with a non-delta
 // BSDF (a light subpath's first vertex, on the light, is never one: callers check). At a
@@ -238,6 +253,12 @@ bool info_merge_inside(uint info) {
 // as in mis_ratio).
 float vcm_merge_ratio(float pdf_fwd) {
     float r = u_vcm.merge.z * (pdf_fwd != 0.0 ? pdf_fwd : 1.0);
+    return kStrategy == kStrategyMisBalance ? r : r * r;
+}
+
+// (N / (W H))^e: the lens connections' density factor (VC_CAM).
+float vcm_lens_ratio() {
+    float r = u_vcm.lens.x;
     return kStrategy == kStrategyMisBalance ? r : r * r;
 }
 #endif
@@ -276,7 +297,7 @@ void bdpt_mis_prepare_camera(int n_camera) {
         LOOP_TICK();
         bool valid = !info_delta(g_camera[i].info) && !info_delta(g_camera[i - 1].info);
         c = mis_step(mis_ratio(g_camera[i].pdf_rev, g_camera[i].pdf_fwd),
-                     c + (valid ? VC_ON : 0.0) VM_TERM(info_merge_inside(g_camera[i].info), g_camera[i].pdf_fwd));
+                     c + (valid ? VC_CAM(i) : 0.0) VM_TERM(info_merge_inside(g_camera[i].info), g_camera[i].pdf_fwd));
         STORE_AT(g_camera_mis, i, c);
     }
 }
@@ -315,10 +336,10 @@ float camera_side_sum(int t, float pt_rev, float pt_minus_rev, bool merge_pt) {
         float tail = g_camera_mis[max(t - 3, 0)];
         bool valid = !delta_minus && !info_delta(g_camera[t - 3].info);
         inner = mis_step(mis_ratio(pt_minus_rev, g_camera[t - 2].pdf_fwd),
-                         (valid ? VC_ON : 0.0) VM_TERM(info_merge_inside(g_camera[t - 2].info), g_camera[t - 2].pdf_fwd) + tail);
+                         (valid ? VC_CAM(t - 2) : 0.0) VM_TERM(info_merge_inside(g_camera[t - 2].info), g_camera[t - 2].pdf_fwd) + tail);
     }
     return mis_step(mis_ratio(pt_rev, g_camera[t - 1].pdf_fwd),
-                    (!delta_minus ? VC_ON : 0.0) VM_TERM(merge_pt && info_mergeable(g_camera[t - 1].info), g_camera[t - 1].pdf_fwd) + inner);
+                    (!delta_minus ? VC_CAM(t - 1) : 0.0) VM_TERM(merge_pt && info_mergeable(g_camera[t - 1].info), g_camera[t - 1].pdf_fwd) + inner);
 }
 
 // MIS weight of strategy (s, t) given the densities its connection changes, the forward
@@ -347,7 +368,7 @@ float bdpt_mis_weight_ends(int s, int t, ConnectionPdfs c, float qs_fwd, bool de
         light = mis_step(mis_ratio(c.qs_rev, qs_fwd),
                          (!delta_minus ? VC_AT(s - 1) : 0.0) VM_TERM(s >= 2 && info_mergeable(g_light[max(s - 1, 0)].info), qs_fwd) + inner);
     }
-    return 1.0 / (1.0 + cam + light);
+    return 1.0 / (1.0 + VC_SELF_DIV(t, cam + light));
 }
 
 // MIS weight of strategy (s, t) given the densities its connection changes (the

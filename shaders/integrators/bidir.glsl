@@ -27,6 +27,13 @@
 #include "integrators/splat.glsl"
 #include "integrators/bdpt_vertex.glsl"
 #include "integrators/strategy_images.glsl"
+// vcm's splats: its light pass traces N light paths for W H camera samples, and the film
+// divides the splats by W H per iteration (the light paths bdpt traces): each counts W H / N.
+#if GLRENDER_VCM_MODE == 1
+#define LENS_SCALE * u_vcm.lens.y
+#else
+#define LENS_SCALE
+#endif
 // The strategies weigh with the densities of their own BSDF evaluations; tests set
 // kBdptGenericWeights to evaluate every density afresh instead (the same bits).
 // Next-event estimation and lens connections pass their own light or lens vertex (the
@@ -272,7 +279,7 @@ void strategy_lens(int s, inout SamplerState smp) {
     if (!c.valid) return;
     Vertex qs_minus = light_point(s - 2);
     float pdf_lens, pdf_back;
-    vec3 L = qs.beta * vertex_f(qs, qs_minus.p, c.p, true, pdf_lens, pdf_back) * c.importance;
+    vec3 L = qs.beta * vertex_f(qs, qs_minus.p, c.p, true, pdf_lens, pdf_back) * c.importance LENS_SCALE;
     Vertex lens = vertex_point(kVertexCamera, c.p, vec3(0.0), vec3(1.0));
     if (max_component(L) <= 0.0 || !segment_visible(qs, lens, kNoPrimitive)) return;
     ConnectionPdfs cp = ConnectionPdfs(solid_angle_to_area(pdf_lens, qs, lens), 0.0, vertex_pdf(lens, lens, qs),

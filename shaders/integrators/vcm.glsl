@@ -26,9 +26,10 @@ const uint kVcmMergeCandidates = 1024u;   // merge candidates visited per camera
 const uint kVcmLightSeed = 0x2f6b8e13u;   // the light pass's sampler stream: the seed xor this
 const float kDiscThickness = 0.25;        // a merge disk's half thickness over its radius
 
-// The light path that the camera samples of `pixel` connect to (one per pixel).
+// The light path that the camera samples of `pixel` connect to: its index in the image,
+// modulo the light paths (fewer light paths than pixels: several pixels share one).
 uint vcm_light_path_of(uvec2 pixel) {
-    return pixel.y * u_params.image.x + pixel.x;
+    return (pixel.y * u_params.image.x + pixel.x) % u_vcm.paths.x;
 }
 
 // Stored light vertex `slot`, and its light subpath suffix sum (g_light_mis).
@@ -178,7 +179,6 @@ void vcm_light_path(uint j) {
 
 // The light subpath `j` into g_light and g_light_mis (g_light_delta): its vertex count.
 int vcm_load_light_path(uint j) {
-    if (j >= u_vcm.paths.x) return 0;
     uvec2 range = vcm_paths[j];
     int n = int(range.y);
     for (int i = 0; i < n; ++i) {

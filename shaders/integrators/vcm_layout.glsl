@@ -16,6 +16,8 @@ layout(std140, binding = UBO_VCM_PARAMS) uniform VcmParams {
     vec4 grid_lo;      // xyz: corner of cell (0, 0, 0), w: cell edge (twice the radius at least)
     vec4 merge;        // x: radius, y: radius^2, z: eta = pi r^2 (light paths), the merges' density
                        // factor in the MIS weights, w: 1 / eta, the merge's kernel normalisation
+    vec4 lens;         // x: (light paths) / (W H), the lens connections' density factor, y: its
+                       // inverse, each splat's weight (the film counts W H light paths)
 } u_vcm;
 
 // ---- storage blocks (std430) ----------------------------------------------------------

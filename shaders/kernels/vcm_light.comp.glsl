@@ -12,7 +12,8 @@ layout(local_size_x = 64) in;
 #include "integrators/vcm.glsl"
 
 void main() {
-    uint j = gl_GlobalInvocationID.x;
+    // work groups in rows of at most 65,535 (glrender/vcm/vcm.py groups_2d)
+    uint j = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * 64u + gl_LocalInvocationID.x;
     if (j >= u_vcm.paths.x) return;
     vcm_light_path(j);
 }

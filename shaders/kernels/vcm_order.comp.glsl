@@ -11,7 +11,8 @@ layout(std430, binding = SSBO_VCM_GRID) readonly buffer Order { uint order[]; };
 layout(std430, binding = SSBO_VCM_MERGE_SORT) writeonly buffer Ordered { vec4 ordered[]; };
 
 void main() {
-    uint e = gl_GlobalInvocationID.x;
+    // work groups in rows of at most 65,535 (glrender/vcm/vcm.py groups_2d)
+    uint e = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * 64u + gl_LocalInvocationID.x;
     if (e >= uint(order.length())) return;
     uint i = order[e];
     ordered[e] = vec4(keys[i].xyz, uintBitsToFloat(i));

@@ -145,6 +145,7 @@ def test07_photon_integrator_writes_the_photon_view(tmp_path):
     (("--iterations", -2), "--iterations -2"),
     (("--photons", 100), "--photons-per-iteration: only with --integrator sppm or photon"),
     (("--knn", 4), "--knn: only with --integrator photon"),
+    (("--light-paths", 0), "--light-paths 0: expected an integer in [1, 67108864]"),
 ])
 def test08_vcm_bad_parameters_one_line_exit_2(tmp_path, args, message):
     line = one_error_line(glrender("render", CORNELL, "-o", tmp_path / "x.exr", "--integrator", "vcm",

@@ -140,10 +140,11 @@ void main() {
 """
 
 
-def weight_sums(gl_ctx, scene, heuristic, n=1 << 14, vcm_mode=0, eta=0.0):
+def weight_sums(gl_ctx, scene, heuristic, n=1 << 14, vcm_mode=0, eta=0.0, lens=1.0):
     """Per path: the sum of the weights, the strategies counted, the vertices, whether it
-    has delta vertices. vcm_mode 1 or 2: vcm's weights (merge density factor eta), with
-    its merges among the strategies."""
+    has delta vertices. vcm_mode 1 or 2: vcm's weights (merge density factor eta, lens
+    connections' density factor ``lens``: light paths per camera sample), with its merges
+    among the strategies."""
     # the scene on the device as the renderer binds it (its own kernel: the cheap path tracer)
     r = Renderer(scene, settings_from_scene(scene, integrator="path", spp=1, seed=1), ctx=gl_ctx)
     library = shaders.ShaderLibrary().with_generated(
@@ -158,6 +159,7 @@ def weight_sums(gl_ctx, scene, heuristic, n=1 << 14, vcm_mode=0, eta=0.0):
     out = gl_ctx.gl.buffer(reserve=16 * n)
     block = np.zeros(1, VCM_PARAMS)[0]
     block["merge"] = (0.0, 0.0, eta, 0.0)
+    block["lens"] = (lens, 1.0 / lens, 0.0, 0.0)
     params = gl_ctx.gl.buffer(block.tobytes())
     r.bind()
     r.write_params(r.param_block(0, 1))
@@ -191,8 +193,9 @@ def test02_vcm_weights_sum_to_one(gl_ctx, make, mode):
     strategy and a merge at every inner vertex where the path scatters by a non-delta lobe
     (vcm, mode 1), or s = 0 and the merges alone (vm, mode 2); the merges' density factor
     eta = pi r^2 N at a value where merges and connections weigh alike (area densities of
-    order 1 in these scenes), under the power heuristic."""
-    res = weight_sums(gl_ctx, make(16), "mis-power", vcm_mode=mode, eta=0.7)
+    order 1 in these scenes), and 0.6 light paths per camera sample (the lens connections'
+    density factor), under the power heuristic."""
+    res = weight_sums(gl_ctx, make(16), "mis-power", vcm_mode=mode, eta=0.7, lens=0.6)
     made = res[:, 1] > 0
     assert made.sum() > 1000, made.sum()
     np.testing.assert_allclose(res[made, 0], 1.0, atol=2e-4)

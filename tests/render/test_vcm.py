@@ -25,12 +25,15 @@ from bidir_scenes import caustic, closed_enclosure, cornell, renders, thin_lens
 
 SEEDS = tuple(range(100, 116))
 SEEDS_PATH = (11, 12, 13, 14)
-# name: (scene, block, path spp, vcm iterations, vcm mode)
+# name: (scene, block, path spp, vcm iterations, vcm mode, light paths per iteration
+# (None: one per pixel, 1024 in these 32x32 images))
 SCENES = {
-    "cornell": (cornell, 16, 256, 64, "vcm"),
-    "enclosure": (closed_enclosure, 8, 0, 16, "vcm"),
-    "thin-lens": (thin_lens, 16, 256, 64, "vcm"),
-    "cornell-vm": (cornell, 16, 256, 64, "vm"),
+    "cornell": (cornell, 16, 256, 64, "vcm", None),
+    "enclosure": (closed_enclosure, 8, 0, 16, "vcm", None),
+    "thin-lens": (thin_lens, 16, 256, 64, "vcm", None),
+    "cornell-vm": (cornell, 16, 256, 64, "vm", None),
+    "cornell-paths-300": (cornell, 16, 256, 64, "vcm", 300),
+    "cornell-paths-3000": (cornell, 16, 256, 64, "vcm", 3000),
 }
 
 
@@ -71,10 +74,11 @@ def test01_vcm_matches_path_and_closed_form(gl_ctx, all_tests, name):
     image-mean test detects a bias of 2.2% on the Cornell box (1.7% merges alone), 2.0% with
     the thin lens and 0.27% in the enclosure, whose radiance is Le / (1 - albedo) = 2
     everywhere (2 (1 - 2^-16) at the 16-segment cap)."""
-    make, block, spp_path, iterations, mode = SCENES[name]
+    make, block, spp_path, iterations, mode, paths = SCENES[name]
     scene = make(32)
     extra = all_tests - block_tests(scene, block)
-    v = vcm_renders(scene, iterations, SEEDS, mode, initial_radius=default_radius(scene) / 4)
+    v = vcm_renders(scene, iterations, SEEDS, mode, initial_radius=default_radius(scene) / 4,
+                    light_paths=paths)
     if name == "enclosure":
         ref, ref_se = np.full(v.shape[1:], 2.0), None
     else:
