@@ -241,3 +241,24 @@ def test09_strategy_images_with_merges_partition_the_render(gl_ctx, mode):
     assert sum(w.sum() for w, u in merges.values()) > 0
     if mode == "vm":   # merges alone: no connection but s = 0 carries light
         assert all(w.max() == 0 for (s, t), (w, u) in images.items() if s > 0)
+
+
+@pytest.mark.parametrize("make", [caustic, cornell])
+def test10_connection_densities_are_the_fresh_ones(gl_ctx, monkeypatch, make):
+    """As bdpt's (tests/render/test_bdpt.py test06): the connections, next-event estimation
+    and lens splats of vcm weigh with the densities of their own BSDF evaluations, merges
+    and the lens connections' light-path factor included: the image is bitwise the one
+    whose connection weights evaluate every density afresh (GLRENDER_BDPT_GENERIC_WEIGHTS),
+    at 0.7 light paths a pixel."""
+    from glrender.render import renderer as renderer_module
+
+    scene = make(16)
+    images = []
+    for generic in (False, True):
+        defines = renderer_module.shader_defines
+        if generic:
+            monkeypatch.setattr(renderer_module, "shader_defines",
+                                lambda **kw: {**defines(**kw), "GLRENDER_BDPT_GENERIC_WEIGHTS": 1})
+        film, _ = vcm_image(gl_ctx, scene, 3, VcmSettings(light_paths=180))
+        images.append(film.mean)
+    assert np.array_equal(images[0], images[1]) and images[0].max() > 0
