@@ -44,11 +44,33 @@ def pytest_runtest_makereport(item, call):
         report.longrepr = f"skipped under CI=true (every dependency must be installed): {reason}"
 
 
+_WORKER_COMPILE_STATS: list[dict] = []   # the xdist workers' counts, gathered by the controller
+
+
+def pytest_sessionfinish(session):
+    """An xdist worker hands its shader compile counts to the controller."""
+    output = getattr(session.config, "workeroutput", None)
+    if output is not None:
+        from glrender.gl.shaders import COMPILE_STATS
+
+        output["glrender_compile_stats"] = dict(COMPILE_STATS)
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_testnodedown(node, error):
+    stats = getattr(node, "workeroutput", {}).get("glrender_compile_stats")
+    if stats:
+        _WORKER_COMPILE_STATS.append(stats)
+
+
 def pytest_terminal_summary(terminalreporter):
-    """Keep shader compile time visible: programs compiled by this run and the driver's time."""
+    """Keep shader compile time visible: programs compiled by this run (every worker's) and
+    the driver's time."""
     from glrender.gl.shaders import COMPILE_STATS
 
+    total = {k: sum(s.get(k, 0) for s in [COMPILE_STATS, *_WORKER_COMPILE_STATS])
+             for k in ("programs", "seconds", "first_dispatch_seconds")}
     terminalreporter.write_line(
-        f"glrender: {COMPILE_STATS['programs']} shader programs compiled in "
-        f"{COMPILE_STATS['seconds']:.1f} s, their first dispatches (code generation or the "
-        f"disk cache) took {COMPILE_STATS['first_dispatch_seconds']:.1f} s")
+        f"glrender: {total['programs']} shader programs compiled in "
+        f"{total['seconds']:.1f} s, their first dispatches (code generation or the "
+        f"disk cache) took {total['first_dispatch_seconds']:.1f} s")
