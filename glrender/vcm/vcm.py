@@ -184,6 +184,12 @@ class VcmRenderer(Renderer):
         self._counters.bind_to_storage_buffer(bindings.SSBO_VCM_COUNTERS)
         self._sort.bind_to_storage_buffer(bindings.SSBO_VCM_MERGE_SORT)
 
+    @current
+    def reset(self, start: int = 0, rows: tuple[int, int] | None = None) -> None:
+        """Renderer.reset, and the light pass and grid timers (stats) from zero."""
+        super().reset(start, rows)
+        self.light_seconds = self.grid_seconds = 0.0
+
     def _warm_up(self) -> None:
         super()._warm_up()
         if self.light_kernel is not None:

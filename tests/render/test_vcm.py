@@ -262,3 +262,39 @@ def test10_connection_densities_are_the_fresh_ones(gl_ctx, monkeypatch, make):
         film, _ = vcm_image(gl_ctx, scene, 3, VcmSettings(light_paths=180))
         images.append(film.mean)
     assert np.array_equal(images[0], images[1]) and images[0].max() > 0
+
+
+def test11_params_block_is_the_host_layout(gl_ctx):
+    """glrender/vcm/layout.py VCM_PARAMS is integrators/vcm_layout.glsl's std140 block: a
+    kernel copies every member of a block the host wrote back, word for word."""
+    from glrender.gl import shaders
+    from glrender.gpu.bindings import UBO_VCM_PARAMS
+    from glrender.vcm import layout as vl
+
+    source = """#version 450
+layout(local_size_x = 1) in;
+#include "integrators/vcm_layout.glsl"
+layout(std430, binding = 8) buffer Out { uvec4 words[]; };
+void main() {
+    words[0] = u_vcm.paths;
+    words[1] = u_vcm.grid_size;
+    words[2] = floatBitsToUint(u_vcm.grid_lo);
+    words[3] = floatBitsToUint(u_vcm.merge);
+    words[4] = floatBitsToUint(u_vcm.lens);
+}
+"""
+    kernel = shaders.compile_compute(gl_ctx, source=source, name="<vcm params test>")
+    block = np.zeros(1, vl.VCM_PARAMS)[0]
+    block["paths"] = (1, 2, 3, 4)
+    block["grid_size"] = (5, 6, 7, 8)
+    block["grid_lo"] = (0.5, 1.5, 2.5, 3.5)
+    block["merge"] = (4.5, 5.5, 6.5, 7.5)
+    block["lens"] = (8.5, 9.5, 10.5, 11.5)
+    gl = gl_ctx.gl
+    params, out = gl.buffer(block.tobytes()), gl.buffer(reserve=16 * 5)
+    params.bind_to_uniform_block(UBO_VCM_PARAMS)
+    out.bind_to_storage_buffer(8)
+    kernel.run(group_x=1)
+    assert out.read() == block.tobytes()
+    params.release()
+    out.release()
