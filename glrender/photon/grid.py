@@ -4,7 +4,7 @@ Every visible point is listed in each cell of a uniform grid that its search sph
 overlaps; the cell edge is the largest radius (pbrt-v3's choice), so a sphere spans at
 most three cells along each axis (27 in all; a sphere of diameter 2 r straddles the
 cell boundaries on both sides of its centre's cell). Cells are stored by spatial hash (Teschner et al.
-2003, the hash of ``shaders/photon/hash_grid.glsl``) in a table with one slot per
+2003, the hash of ``shaders/common/hash.glsl`` grid_hash) in a table with one slot per
 visible point: ``cells[h] .. cells[h + 1]`` are the positions in ``cells`` of the pixel
 indices listed under hash ``h``.
 """

@@ -36,3 +36,9 @@ uint hash_combine(uint seed, uint v) {
 float uint_to_unit_float(uint x) {
     return float(x >> 8u) * 5.9604644775390625e-8;  // 2^-24
 }
+
+// Spatial hash of integer grid cell coordinates (Teschner et al. 2003), wrapping in 32
+// bits: the photon and merge grids' (glrender/photon/grid.py grid_hash is its host twin).
+uint grid_hash(uvec3 cell) {
+    return (cell.x * 73856093u) ^ (cell.y * 19349663u) ^ (cell.z * 83492791u);
+}

@@ -19,6 +19,7 @@
 // join light vertices of other times).
 #include "integrators/bidir.glsl"
 #include "photon/density.glsl"
+#include "photon/grid_buckets.glsl"
 
 const int kVcmVertexTexels = GLRENDER_NORMAL_SHADOWING != 0 ? 7 : 6;   // records per stored light vertex (96 or 112 bytes)
 const int kVcmMergeTexels = 4;      // records per merge point (64 bytes, and 16 of its key)
@@ -223,22 +224,13 @@ vec3 vcm_merge(int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus) {
     uvec4 size = u_vcm.grid_size;
     if (size.w == 0u) return vec3(0.0);
     float r2 = u_vcm.merge.y;
-    ivec3 base = ivec3(floor((pt.p - u_vcm.grid_lo.xyz) / u_vcm.grid_lo.w - 0.5));
     uint buckets[8];
-    for (int i = 0; i < 8; ++i) {
-        ivec3 c = base + ivec3(i & 1, (i >> 1) & 1, i >> 2);
-        buckets[i] = 0xffffffffu;
-        if (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(size.xyz)))) continue;
-        uint h = vcm_grid_hash(c);
-        for (int j = 0; j < i; ++j)
-            if (buckets[j] == h) h = 0xffffffffu;
-        buckets[i] = h;
-    }
+    grid_buckets(pt.p, u_vcm.grid_lo, size, buckets);
     int max_light_segments = kBdptMaxSegments - (t - 1);
     vec3 sum = vec3(0.0);
     uint visited = 0u, skipped = 0u;
     for (int i = 0; i < 8; ++i) {
-        if (buckets[i] == 0xffffffffu) continue;
+        if (buckets[i] == kNoBucket) continue;
         uint begin = vcm_grid[buckets[i]], end = vcm_grid[buckets[i] + 1u];
         uint visit = min(end - begin, kVcmMergeCandidates - visited);
         skipped += end - begin - visit;

@@ -5,6 +5,7 @@
 // Beside the render kernels' bindings (scene/layout.glsl: uniform block 0, storage blocks
 // 0-7; bdpt's strategy images: 8), named in common/bindings.glsl.
 #include "common/bindings.glsl"
+#include "common/hash.glsl"
 
 // ---- uniform block 1: one iteration's parameters (std140) -----------------------------
 layout(std140, binding = UBO_VCM_PARAMS) uniform VcmParams {
@@ -58,8 +59,7 @@ ivec3 vcm_grid_cell(vec3 p) {
                  ivec3(u_vcm.grid_size.xyz) - 1);
 }
 
-// Spatial hash of a grid cell (Teschner et al. 2003) into the table of grid_size.w entries.
+// A grid cell's bucket in the table of grid_size.w entries.
 uint vcm_grid_hash(ivec3 c) {
-    uvec3 u = uvec3(c);
-    return ((u.x * 73856093u) ^ (u.y * 19349663u) ^ (u.z * 83492791u)) % u_vcm.grid_size.w;
+    return grid_hash(uvec3(c)) % u_vcm.grid_size.w;
 }

@@ -3,11 +3,7 @@
 // with the same hash, each visible point listed in every cell its search sphere
 // overlaps; a photon looks up the one cell it lies in.
 #include "photon/layout.glsl"
-
-// Spatial hash of integer cell coordinates (Teschner et al. 2003), wrapping in 32 bits.
-uint grid_hash(uvec3 cell) {
-    return (cell.x * 73856093u) ^ (cell.y * 19349663u) ^ (cell.z * 83492791u);
-}
+#include "common/hash.glsl"
 
 // The grid cell holding world point p; false outside the grid (no visible point's
 // sphere reaches p there) or when there is no grid.

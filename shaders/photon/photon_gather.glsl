@@ -18,6 +18,7 @@
 // across a thin wall or on the other wall of a corner does not leak in.
 #include "photon/map_layout.glsl"
 #include "photon/density.glsl"
+#include "photon/grid_buckets.glsl"
 #include "integrators/integrator_common.glsl"
 
 const uint kRadiusCandidates = 4096u;
@@ -61,30 +62,12 @@ vec3 photon_term(uint map, uint k, GatherPoint g, float w) {
     return f * map_record(map, k + 2u).rgb * w;
 }
 
-// The 8 hash buckets around g.p, each once (0xffffffff: a cell outside the grid or a
-// bucket seen already).
-void gather_buckets(uint map, vec3 p, out uint buckets[8]) {
-    uvec4 size = map == kGlobalMap ? u_map.global_size : u_map.caustic_size;
-    vec4 lo = map == kGlobalMap ? u_map.global_lo : u_map.caustic_lo;
-    ivec3 base = ivec3(floor((p - lo.xyz) / lo.w - 0.5));
-    for (int i = 0; i < 8; ++i) {
-        ivec3 c = base + ivec3(i & 1, (i >> 1) & 1, i >> 2);
-        buckets[i] = 0xffffffffu;
-        if (size.w == 0u || any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(size.xyz))))
-            continue;
-        uvec3 u = uvec3(c);
-        uint h = ((u.x * 73856093u) ^ (u.y * 19349663u) ^ (u.z * 83492791u)) % size.w;
-        for (int j = 0; j < i; ++j)
-            if (buckets[j] == h) h = 0xffffffffu;
-        buckets[i] = h;
-    }
-}
-
 // The estimate from photons of `map` of the types in `types` that took at most
 // `segments` segments from their light.
 vec3 photon_estimate(uint map, GatherPoint g, uint types, int segments) {
     uint buckets[8];
-    gather_buckets(map, g.p, buckets);
+    grid_buckets(g.p, map == kGlobalMap ? u_map.global_lo : u_map.caustic_lo,
+                 map == kGlobalMap ? u_map.global_size : u_map.caustic_size, buckets);
     float r_max = map == kGlobalMap ? u_map.radius.x : u_map.radius.y;
     float inv_photons = map == kGlobalMap ? u_map.radius.z : u_map.radius.w;
     float r2 = r_max * r_max, seg = float(segments);
@@ -95,7 +78,7 @@ vec3 photon_estimate(uint map, GatherPoint g, uint types, int segments) {
     uint heap_k[kMaxKnn];
     uint found = 0u;
     for (int i = 0; i < 8; ++i) {
-        if (buckets[i] == 0xffffffffu) continue;
+        if (buckets[i] == kNoBucket) continue;
         uint begin = map_cell(map, buckets[i]), end = map_cell(map, buckets[i] + 1u);
         uint visit = min(end - begin, budget - visited);
         skipped += end - begin - visit;
