@@ -30,7 +30,6 @@ from ..film import Film
 from ..gl import shaders
 from ..gl.buffers import BufferTexture
 from ..gl.context import current
-from ..gpu import codegen
 from ..gpu import bindings
 from ..render import accum
 from ..render.accumulation import SPLAT_SCALE
@@ -138,15 +137,13 @@ class PhotonRenderer(Renderer):
         # at worst, below llvmpipe's silent 65,535 (tests/photon/test_photon.py test04)
         if self.settings.samples_per_pass is None:
             self.samples_per_pass = 2 if self.photon.knn is None else 1
-        p = self.packed
-        geometry = codegen.generate(p, has_bvh=p.has_bvh, lights=self.lights_final)
-        library = shaders.ShaderLibrary().with_generated({codegen.GENERATED_PATH: geometry})
-        slots = {"scene": codegen.GENERATED_PATH}
+        # the render kernel's scene code and library (Renderer._compile made them)
+        slots = {"scene": self.slots["scene"]}
         self.store_kernel: Any = shaders.compile_compute(
             self.ctx, "photon/photon_store.comp.glsl", defines=self.defines, slots=slots,
-            library=library)
+            library=self.library)
         source = shaders.preprocess("photon/photon_store.comp.glsl", defines=self.defines,
-                                    slots=slots, library=library).source
+                                    slots=slots, library=self.library).source
         self._store_hash = hashlib.sha256(source.encode()).hexdigest()
         gl = self.gl
         empty = np.zeros((0, 4), np.float32)

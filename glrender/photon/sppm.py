@@ -35,7 +35,6 @@ from ..errors import UsageError
 from ..film import Film
 from ..gl import shaders
 from ..gl.context import Context, current
-from ..gpu import codegen
 from ..gpu import bindings
 from ..render import accum
 from ..render.accumulation import SPLAT_SCALE, TILE
@@ -154,10 +153,9 @@ class SppmRenderer:
         return footprint_radius(self.scene, self.base.packed.sphere_bounds, self.width, self.height)
 
     def _compile(self) -> None:
-        p = self.base.packed
-        geometry = codegen.generate(p, has_bvh=p.has_bvh, lights=self.base.lights_final)
-        library = shaders.ShaderLibrary().with_generated({codegen.GENERATED_PATH: geometry})
-        slots = {"scene": codegen.GENERATED_PATH}
+        # the inner renderer's scene code and library (Renderer._compile made them)
+        library = self.base.library
+        slots = {"scene": self.base.slots["scene"]}
         self.camera_kernel: Any = shaders.compile_compute(
             self.ctx, "photon/sppm_camera.comp.glsl", defines=self.base.defines, slots=slots,
             library=library)
