@@ -90,6 +90,22 @@ def renders(scene: m.Scene, integrator: str, spp: int, seeds, **options) -> np.n
                      for seed in seeds])
 
 
+def path_reference(scene: m.Scene, spp: int, seeds) -> tuple[np.ndarray, np.ndarray]:
+    """The path tracer's image over independent ``seeds`` and its per-pixel standard error."""
+    paths = renders(scene, "path", spp, seeds)
+    return paths.mean(axis=0), paths.std(axis=0, ddof=1) / np.sqrt(len(seeds))
+
+
+def use_generic_weights(monkeypatch) -> None:
+    """Renderers made from here on compile GLRENDER_BDPT_GENERIC_WEIGHTS: every MIS density
+    of bdpt's and vcm's connections evaluated afresh (the oracle of their O(1) weights)."""
+    from glrender.render import renderer as renderer_module
+
+    defines = renderer_module.shader_defines
+    monkeypatch.setattr(renderer_module, "shader_defines",
+                        lambda **kw: {**defines(**kw), "GLRENDER_BDPT_GENERIC_WEIGHTS": 1})
+
+
 def _floor_and_spheres(scene: m.Scene) -> None:
     """A diffuse floor (z = 0, 6x6) with a diffuse sphere and a rough plastic one on it."""
     floor = scene.add_material(m.Material("diffuse", reflectance=(0.6, 0.55, 0.5)))

@@ -13,7 +13,8 @@ from glrender.render.renderer import Renderer, settings_from_scene
 from glrender.testing.images import compare_images
 
 from bidir_scenes import (caustic, closed_enclosure, cornell, directional, environment, glossy,
-                          point_light, renders, slab_enclosure, thin_lens)
+                          path_reference, point_light, renders, slab_enclosure, thin_lens,
+                          use_generic_weights)
 
 SEEDS_PATH, SEEDS_BDPT = (11, 12, 13, 14), (31, 32, 33, 34)
 # name: (scene, block, path spp, bdpt spp)
@@ -55,8 +56,7 @@ def test01_bdpt_matches_path(gl_ctx, all_tests, name, heuristic):
         # tests/render/test_depth_cap.py counts the subpaths its cap cuts)
         ref, ref_se = np.full(bd.shape[1:], 2.0), None
     else:
-        paths = renders(scene, "path", spp_path, SEEDS_PATH)
-        ref, ref_se = paths.mean(axis=0), paths.std(axis=0, ddof=1) / np.sqrt(len(SEEDS_PATH))
+        ref, ref_se = path_reference(scene, spp_path, SEEDS_PATH)
     c = compare_images(bd, ref, ref_se, block=block, extra_tests=extra)
     assert c.passed, c.summary() + " " + "; ".join(c.messages)
     assert c.detectable_bias < (0.04 if name == "caustic" else 0.02), c.summary()
@@ -110,15 +110,11 @@ def test06_connection_densities_are_the_fresh_ones(gl_ctx, monkeypatch, make):
     """The strategies take the MIS densities of the connection from their own BSDF
     evaluations (no second material lookup): the image is bitwise the one whose weights
     evaluate every density afresh (GLRENDER_BDPT_GENERIC_WEIGHTS)."""
-    from glrender.render import renderer as renderer_module
-
     scene = make(16)
     images = []
     for generic in (False, True):
-        defines = renderer_module.shader_defines
         if generic:
-            monkeypatch.setattr(renderer_module, "shader_defines",
-                                lambda **kw: {**defines(**kw), "GLRENDER_BDPT_GENERIC_WEIGHTS": 1})
+            use_generic_weights(monkeypatch)
         r = Renderer(scene, settings_from_scene(scene, integrator="bdpt", spp=4, seed=8), ctx=gl_ctx)
         r.step(4)
         images.append(r.film().mean)

@@ -13,7 +13,7 @@ import glrender
 from glrender.testing.images import compare_images
 
 from bidir_scenes import (caustic, closed_enclosure, cornell, glossy, non_specular_first_hit,
-                          point_light, renders, thin_lens)
+                          path_reference, point_light, renders, thin_lens)
 
 SEEDS_PATH, SEEDS_LT = (11, 12, 13, 14), (21, 22, 23, 24)
 # name: (scene, block, path spp, lighttrace spp)
@@ -49,8 +49,7 @@ def test01_lighttrace_matches_path(gl_ctx, all_tests, name):
         # closed form: L = Le / (1 - albedo) = 2 everywhere (zero reference error)
         ref, ref_se = np.full(lt.shape[1:], 2.0), None
     else:
-        paths = renders(scene, "path", spp_path, SEEDS_PATH)
-        ref, ref_se = paths.mean(axis=0), paths.std(axis=0, ddof=1) / np.sqrt(len(SEEDS_PATH))
+        ref, ref_se = path_reference(scene, spp_path, SEEDS_PATH)
     c = compare_images(lt, ref, ref_se, block=block, mask=mask, extra_tests=extra)
     assert c.passed, c.summary() + " " + "; ".join(c.messages)
     assert c.detectable_bias < (0.04 if name == "caustic" else 0.02), c.summary()

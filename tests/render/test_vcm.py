@@ -21,7 +21,8 @@ from glrender.scene import model as m
 from glrender.testing.images import compare_images
 from glrender.vcm import VcmSettings, vcm as vcm_module
 
-from bidir_scenes import caustic, closed_enclosure, cornell, renders, thin_lens
+from bidir_scenes import (caustic, closed_enclosure, cornell, path_reference, renders, thin_lens,
+                          use_generic_weights)
 
 SEEDS = tuple(range(100, 116))
 SEEDS_PATH = (11, 12, 13, 14)
@@ -82,8 +83,7 @@ def test01_vcm_matches_path_and_closed_form(gl_ctx, all_tests, name):
     if name == "enclosure":
         ref, ref_se = np.full(v.shape[1:], 2.0), None
     else:
-        paths = renders(scene, "path", spp_path, SEEDS_PATH)
-        ref, ref_se = paths.mean(axis=0), paths.std(axis=0, ddof=1) / np.sqrt(len(SEEDS_PATH))
+        ref, ref_se = path_reference(scene, spp_path, SEEDS_PATH)
     c = compare_images(v, ref, ref_se, block=block, extra_tests=extra, correlated_blocks=True)
     assert c.passed, c.summary() + " " + "; ".join(c.messages)
     assert c.detectable_bias < (0.005 if name == "enclosure" else 0.025), c.summary()
@@ -250,15 +250,11 @@ def test10_connection_densities_are_the_fresh_ones(gl_ctx, monkeypatch, make):
     and the lens connections' light-path factor included: the image is bitwise the one
     whose connection weights evaluate every density afresh (GLRENDER_BDPT_GENERIC_WEIGHTS),
     at 0.7 light paths a pixel."""
-    from glrender.render import renderer as renderer_module
-
     scene = make(16)
     images = []
     for generic in (False, True):
-        defines = renderer_module.shader_defines
         if generic:
-            monkeypatch.setattr(renderer_module, "shader_defines",
-                                lambda **kw: {**defines(**kw), "GLRENDER_BDPT_GENERIC_WEIGHTS": 1})
+            use_generic_weights(monkeypatch)
         film, _ = vcm_image(gl_ctx, scene, 3, VcmSettings(light_paths=180))
         images.append(film.mean)
     assert np.array_equal(images[0], images[1]) and images[0].max() > 0
