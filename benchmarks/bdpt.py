@@ -3,8 +3,8 @@
 Scenes: the Cornell box and the caustic scene (shared Mitsuba references) and the door
 scene (reference: benchmarks/door_reference.py, bdpt, its own noise subtracted). Configs:
 glrender path, bdpt and lighttrace (the scenes' Sobol' sampler, max depth 8), and
-Mitsuba 3's path tracer (llvm_ad_rgb, independent and multijitter) where the scene exists
-in Mitsuba's format (Cornell box, caustic; not the door). Each config renders in its own
+Mitsuba 3's path tracer (llvm_ad_rgb, independent and multijitter) on each scene's Mitsuba
+XML (the shared ones, scenes/door/scene.xml). Each config renders in its own
 process for the same wall time after its kernel is compiled and warmed up; rounds
 alternate. Reported: samples per pixel per second, RMSE against the reference (whole
 image and the caustic window, rows 130-170 x columns 130-200), efficiency 1 / (MSE x
@@ -42,10 +42,13 @@ from glrender.drivers import create_driver, options_class
 from glrender.render.renderer import settings_from_scene
 toml, integrator, seconds, seed, out = sys.argv[1:6]
 seconds, seed = float(seconds), int(seed)
+# "name" or "name:key=int,...": the integrator's own settings (sppm, vcm), defaults but these
+integrator, _, given = integrator.partition(":")
+given = {k: int(v) for k, v in (item.split("=") for item in given.split(",") if item)}
 scene = glrender.load(toml)
-options = options_class(integrator)      # the integrator's own settings (sppm, vcm): defaults
+options = options_class(integrator)
 r = create_driver(scene, settings_from_scene(scene, integrator=integrator, seed=seed, spp=1 << 20),
-                  None if options is None else options())
+                  None if options is None else options(**given))
 r.step(r.samples_per_pass)   # warm-up: the first pass's dispatches
 r.reset()
 before = r.stats()           # what the warm-up counted (vcm's light pass and grid seconds)
@@ -71,7 +74,7 @@ def scenes(tmp: Path) -> dict:
     return {
         "cornell": (ROOT / "scenes/cornell-box/scene.toml", REFS / "cornell-box.xml",
                     REFS / "cornell-box-ref.npy", np.load(REFS / "cornell-box-ref-stderr.npy") ** 2),
-        "door": (ROOT / "scenes/door/scene.toml", None, door_ref, door_var),
+        "door": (ROOT / "scenes/door/scene.toml", ROOT / "scenes/door/scene.xml", door_ref, door_var),
         "caustic": (ROOT / "scenes/caustic/scene.toml", caustic_xml, REFS / "caustic" / "caustic-ref.npy",
                     None),
     }
@@ -93,18 +96,28 @@ def arguments(doc: str) -> argparse.Namespace:
     return ap.parse_args()
 
 
+def label_of(integrator: str) -> str:
+    """A config's label: "glrender vcm" for "vcm", "glrender vcm (cache connections 1)" for
+    "vcm:cache_connections=1"."""
+    name, _, given = integrator.partition(":")
+    items = [item.replace("_", " ").replace("=", " ") for item in given.split(",") if item]
+    return f"glrender {name}" + (f" ({', '.join(items)})" if items else "")
+
+
 def equal_time(tmp: Path, args, integrators, extra=None):
     """Per scene of ``args.scenes``: render glrender's ``integrators`` and, where the scene
     has a Mitsuba XML, Mitsuba's path tracer (independent, multijitter), each config in its
     own process for ``args.seconds`` after its warm-up, in ``args.rounds`` rounds that
     alternate the configs. Yields (scene, label -> the rounds' medians, the device glrender
     ran on); a median record holds seconds, spp, mse, mse_window, spp_s, mean, eff,
-    eff_window and what ``extra(info)`` adds from the config's JSON output."""
+    eff_window and what ``extra(info)`` adds from the config's JSON output. An integrator
+    "name:key=value,..." renders with those of its own settings (integers), labelled
+    "glrender name (key value, ...)"."""
     table = scenes(tmp)
     for name in args.scenes.split(","):
         toml, xml, ref_path, ref_var = table[name]
         ref = np.load(ref_path).astype(np.float64)[..., :3]
-        configs = [(f"glrender {k}", "glrender", k) for k in integrators]
+        configs = [(label_of(k), "glrender", k) for k in integrators]
         if xml is not None:
             configs += [("Mitsuba path, independent", "mitsuba", "independent"),
                         ("Mitsuba path, multijitter", "mitsuba", "multijitter")]

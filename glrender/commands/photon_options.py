@@ -8,12 +8,12 @@ from typing import Any
 from ..errors import UsageError
 from ..photon.photon import PhotonSettings
 from ..photon.sppm import SppmSettings
-from ..vcm.vcm import DEFAULT_ALPHA, MAX_LIGHT_PATHS, MODES, VcmSettings
+from ..vcm.vcm import DEFAULT_ALPHA, MAX_CACHE_CONNECTIONS, MAX_LIGHT_PATHS, MODES, VcmSettings
 
 SPPM_OPTIONS = ("iterations", "initial_radius", "alpha")
 PHOTON_OPTIONS = ("caustic_photons", "radius", "knn", "final_gather")
 SHARED_OPTIONS = ("photons_per_iteration", "kernel")   # --photons: per iteration (sppm) or per map
-VCM_OPTIONS = ("vcm_mode", "light_paths")          # vcm takes SPPM_OPTIONS too
+VCM_OPTIONS = ("vcm_mode", "light_paths", "light_vertex_cache")   # vcm takes SPPM_OPTIONS too
 OPTIONS = SHARED_OPTIONS + SPPM_OPTIONS + PHOTON_OPTIONS + VCM_OPTIONS   # saved in checkpoints
 #: the options each of these integrators takes
 TAKES = {"sppm": SHARED_OPTIONS + SPPM_OPTIONS, "photon": SHARED_OPTIONS + PHOTON_OPTIONS,
@@ -46,6 +46,10 @@ def add_arguments(parser: Any) -> None:
     g.add_argument("--light-paths", type=int, default=None, metavar="N",
                    help="vcm: light paths per iteration (default: one per pixel; more: more merge "
                         "points and lens connections, fewer: pixels share the one they connect to)")
+    g.add_argument("--light-vertex-cache", type=int, default=None, metavar="M",
+                   help="vcm: connect each camera vertex to M light vertices drawn from all the "
+                        "iteration's light subpaths instead of to every vertex of its pixel's own "
+                        f"(1-{MAX_CACHE_CONNECTIONS}; default: its own subpath)")
     g.add_argument("--caustic-photons", type=int, default=None, metavar="N",
                    help="photon: photons traced for the caustic map (default: as --photons)")
     g.add_argument("--radius", type=float, default=None, metavar="R",
@@ -89,10 +93,17 @@ def photon_options(args: Any, kind: str) -> tuple[int | None, SppmSettings | Pho
         paths = getattr(args, "light_paths", None)
         if paths is not None and not 1 <= paths <= MAX_LIGHT_PATHS:
             raise UsageError(f"--light-paths {paths}: expected an integer in [1, {MAX_LIGHT_PATHS}]")
-        return iterations, VcmSettings(mode=getattr(args, "vcm_mode", None) or "vcm",
-                                       initial_radius=radius,
+        mode = getattr(args, "vcm_mode", None) or "vcm"
+        cache = getattr(args, "light_vertex_cache", None)
+        if cache is not None and not 1 <= cache <= MAX_CACHE_CONNECTIONS:
+            raise UsageError(f"--light-vertex-cache {cache}: expected an integer in "
+                             f"[1, {MAX_CACHE_CONNECTIONS}] connections per camera vertex")
+        if cache is not None and mode != "vcm":
+            raise UsageError(f"--light-vertex-cache: only with --vcm-mode vcm (connections and "
+                             f"merges), not {mode}")
+        return iterations, VcmSettings(mode=mode, initial_radius=radius,
                                        alpha=DEFAULT_ALPHA if alpha is None else alpha,
-                                       light_paths=paths)
+                                       light_paths=paths, cache_connections=cache or 0)
     if kind == "photon":
         if "radius" in aovs:
             raise UsageError("--aov radius: only with --integrator sppm (the photon integrator's "

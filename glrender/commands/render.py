@@ -88,7 +88,7 @@ def _saved_kinds() -> dict:
     kinds: dict = dict.fromkeys(("spp", "seed", "max_depth", "width", "height", "rr_depth",
                                  "light_samples", "split", "strategy_depth",
                                  "photons_per_iteration", "iterations", "caustic_photons",
-                                 "knn", "light_paths"), int)
+                                 "knn", "light_paths", "light_vertex_cache"), int)
     kinds.update(dict.fromkeys(("clamp", "initial_radius", "alpha", "radius"), float))
     kinds.update(rr=str, strategy_images=str, crop=str | list, final_gather=bool,
                  sampler=tuple(SAMPLER_KINDS), integrator=tuple(INTEGRATORS),

@@ -57,6 +57,7 @@ SSBO_VCM_MERGE_DATA = 12
 SSBO_VCM_GRID = 13
 SSBO_VCM_COUNTERS = 14
 SSBO_VCM_MERGE_SORT = 15
+SSBO_VCM_CACHE = 15         # the camera pass's light vertex cache, in the light pass's merge sort block
 
 # ---- texture units ----------------------------------------------------------------------
 # the BVH (geometry/bvh_layout.glsl; unit 3 is reserved for geometry)

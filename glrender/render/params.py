@@ -28,6 +28,7 @@ OPTIONAL_DEFINES = {
     "GLRENDER_WAVE_BVH_HITS": "the scene's closest hit takes the extend stage's BVH hit",
     "GLRENDER_COOP_LANES": "8-wide traversal: cooperative when at most this many lanes have rays",
     "GLRENDER_VCM_MODE": "vertex connection and merging: 1 connections and merges, 2 merges alone",
+    "GLRENDER_VCM_CACHE": "vcm: connections per camera vertex to a light vertex cache (0: none)",
 }
 
 

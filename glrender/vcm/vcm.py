@@ -50,6 +50,7 @@ VERTICES_PER_PATH = 4       # first guess of the vertex buffer (stored vertices 
 MERGES_PER_PATH = 3         # and of the merge points'
 GRID_SLACK = 1e-3           # the merge grid's cells are 2 r (1 + this)
 MAX_LIGHT_PATHS = 1 << 26   # a merge point's key holds the light path index in 27 bits
+MAX_CACHE_CONNECTIONS = 16  # per camera vertex, to a light vertex cache
 
 
 def groups_2d(invocations: int) -> tuple[int, int]:
@@ -65,12 +66,16 @@ class VcmSettings:
     """vcm's own parameters: ``mode`` (vcm, vm or bpt), ``initial_radius`` r_1 in scene
     units (None: DEFAULT_RADIUS_PIXELS pixel footprints at the scene's centre), ``alpha`` in
     (0, 1), the radius schedule r_i = r_1 i^((alpha - 1) / 2), and ``light_paths`` traced
-    per iteration (None: one per pixel; fewer: pixels share the one they connect to)."""
+    per iteration (None: one per pixel; fewer: pixels share the one they connect to), and
+    ``cache_connections``: with a light vertex cache (Davidovič et al. 2014), the light
+    vertices drawn from all the iteration's light subpaths that each camera vertex connects
+    to (0: none, each camera vertex connects to every vertex of its pixel's own subpath)."""
 
     mode: str = "vcm"
     initial_radius: float | None = None
     alpha: float = DEFAULT_ALPHA
     light_paths: int | None = None     # per iteration (None: one per pixel)
+    cache_connections: int = 0          # per camera vertex, to a light vertex cache (0: none)
 
     def __post_init__(self) -> None:
         n = self.light_paths
@@ -86,6 +91,13 @@ class VcmSettings:
         a = self.alpha
         if not (isinstance(a, (int, float)) and not isinstance(a, bool) and 0 < a < 1):
             raise UsageError(f"alpha: expected a number in (0, 1), got {a!r}")
+        c = self.cache_connections
+        if not isinstance(c, (int, np.integer)) or isinstance(c, bool) or not 0 <= c <= MAX_CACHE_CONNECTIONS:
+            raise UsageError(f"light vertex cache: expected an integer in [0, {MAX_CACHE_CONNECTIONS}] "
+                             f"connections per camera vertex, got {c!r}")
+        if c and self.mode != "vcm":
+            raise UsageError(f"light vertex cache: only in vcm mode 'vcm' (connections and merges), "
+                             f"not {self.mode!r}")
 
     @property
     def merges(self) -> bool:
@@ -124,7 +136,12 @@ class VcmRenderer(Renderer):
         return self.vcm.merges
 
     def _integrator_defines(self) -> dict[str, int]:
-        return {"GLRENDER_VCM_MODE": MODES[self.vcm.mode]} if self.vcm.merges else {}
+        if not self.vcm.merges:
+            return {}
+        out = {"GLRENDER_VCM_MODE": MODES[self.vcm.mode]}
+        if self.vcm.cache_connections:
+            out["GLRENDER_VCM_CACHE"] = self.vcm.cache_connections
+        return out
 
     def _compile(self) -> None:
         super()._compile()
@@ -150,6 +167,9 @@ class VcmRenderer(Renderer):
         self._grid: Any = gl.buffer(reserve=16)
         self._grid.clear()
         self._ordered: Any = None     # the camera pass's grid-ordered merge points
+        self._cache: Any = None       # the camera pass's light vertex cache
+        self._cache_bytes = 0
+        self._camera_bindings = False   # binding 15: the camera pass's cache, not the merge sort
         self._allocate(VERTICES_PER_PATH * self.light_paths, MERGES_PER_PATH * self.light_paths)
         self._block = np.zeros(1, vl.VCM_PARAMS)[0]
         self._vcm_params.write(self._block.tobytes())
@@ -182,7 +202,10 @@ class VcmRenderer(Renderer):
         self._data.bind_to_storage_buffer(bindings.SSBO_VCM_MERGE_DATA)
         self._grid.bind_to_storage_buffer(bindings.SSBO_VCM_GRID)
         self._counters.bind_to_storage_buffer(bindings.SSBO_VCM_COUNTERS)
-        self._sort.bind_to_storage_buffer(bindings.SSBO_VCM_MERGE_SORT)
+        if self._cache is not None and self._camera_bindings:
+            self._cache.bind_to_storage_buffer(bindings.SSBO_VCM_CACHE)
+        else:
+            self._sort.bind_to_storage_buffer(bindings.SSBO_VCM_MERGE_SORT)
 
     @current
     def reset(self, start: int = 0, rows: tuple[int, int] | None = None) -> None:
@@ -217,6 +240,7 @@ class VcmRenderer(Renderer):
         if self._ordered is not None:     # the light pass appends to the keys themselves
             self._ordered.release()
             self._ordered = None
+        self._camera_bindings = False
         self.bind()
         self.write_params(prm)
         block = self._block
@@ -242,10 +266,36 @@ class VcmRenderer(Renderer):
             self.bind()
         self.counters["vertices"] += vertices
         self.counters["merge_points"] += merges
+        if self.vcm.cache_connections:
+            self._build_cache()
         t1 = time.perf_counter()
         self.light_seconds += t1 - t0
+        self._camera_bindings = True
         self._build_grid(merges)
         self.grid_seconds += time.perf_counter() - t1
+        self.bind()
+
+    def _build_cache(self) -> None:
+        """The light vertex cache of the camera pass: the slot of every stored light vertex
+        past the light, light path by light path in index order (so the entry a camera
+        vertex draws does not depend on the order the light pass's atomics stored them in),
+        and its entry count into the parameter block."""
+        paths = np.frombuffer(self._paths.read(vl.PATH_BYTES * self.light_paths), np.uint32)
+        first = paths[0::2].astype(np.int64)
+        count = np.maximum(paths[1::2].astype(np.int64) - 1, 0)
+        entries = int(count.sum())
+        ends = np.cumsum(count)
+        slots = (np.repeat(first + 1 - (ends - count), count) + np.arange(entries)).astype(np.uint32)
+        size = max(16, vl.CACHE_ENTRY_BYTES * entries)
+        if self._cache is None or self._cache_bytes < size:
+            if self._cache is not None:
+                self._cache.release()
+            self._cache_bytes = size + size // 4
+            self._cache = self.gl.buffer(reserve=self._cache_bytes)
+        if entries:
+            self._cache.write(slots.tobytes())
+        self._block["cache"] = (entries, 0, 0, 0)
+        self._vcm_params.write(self._block.tobytes())
 
     def _grid_geometry(self, r: float) -> None:
         """The merge grid of radius r into the parameter block, before the light pass hashes
@@ -360,14 +410,16 @@ class VcmRenderer(Renderer):
 
     def _vcm_inputs(self) -> list[tuple[str, bytes]]:
         v = self.vcm
-        return [("vcm settings", repr(("vcm", v.mode, v.initial_radius, v.alpha,
-                                       v.light_paths)).encode())]
+        key = ("vcm", v.mode, v.initial_radius, v.alpha, v.light_paths)
+        if v.cache_connections:   # as before the cache for renders without it
+            key += (v.cache_connections,)
+        return [("vcm settings", repr(key).encode())]
 
     @current
     def release(self) -> None:
         if getattr(self, "light_kernel", None) is not None:
             for buf in (self._vcm_params, self._paths, self._counters, self._vertices, self._keys,
-                        self._data, self._sort, self._grid, self._ordered):
+                        self._data, self._sort, self._grid, self._ordered, self._cache):
                 if buf is not None:
                     buf.release()
             self.light_kernel = None

@@ -52,6 +52,8 @@
 #define SSBO_VCM_GRID 13
 #define SSBO_VCM_COUNTERS 14
 #define SSBO_VCM_MERGE_SORT 15
+// the camera pass's light vertex cache, in the light pass's merge sort block
+#define SSBO_VCM_CACHE 15
 
 // ---- texture units ----------------------------------------------------------------------
 // the BVH (geometry/bvh_layout.glsl; unit 3 is reserved for geometry)

@@ -56,6 +56,9 @@
 #ifndef GLRENDER_VCM_MODE
 #define GLRENDER_VCM_MODE 0
 #endif
+#ifndef GLRENDER_VCM_CACHE
+#define GLRENDER_VCM_CACHE 0
+#endif
 // A material's normal map has Mitsuba's shadowing term (bsdf/bsdf.glsl
 // bsdf_normal_shadowing; bdpt's vertices keep the unperturbed normal for it).
 const bool kNormalShadowing = GLRENDER_NORMAL_SHADOWING != 0;
@@ -91,6 +94,9 @@ const uint kCoopLanes = uint(GLRENDER_COOP_LANES);
 // alone (vm, progressive photon mapping); modes 1 and 2 read light subpaths that a light
 // pass stored (kernels/vcm_light.comp.glsl) and take their declarations by #if.
 const int kVcmMode = GLRENDER_VCM_MODE;
+// vcm with a light vertex cache: each camera vertex connects to this many light vertices
+// drawn from all the iteration's stored ones (0: to its pixel's own light subpath).
+const int kVcmCacheConnections = GLRENDER_VCM_CACHE;
 
 // Sample generator (sampling/sampler.glsl).
 const int kSamplerIndependent = 0;

@@ -290,8 +290,10 @@ void strategy_lens(int s, inout SamplerState smp) {
 }
 
 // s, t >= 2: the two subpaths' ends joined by a visibility ray; pt = g_camera[t - 1],
-// its BSDF and the point before it come from the caller (the same for every s).
-vec3 strategy_connect(int s, int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus) {
+// its BSDF and the point before it come from the caller (the same for every s). The
+// light vertices are read at g_light[0, s); the strategy is (s_path, t) (vcm's light
+// vertex cache puts a vertex's last three there: integrators/vcm.glsl vcm_load_cached).
+vec3 strategy_connect_as(int s, int s_path, int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus) {
     Vertex qs = g_light[s - 1];
     if (!vertex_connectible(qs)) return vec3(0.0);
     Vertex qs_minus = light_point(s - 2);
@@ -306,8 +308,12 @@ vec3 strategy_connect(int s, int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_min
                                        solid_angle_to_area(pt_to_qs, pt, qs),
                                        solid_angle_to_area(qs_to_minus, qs, qs_minus));
     float w = STRATEGY_WEIGHT(s, t, cp);
-    strategy_record(s, t, L, w);
+    strategy_record(s_path, t, L, w);
     return L * w;
+}
+
+vec3 strategy_connect(int s, int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus) {
+    return strategy_connect_as(s, s, t, pt, pt_bsdf, pt_minus);
 }
 
 // The camera subpath of one sample of `pixel` into g_camera (its time into g_time):

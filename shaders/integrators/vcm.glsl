@@ -33,15 +33,16 @@ uint vcm_light_path_of(uvec2 pixel) {
     return (pixel.y * u_params.image.x + pixel.x) % u_vcm.paths.x;
 }
 
-// Stored light vertex `slot`, and its light subpath suffix sum (g_light_mis).
-void vcm_store_vertex(uint slot, Vertex v, float mis) {
+// Stored light vertex `slot`: vertex i of a light subpath (delta_light: that subpath starts
+// on a delta light), and its suffix sum (g_light_mis).
+void vcm_store_vertex(uint slot, Vertex v, float mis, int i, bool delta_light) {
     uint k = uint(kVcmVertexTexels) * slot;
     vcm_vertices[k] = vec4(v.p, uintBitsToFloat(v.material));
     vcm_vertices[k + 1u] = vec4(v.ng, uintBitsToFloat(v.info));
     vcm_vertices[k + 2u] = vec4(v.ns, v.pdf_fwd);
     vcm_vertices[k + 3u] = vec4(v.tangent, v.pdf_rev);
     vcm_vertices[k + 4u] = vec4(v.beta, mis);
-    vcm_vertices[k + 5u] = vec4(v.uv, 0.0, 0.0);
+    vcm_vertices[k + 5u] = vec4(v.uv, float(i), delta_light ? 1.0 : 0.0);
 #if GLRENDER_NORMAL_SHADOWING
     vcm_vertices[k + 6u] = vec4(v.ns0, 0.0);
 #endif
@@ -157,7 +158,7 @@ void vcm_light_path(uint j) {
         if (stored) {
             for (int i = 0; i < n; ++i) {
                 LOOP_TICK();
-                vcm_store_vertex(first + uint(i), g_light[i], g_light_mis[i]);
+                vcm_store_vertex(first + uint(i), g_light[i], g_light_mis[i], i, g_light_delta);
             }
         }
     }
@@ -191,6 +192,55 @@ int vcm_load_light_path(uint j) {
     }
     g_light_delta = n > 0 && light_is_delta(g_light[0]);
     return n;
+}
+
+// Light vertex cache (Davidovič, Křivánek, Hašan and Slusallek 2014): the light vertex in
+// `slot`, vertex i >= 1 of its subpath (returned), into g_light with the two before it
+// (one for i = 1) and their suffix sums: all that a connection to it and its MIS weight
+// read (g_light_delta its subpath's), at the constant indices 0 .. min(i, 2) (an array
+// written at a varying index costs llvmpipe every access to it). There the connection
+// with s = min(i, 2) + 1 light vertices reads what the one with s = i + 1 would read at
+// its own indices: the MIS weights read x_{s-1}, x_{s-2}, x_{s-3}'s flag and suffix sum.
+// Its throughput is scaled by `scale`.
+int vcm_load_cached(uint slot, float scale) {
+    vec4 at = vcm_vertices[uint(kVcmVertexTexels) * slot + 5u];
+    int i = int(at.z);
+    g_light_delta = at.w != 0.0;
+    bool three = i >= 2;
+    float mis;
+    Vertex v = vcm_load_vertex(slot, mis);
+    v.beta *= scale;
+    if (three) { g_light[2] = v; g_light_mis[2] = mis; } else { g_light[1] = v; g_light_mis[1] = mis; }
+    v = vcm_load_vertex(slot - 1u, mis);
+    if (three) { g_light[1] = v; g_light_mis[1] = mis; } else { g_light[0] = v; g_light_mis[0] = mis; }
+    if (three) {
+        v = vcm_load_vertex(slot - 2u, mis);
+        g_light[0] = v;
+        g_light_mis[0] = mis;
+    }
+    return i;
+}
+
+// The connections of camera vertex t - 1 with a light vertex cache: to
+// kVcmCacheConnections light vertices drawn uniformly from the cache's entries (every
+// stored vertex past the light of the iteration's N light paths), each weighted by
+// entries / (kVcmCacheConnections N). In expectation that is the sum of the connections
+// to one light subpath's vertices, as without the cache, so the MIS weights are those of
+// the connections to the pixel's own subpath.
+vec3 vcm_connect_cache(int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus, inout SamplerState s) {
+    uint entries = u_vcm.cache.x;
+    vec3 L = vec3(0.0);
+    if (entries == 0u) return L;
+    float scale = float(entries) / (float(kVcmCacheConnections) * float(u_vcm.paths.x));
+    for (int c = 0; c < kVcmCacheConnections; ++c) {
+        LOOP_TICK();
+        uint e = min(uint(sampler_1d(s) * float(entries)), entries - 1u);
+        int i = vcm_load_cached(vcm_cache_entry(e), scale);
+        // s = i + 1 light vertices: bdpt's path length cap, as the loop over a whole subpath
+        if (i + t <= kBdptMaxSegments)
+            L += strategy_connect_as(min(i, 2) + 1, i + 1, t, pt, pt_bsdf, pt_minus);
+    }
+    return L;
 }
 
 // MIS weight of merging camera vertex t - 1 with merge point m: the connection strategy
@@ -273,8 +323,8 @@ vec3 vcm_merge(int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus) {
 vec3 bidir_sample(uvec2 pixel, inout SamplerState s, inout Aov aov) {
     strategy_begin(pixel);
     int n_camera = camera_subpath(pixel, s, aov);
-    int n_light = kVcmMode == 1 ? vcm_load_light_path(vcm_light_path_of(pixel)) : 0;
-    if (kVcmMode != 1) g_light_delta = false;
+    int n_light = kVcmMode == 1 && kVcmCacheConnections == 0 ? vcm_load_light_path(vcm_light_path_of(pixel)) : 0;
+    if (kVcmMode != 1 || kVcmCacheConnections > 0) g_light_delta = false;
     bdpt_mis_prepare_camera(n_camera);
 
     vec3 L = strategies_emission(n_camera, aov);
@@ -289,6 +339,9 @@ vec3 bidir_sample(uvec2 pixel, inout SamplerState s, inout Aov aov) {
             LOOP_TICK();
             L += strategy_connect(k, t, pt, pt_bsdf, pt_minus);
         }
+#if GLRENDER_VCM_CACHE   // (a call under a false constant still counts its storage block)
+        L += vcm_connect_cache(t, pt, pt_bsdf, pt_minus, s);
+#endif
         if (info_mergeable(pt.info) && t - 1 < kBdptMaxSegments) L += vcm_merge(t, pt, pt_bsdf, pt_minus);
     }
     return L;

@@ -19,6 +19,8 @@ layout(std140, binding = UBO_VCM_PARAMS) uniform VcmParams {
                        // factor in the MIS weights, w: 1 / eta, the merge's kernel normalisation
     vec4 lens;         // x: (light paths) / (W H), the lens connections' density factor, y: its
                        // inverse, each splat's weight (the film counts W H light paths)
+    uvec4 cache;       // x: the light vertex cache's entries (the camera pass's, with
+                       // kVcmCacheConnections > 0), yzw: 0
 } u_vcm;
 
 // ---- storage blocks (std430) ----------------------------------------------------------
@@ -50,7 +52,17 @@ layout(std430, binding = SSBO_VCM_COUNTERS) buffer VcmCounters { uint vcm_counte
 // 15: per merge point as the light pass stored it: (key, as in 11; its grid cell's hash
 // < grid_size.w). The host orders the merge points by key, then stably by hash (two
 // integer sorts), and kernels/vcm_order.comp.glsl writes 11's grid-ordered copy.
+// In the camera pass with a light vertex cache the same binding (SSBO_VCM_CACHE) holds the
+// cache, two entries to a record (vcm_cache_entry): the slot in 9 of every stored light
+// vertex past the light (u_vcm.cache.x of them), light path by light path in the order of
+// their indices, each path's vertices in order (glrender/vcm/vcm.py writes them). One
+// block for both: a kernel has 16 storage blocks, and every block that any function of it
+// names counts, called or not.
 layout(std430, binding = SSBO_VCM_MERGE_SORT) buffer VcmMergeSort { uvec2 vcm_merge_sort[]; };
+
+uint vcm_cache_entry(uint e) {
+    return vcm_merge_sort[e >> 1u][e & 1u];
+}
 
 // The grid cell of world point p (the merge grid of u_vcm: fixed before the light pass, a
 // box around the scene's bounding sphere with cells of edge grid_lo.w), clamped to it.

@@ -99,6 +99,7 @@ def test05_photon_map_options_need_photon(tmp_path):
     ("photon", ("--photons", 20000, "--knn", 16, "--kernel", "cone", "--final-gather")),
     ("sppm", ("--photons", 4096, "--alpha", 0.5, "--initial-radius", 0.04)),
     ("vcm", ("--vcm-mode", "vm", "--alpha", 0.6, "--initial-radius", 0.05)),
+    ("vcm", ("--light-vertex-cache", 2, "--light-paths", 500)),
 ])
 def test06_resume_keeps_the_photon_options(tmp_path, integrator, options):
     """A checkpoint saves the photon options: --resume without them continues the same
@@ -146,6 +147,8 @@ def test07_photon_integrator_writes_the_photon_view(tmp_path):
     (("--photons", 100), "--photons-per-iteration: only with --integrator sppm or photon"),
     (("--knn", 4), "--knn: only with --integrator photon"),
     (("--light-paths", 0), "--light-paths 0: expected an integer in [1, 67108864]"),
+    (("--light-vertex-cache", 0), "--light-vertex-cache 0: expected an integer in [1, 16]"),
+    (("--light-vertex-cache", 2, "--vcm-mode", "vm"), "--light-vertex-cache: only with --vcm-mode vcm"),
 ])
 def test08_vcm_bad_parameters_one_line_exit_2(tmp_path, args, message):
     line = one_error_line(glrender("render", CORNELL, "-o", tmp_path / "x.exr", "--integrator", "vcm",

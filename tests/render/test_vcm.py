@@ -26,15 +26,18 @@ from bidir_scenes import (caustic, closed_enclosure, cornell, path_reference, re
 
 SEEDS = tuple(range(100, 116))
 SEEDS_PATH = (11, 12, 13, 14)
-# name: (scene, block, path spp, vcm iterations, vcm mode, light paths per iteration
-# (None: one per pixel, 1024 in these 32x32 images))
+# name: (scene, block, path spp, vcm iterations, vcm mode, VcmSettings of its own: light
+# paths per iteration (default one per pixel, 1024 in these 32x32 images), connections to
+# a light vertex cache)
 SCENES = {
-    "cornell": (cornell, 16, 256, 64, "vcm", None),
-    "enclosure": (closed_enclosure, 8, 0, 16, "vcm", None),
-    "thin-lens": (thin_lens, 16, 256, 64, "vcm", None),
-    "cornell-vm": (cornell, 16, 256, 64, "vm", None),
-    "cornell-paths-300": (cornell, 16, 256, 64, "vcm", 300),
-    "cornell-paths-3000": (cornell, 16, 256, 64, "vcm", 3000),
+    "cornell": (cornell, 16, 256, 64, "vcm", {}),
+    "enclosure": (closed_enclosure, 8, 0, 16, "vcm", {}),
+    "thin-lens": (thin_lens, 16, 256, 64, "vcm", {}),
+    "cornell-vm": (cornell, 16, 256, 64, "vm", {}),
+    "cornell-paths-300": (cornell, 16, 256, 64, "vcm", {"light_paths": 300}),
+    "cornell-paths-3000": (cornell, 16, 256, 64, "vcm", {"light_paths": 3000}),
+    "cornell-cache": (cornell, 16, 256, 64, "vcm", {"cache_connections": 2}),
+    "enclosure-cache": (closed_enclosure, 8, 0, 16, "vcm", {"cache_connections": 1, "light_paths": 700}),
 }
 
 
@@ -75,18 +78,18 @@ def test01_vcm_matches_path_and_closed_form(gl_ctx, all_tests, name):
     image-mean test detects a bias of 2.2% on the Cornell box (1.7% merges alone), 2.0% with
     the thin lens and 0.27% in the enclosure, whose radiance is Le / (1 - albedo) = 2
     everywhere (2 (1 - 2^-16) at the 16-segment cap)."""
-    make, block, spp_path, iterations, mode, paths = SCENES[name]
+    make, block, spp_path, iterations, mode, options = SCENES[name]
     scene = make(32)
     extra = all_tests - block_tests(scene, block)
     v = vcm_renders(scene, iterations, SEEDS, mode, initial_radius=default_radius(scene) / 4,
-                    light_paths=paths)
-    if name == "enclosure":
+                    **options)
+    if make is closed_enclosure:
         ref, ref_se = np.full(v.shape[1:], 2.0), None
     else:
         ref, ref_se = path_reference(scene, spp_path, SEEDS_PATH)
     c = compare_images(v, ref, ref_se, block=block, extra_tests=extra, correlated_blocks=True)
     assert c.passed, c.summary() + " " + "; ".join(c.messages)
-    assert c.detectable_bias < (0.005 if name == "enclosure" else 0.025), c.summary()
+    assert c.detectable_bias < (0.005 if make is closed_enclosure else 0.025), c.summary()
 
 
 @pytest.mark.parametrize("make", [cornell, caustic])
@@ -113,15 +116,17 @@ def vcm_image(gl_ctx, scene, spp, options=None, **settings):
     return film, stats
 
 
-@pytest.mark.parametrize("mode", ["vcm", "vm"])
-def test03_one_dispatch_or_many_and_the_seed_bitwise(gl_ctx, mode):
-    """The merge grid is sorted by light path and vertex, merges sum in that order and
-    splats in integers: the image does not depend on how a pass is dispatched, nor on the
-    order in which the light pass's atomics stored the vertices."""
+@pytest.mark.parametrize("options", [{"mode": "vcm"}, {"mode": "vm"}, {"cache_connections": 2}],
+                         ids=["vcm", "vm", "cache"])
+def test03_one_dispatch_or_many_and_the_seed_bitwise(gl_ctx, options):
+    """The merge grid is sorted by light path and vertex, merges sum in that order, the
+    light vertex cache lists the vertices by light path and vertex, and splats sum in
+    integers: the image does not depend on how a pass is dispatched, nor on the order in
+    which the light pass's atomics stored the vertices."""
     scene = caustic(16)
-    a = vcm_image(gl_ctx, scene, 3, VcmSettings(mode=mode), time_target=1e-9)[0].mean
-    b = vcm_image(gl_ctx, scene, 3, VcmSettings(mode=mode), time_target=10.0)[0].mean
-    c = vcm_image(gl_ctx, scene, 3, VcmSettings(mode=mode), time_target=10.0)[0].mean
+    a = vcm_image(gl_ctx, scene, 3, VcmSettings(**options), time_target=1e-9)[0].mean
+    b = vcm_image(gl_ctx, scene, 3, VcmSettings(**options), time_target=10.0)[0].mean
+    c = vcm_image(gl_ctx, scene, 3, VcmSettings(**options), time_target=10.0)[0].mean
     assert np.array_equal(a, b) and np.array_equal(b, c) and a.max() > 0
 
 
@@ -177,6 +182,10 @@ def test07_refusals(gl_ctx):
         VcmSettings(alpha=1.0)
     with pytest.raises(UsageError, match=r"initial radius: expected a positive number"):
         VcmSettings(initial_radius=0.0)
+    with pytest.raises(UsageError, match=r"light vertex cache: expected an integer in \[0, 16\]"):
+        VcmSettings(cache_connections=17)
+    with pytest.raises(UsageError, match=r"light vertex cache: only in vcm mode 'vcm'"):
+        VcmSettings(mode="vm", cache_connections=1)
     scene = caustic(16)
     ball = next(s for s in scene.shapes if s.kind == "mesh")
     ball.world_from_object_close = m.translate((0.0, 0.1, 0.0)) @ ball.world_from_object
@@ -212,20 +221,21 @@ def test08_caustic_error_falls_with_iterations(gl_ctx):
     assert slope + 3 * se < 0, (slope, se)
 
 
-@pytest.mark.parametrize("mode", ["vcm", "vm"])
-def test09_strategy_images_with_merges_partition_the_render(gl_ctx, mode):
+@pytest.mark.parametrize("mode,cache", [("vcm", 0), ("vm", 0), ("vcm", 2)], ids=["vcm", "vm", "cache"])
+def test09_strategy_images_with_merges_partition_the_render(gl_ctx, mode, cache):
     """At strategy depth = max depth (3) the weighted images of the connections (splats
-    included) and of the merges add up to the film: the camera side to float32 summation
-    order (a bound from the sample and strategy counts), the splats exactly (the same
-    fixed-point integers). The merges' unweighted images are at least their weighted part,
-    and the caustic's merges carry light (the glass's L S D E paths)."""
+    included; with a light vertex cache, on the Cornell box, each connection under its own
+    s) and of the merges add up to the film: the camera side to float32 summation order (a
+    bound from the sample and strategy counts), the splats exactly (the same fixed-point
+    integers). The merges' unweighted images are at least their weighted part, and the
+    merges carry light (the caustic's: the glass's L S D E paths)."""
     from glrender.render import strategies
 
-    scene = caustic(16)
+    scene = (cornell if cache else caustic)(16)   # the Cornell box's (2, 2) connections carry light
     spp, depth = 4, 3
     r = create_driver(scene, settings_from_scene(scene, integrator="vcm", spp=spp, seed=4,
                                                  max_depth=depth, strategy_depth=depth),
-                      VcmSettings(mode=mode), ctx=gl_ctx)
+                      VcmSettings(mode=mode, cache_connections=cache), ctx=gl_ctx)
     r.step(spp)
     film, splat = r.film(), r.splat_image()
     images, merges = r.strategy_images(), r.merge_strategy_images()
@@ -239,6 +249,8 @@ def test09_strategy_images_with_merges_partition_the_render(gl_ctx, mode):
     assert np.all(err <= bound + 1e-7), float((err - bound).max())
     assert all(np.all(u >= w - 1e-6) for w, u in merges.values())
     assert sum(w.sum() for w, u in merges.values()) > 0
+    if cache:   # the cache's connections, under their own strategy
+        assert images[(2, 2)][0].sum() > 0
     if mode == "vm":   # merges alone: no connection but s = 0 carries light
         assert all(w.max() == 0 for (s, t), (w, u) in images.items() if s > 0)
 
@@ -277,6 +289,7 @@ void main() {
     words[2] = floatBitsToUint(u_vcm.grid_lo);
     words[3] = floatBitsToUint(u_vcm.merge);
     words[4] = floatBitsToUint(u_vcm.lens);
+    words[5] = u_vcm.cache;
 }
 """
     kernel = shaders.compile_compute(gl_ctx, source=source, name="<vcm params test>")
@@ -286,8 +299,9 @@ void main() {
     block["grid_lo"] = (0.5, 1.5, 2.5, 3.5)
     block["merge"] = (4.5, 5.5, 6.5, 7.5)
     block["lens"] = (8.5, 9.5, 10.5, 11.5)
+    block["cache"] = (12, 13, 14, 15)
     gl = gl_ctx.gl
-    params, out = gl.buffer(block.tobytes()), gl.buffer(reserve=16 * 5)
+    params, out = gl.buffer(block.tobytes()), gl.buffer(reserve=16 * 6)
     params.bind_to_uniform_block(UBO_VCM_PARAMS)
     out.bind_to_storage_buffer(8)
     kernel.run(group_x=1)
