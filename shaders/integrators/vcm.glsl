@@ -269,23 +269,42 @@ bool vcm_merge_visible(Vertex pt, MergePoint m) {
 
 // The merges at camera vertex t - 1 (a mergeable surface vertex): every merge point
 // within the radius in the 2 x 2 x 2 grid cells around it, at most kVcmMergeCandidates
-// visited (the rest counted, vcm_counters[2]).
+// visited (the rest counted, vcm_counters[2]). The candidates of the 8 buckets are one
+// loop: a lane that ends a bucket moves on to its next one, so the lanes of a vector
+// wait for the longest total of candidates, not for the longest list of each bucket in
+// turn (the buckets' ranges sit at constant indices, read by unrolled scans).
 vec3 vcm_merge(int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus) {
     uvec4 size = u_vcm.grid_size;
     if (size.w == 0u) return vec3(0.0);
     float r2 = u_vcm.merge.y;
-    uint buckets[8];
+    uint buckets[8], begins[8], ends[8];
     grid_buckets(pt.p, u_vcm.grid_lo, size, buckets);
+    uint total = 0u;
+    for (int i = 0; i < 8; ++i) {
+        bool none = buckets[i] == kNoBucket;
+        begins[i] = none ? 0u : vcm_grid[buckets[i]];
+        ends[i] = none ? 0u : vcm_grid[buckets[i] + 1u];
+        total += ends[i] - begins[i];
+    }
+    uint visit = min(total, kVcmMergeCandidates);
     int max_light_segments = kBdptMaxSegments - (t - 1);
     vec3 sum = vec3(0.0);
-    uint visited = 0u, skipped = 0u;
-    for (int i = 0; i < 8; ++i) {
-        if (buckets[i] == kNoBucket) continue;
-        uint begin = vcm_grid[buckets[i]], end = vcm_grid[buckets[i] + 1u];
-        uint visit = min(end - begin, kVcmMergeCandidates - visited);
-        skipped += end - begin - visit;
-        for (uint e = begin; e < begin + visit; ++e) {
-            LOOP_TICK();
+    int bucket = -1;
+    uint e = 0u, end = 0u;
+    for (uint n = 0u; n < visit; ++n, ++e) {
+        LOOP_TICK();
+        if (e >= end) {   // the next bucket with candidates
+            int next = 8;
+            for (int k = 7; k >= 0; --k) {
+                if (k > bucket && begins[k] < ends[k]) {
+                    next = k;
+                    e = begins[k];
+                    end = ends[k];
+                }
+            }
+            bucket = next;
+        }
+        {
             vec4 key = vcm_merge_keys[e];
             vec3 d = key.xyz - pt.p;
             if (dot(d, d) > r2) continue;
@@ -311,10 +330,9 @@ vec3 vcm_merge(int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus) {
             strategy_merge(m.segments, t, L, w);
             sum += L * w;
         }
-        visited += visit;
     }
-    if (skipped > 0u) atomicAdd(vcm_counters[2], skipped);
-    if (visited > 0u) atomicAdd(vcm_counters[3], visited);
+    if (total > visit) atomicAdd(vcm_counters[2], total - visit);
+    if (visit > 0u) atomicAdd(vcm_counters[3], visit);
     return sum;
 }
 
