@@ -22,8 +22,8 @@ from .errors import DeviceError, GlrenderError, SceneError, ShaderError, UsageEr
 from .film import Film
 from .render.renderer import Renderer, RenderSettings, settings_from_scene
 from .scene import load
-from .scene.model import (Camera, Emission, Integrator, Light, Material, Sampler, Scene, Shape,
-                          Shutter, Texture, look_at, rotate, scale, translate)
+from .scene.model import (Camera, Emission, Integrator, Light, Material, Medium, Sampler, Scene,
+                          Shape, Shutter, Texture, Volume, look_at, rotate, scale, translate)
 from .scene.model import Film as FilmSettings
 
 __version__ = "0.1.0"
@@ -34,6 +34,6 @@ Image = Film
 __all__ = ["load", "render", "Renderer", "RenderSettings", "Film", "Image", "Scene", "Camera",
            "settings_from_scene",
            "FilmSettings", "Integrator", "Sampler", "Shutter", "Material", "Shape", "Emission",
-           "Light", "Texture", "look_at", "translate", "rotate", "scale", "GlrenderError",
+           "Light", "Texture", "Medium", "Volume", "look_at", "translate", "rotate", "scale", "GlrenderError",
            "SceneError", "ShaderError", "DeviceError", "UsageError", "ProgressCallback",
            "__version__"]

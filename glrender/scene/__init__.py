@@ -9,11 +9,11 @@ from ..errors import SceneError, UsageError
 from .loaders.diagnostics import GlrenderWarning, file_hashes, printable, record_files
 from .loaders.scene_files import check_regular, current_search_path
 from .loaders.scene_files import search_path as search_folders
-from .model import (Camera, Emission, Film, Integrator, Light, Material, Sampler, Scene, Shape,
-                    Shutter, Texture)
+from .model import (Camera, Emission, Film, Integrator, Light, Material, Medium, Sampler, Scene,
+                    Shape, Shutter, Texture, Volume)
 
 __all__ = ["load", "FORMATS", "Scene", "Camera", "Film", "Integrator", "Sampler", "Shutter",
-           "Material", "Shape", "Light", "Emission", "Texture", "GlrenderWarning"]
+           "Material", "Shape", "Light", "Emission", "Texture", "Medium", "Volume", "GlrenderWarning"]
 
 # extension -> (module in glrender.scene.loaders, function)
 FORMATS = {

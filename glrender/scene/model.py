@@ -13,6 +13,11 @@ its scenes load unchanged:
   ``disk`` is the unit disk at z = 0 facing +z; ``sphere`` has a centre and radius.
 - Motion: a shape or camera may carry ``world_from_object_close``: its transform at
   the shutter's close; vertices move linearly between the two (linear motion blur).
+- Media (Mitsuba 3's ``homogeneous`` and ``heterogeneous``): ``sigma_t`` (extinction per
+  unit length, times ``scale``) and ``albedo``, constant or a :class:`Volume` (Mitsuba's
+  ``gridvolume``: a grid over the unit cube, placed by ``world_from_object``, looked up
+  cell-centred); a shape's ``interior`` / ``exterior`` and the camera's ``medium`` index
+  ``Scene.media``. A surface with the ``null`` material only bounds media.
 """
 from __future__ import annotations
 
@@ -246,11 +251,56 @@ class Shape:
     flip_normals: bool = False
     face_normals: bool = False                    # ignore vertex normals (flat shading)
     name: str = ""
+    interior: Optional[int] = None                # index into Scene.media: behind the surface
+    exterior: Optional[int] = None                # and on the side its normal faces
 
     @property
     def moving(self) -> bool:
         return self.world_from_object_close is not None and not np.allclose(
             self.world_from_object_close, self.world_from_object)
+
+
+# -- participating media ---------------------------------------------------------------------------
+@dataclass
+class Volume:
+    """A grid of values over the unit cube [0, 1]^3 of object space (Mitsuba 3's
+    ``gridvolume``), placed by ``world_from_object``. ``data``: float32 (Z, Y, X, C) with C
+    in {1, 3, 6} channels, x fastest in memory as in Mitsuba's ``.vol`` files; a lookup at
+    object point p reads voxel coordinates p * resolution - 0.5 (cell-centred), clamped,
+    ``filter`` ``trilinear`` or ``nearest``."""
+
+    data: np.ndarray
+    world_from_object: np.ndarray = field(default_factory=lambda: np.eye(4))
+    filter: str = "trilinear"
+    name: str = ""
+
+    @property
+    def resolution(self) -> tuple[int, int, int]:
+        """(x, y, z) voxels."""
+        z, y, x = self.data.shape[:3]
+        return x, y, z
+
+
+MediumValue = Union[RGB, Volume]
+
+
+@dataclass
+class Medium:
+    """A participating medium (Mitsuba 3's conventions). ``kind``: ``homogeneous`` (constant
+    ``sigma_t`` and ``albedo``) or ``heterogeneous`` (either may be a :class:`Volume`; the
+    medium is bounded by its ``sigma_t`` grid's box). ``sigma_t`` is the extinction per unit
+    length before ``scale``; ``albedo`` = sigma_s / sigma_t per channel. ``phase``:
+    ``isotropic`` or ``hg`` (Henyey-Greenstein, mean cosine ``g`` in (-1, 1)).
+    ``sample_emitters``: next-event estimation from inside the medium (Mitsuba's flag)."""
+
+    kind: str = "homogeneous"
+    sigma_t: MediumValue = (1.0, 1.0, 1.0)
+    albedo: MediumValue = (0.75, 0.75, 0.75)
+    scale: float = 1.0
+    phase: str = "isotropic"
+    g: float = 0.0
+    sample_emitters: bool = True
+    name: str = ""
 
 
 # -- lights that are not shapes ------------------------------------------------------------------
@@ -310,6 +360,7 @@ class Camera:
     """
 
     world_from_camera: np.ndarray = field(default_factory=lambda: look_at((0, 0, 5), (0, 0, 0), (0, 1, 0)))
+    medium: Optional[int] = None      # index into Scene.media: the medium around the camera
     world_from_camera_close: Optional[np.ndarray] = None
     fov: float = 40.0                 # degrees, along fov_axis (perspective)
     fov_axis: str = "x"               # x | y | smaller | larger | diagonal
@@ -511,6 +562,7 @@ class Scene:
     materials: list[Material] = field(default_factory=list)
     shapes: list[Shape] = field(default_factory=list)
     lights: list[Light] = field(default_factory=list)
+    media: list[Medium] = field(default_factory=list)
     source: str = "<scene>"            # file it came from, for messages
     animation: Optional[object] = None  # keyed motion over frames: glrender.scene.animation.Animation
     files: dict[str, str] = field(default_factory=dict)   # absolute path -> SHA-256 of every file the
@@ -521,11 +573,24 @@ class Scene:
         self.materials.append(material)
         return len(self.materials) - 1
 
+    def add_medium(self, medium: Medium) -> int:
+        """Append ``medium``; returns its index for ``Shape.interior`` / ``exterior`` and
+        ``Camera.medium``."""
+        self.media.append(medium)
+        return len(self.media) - 1
+
     def validate(self) -> None:
         """Cross-checks that loaders cannot do alone."""
         for i, shape in enumerate(self.shapes):
             if not 0 <= shape.material < len(self.materials):
                 raise SceneError(f"{self.source}: shape {shape.name or i}: material index "
                                  f"{shape.material} out of range")
+            for side in ("interior", "exterior"):
+                k = getattr(shape, side)
+                if k is not None and not 0 <= k < len(self.media):
+                    raise SceneError(f"{self.source}: shape {shape.name or i}: {side} medium index "
+                                     f"{k} out of range")
+        if self.camera.medium is not None and not 0 <= self.camera.medium < len(self.media):
+            raise SceneError(f"{self.source}: camera: medium index {self.camera.medium} out of range")
         if not self.shapes and not self.lights:
             raise SceneError(f"{self.source}: the scene has no shapes and no lights")
