@@ -21,8 +21,8 @@ import numpy as np
 
 from ..testing.chi2 import LineDomain, PlanarDomain, SphericalDomain
 from ..testing.harness import run_glsl
-from . import (cone, disk, disk_rejection, distributions, hemisphere, microfacet, phong, power,
-               sphere, spherical_rectangle, spherical_triangle, triangle)
+from . import (cone, disk, disk_rejection, distributions, hemisphere, microfacet, phase, phong,
+               power, sphere, spherical_rectangle, spherical_triangle, triangle)
 from ._array import normalize
 from .sequences import hash_combine, uint_to_unit_float
 
@@ -158,6 +158,9 @@ TRIANGLE_REF = (0.0, 0.0, 0.0)
 RECTANGLE = dict(s=(-0.5, -0.4, 1.0), ex=(1.0, 0.0, 0.2), ey=(0.0, 0.8, 0.0))
 RECTANGLE_REF = (0.2, -0.1, 0.0)
 ALPHA = (0.3, 0.6)
+# Henyey-Greenstein mean cosines: forward and backward scattering (g = 0 is the uniform
+# sphere's density, already catalogued as uniform_sphere)
+HG_G = (0.7, -0.7)
 # Beckmann slopes come from a Newton iteration that stops when |CDF(x) - u| < 1e-6:
 # GLSL (float32) and numpy (float64) may stop at slopes 1e-6 / density apart, which is
 # large in the tails; the CDF-level check is in tests/sampling/test_microfacet.py.
@@ -222,6 +225,23 @@ def _microfacet_warp(name, title, sampler, pdf_fn, sample_fn, wo, alpha, invert=
         roundtrip_tol=AZIMUTH_TOL / min(alpha), well_conditioned=lambda u: u[:, 0] >= 1e-3,
         # normalising the unstretched normal: errors up to ~eps / (alpha cos theta_m)
         agree_tol=agree_tol, pdf_tol=256 * EPS32, plot="sphere", group="microfacet")
+
+
+def _hg_warp(g: float) -> Warp:
+    """Henyey-Greenstein scattering about +z with mean cosine g."""
+    g32 = float(np.float32(g))  # the numpy twin sees the uniform's float32 value
+    return Warp(
+        name=f"hg_{'forward' if g > 0 else 'backward'}", title=f"Henyey-Greenstein, g = {g:g}",
+        includes=("sampling/phase.glsl",), point_type="vec3",
+        sample_glsl="sample_hg(u, g)", pdf_glsl="hg_phase(p.z, g)",
+        invert_glsl="invert_hg_sample(p, g)",
+        sample=lambda u: phase.sample_hg(u, g32),
+        pdf=_sphere_pdf(lambda w: phase.hg_phase(w[:, 2], g32)),
+        invert=lambda w: phase.invert_hg_sample(w, g32),
+        domain=SphericalDomain(), uniforms={"g": g},
+        # only u.x = 0 (cos theta = -1, the pole) loses the azimuth: x and y keep their
+        # relative accuracy however small sin theta is
+        well_conditioned=lambda u: u[:, 0] > 0, plot="sphere", group="phase")
 
 
 def _triangle_warp(suffix: str, title: str, **fields) -> Warp:
@@ -431,6 +451,8 @@ def build_catalog() -> list[Warp]:
                          "sample_beckmann_visible_normal", microfacet.beckmann_visible_normal_pdf,
                          microfacet.sample_beckmann_visible_normal, (0.0, 0.0, 1.0), (0.4, 0.25),
                          agree_tol=BECKMANN_TOL),
+        # -- phase functions of participating media ------------------------------------------
+        *(_hg_warp(g) for g in HG_G),
     ]
     return warps
 

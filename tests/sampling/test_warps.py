@@ -155,7 +155,7 @@ def test06_catalogue_is_complete():
             "uniform_sphere", "uniform_hemisphere", "cosine_hemisphere", "uniform_cone",
             "phong_lobe", "spherical_triangle", "spherical_rectangle", "ggx_visible_normal",
             "beckmann_visible_normal", "power_inversion", "power_max", "distribution_1d",
-            "distribution_2d"} <= names
+            "distribution_2d", "hg_forward", "hg_backward"} <= names
     for w in CATALOG:  # directions are plotted as directions
         assert isinstance(w.domain, SphericalDomain) == (w.plot == "sphere"), w.name
 
