@@ -29,6 +29,7 @@ OPTIONAL_DEFINES = {
     "GLRENDER_COOP_LANES": "8-wide traversal: cooperative when at most this many lanes have rays",
     "GLRENDER_VCM_MODE": "vertex connection and merging: 1 connections and merges, 2 merges alone",
     "GLRENDER_VCM_CACHE": "vcm: connections per camera vertex to a light vertex cache (0: none)",
+    "GLRENDER_SHARED_TIME": "every sample of a pass takes one shutter time (vcm with motion)",
 }
 
 

@@ -53,6 +53,16 @@ MAX_LIGHT_PATHS = 1 << 26   # a merge point's key holds the light path index in 
 MAX_CACHE_CONNECTIONS = 16  # per camera vertex, to a light vertex cache
 
 
+def iteration_time(index: int, seed: int) -> float:
+    """The uniform number in [0, 1) whose shutter time every path of iteration ``index`` + 1
+    takes in a scene with motion: the base-2 radical inverse of the index (the iterations
+    stratify the shutter), rotated by a number of the seed (Cranley-Patterson), so that it
+    depends on the index and the seed alone."""
+    bits = int(f"{index & 0xFFFFFFFF:032b}"[::-1], 2)
+    rotation = ((seed & 0xFFFFFFFF) * 2654435761 + 0x9E3779B9) & 0xFFFFFFFF
+    return ((bits + rotation) & 0xFFFFFFFF) / 2.0 ** 32
+
+
 def groups_2d(invocations: int) -> tuple[int, int]:
     """Work groups of 64 for ``invocations``, in rows of at most 65,535 (GL's guaranteed
     count along one axis): (x, y); the kernels number them row by row."""
@@ -115,12 +125,13 @@ class VcmRenderer(Renderer):
         self.vcm = vcm or VcmSettings()
         if settings is None:
             overrides.setdefault("integrator", "vcm")
-        if self.vcm.merges:
-            moving = [s.name or f"shape {k}" for k, s in enumerate(scene.shapes) if s.moving]
-            if moving:
-                raise UsageError(f"vcm --vcm-mode {self.vcm.mode}: {moving[0]} moves during the "
-                                 f"shutter, and merges would join light vertices of other times "
-                                 f"(use --vcm-mode bpt or --integrator bdpt)")
+        # merges join light vertices of other light paths, which must be at the same time:
+        # in a scene with motion every path of an iteration takes the iteration's time
+        cam = scene.camera
+        self.shared_time = self.vcm.merges and scene.shutter.close > scene.shutter.open and (
+            any(s.moving for s in scene.shapes) or (
+                cam.world_from_camera_close is not None
+                and not np.allclose(cam.world_from_camera_close, cam.world_from_camera)))
         self.counters = {"vertices": 0, "merge_points": 0, "retraced": 0}
         self.grid_seconds = 0.0
         self.light_seconds = 0.0
@@ -139,6 +150,8 @@ class VcmRenderer(Renderer):
         if not self.vcm.merges:
             return {}
         out = {"GLRENDER_VCM_MODE": MODES[self.vcm.mode]}
+        if self.shared_time:
+            out["GLRENDER_SHARED_TIME"] = 1
         if self.vcm.cache_connections:
             out["GLRENDER_VCM_CACHE"] = self.vcm.cache_connections
         return out
@@ -227,6 +240,14 @@ class VcmRenderer(Renderer):
             self.gl.finish()
 
     # -- one iteration -----------------------------------------------------------------------
+    def param_block(self, first_sample: int, samples: int) -> Any:
+        """Renderer.param_block; in a scene with motion, with the shutter time of iteration
+        ``first_sample`` + 1 that all its paths take (:func:`iteration_time`)."""
+        prm = super().param_block(first_sample, samples)
+        if self.shared_time:
+            prm["shutter"][3] = iteration_time(first_sample, int(self.settings.sampler.seed))
+        return prm
+
     def radius(self, iteration: int) -> float:
         """The merge radius of iteration ``iteration`` (1, 2, ...): r_1 i^((alpha - 1) / 2)."""
         return self.radius_1 * iteration ** ((self.vcm.alpha - 1.0) / 2.0)

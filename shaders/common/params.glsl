@@ -59,6 +59,9 @@
 #ifndef GLRENDER_VCM_CACHE
 #define GLRENDER_VCM_CACHE 0
 #endif
+#ifndef GLRENDER_SHARED_TIME
+#define GLRENDER_SHARED_TIME 0
+#endif
 // A material's normal map has Mitsuba's shadowing term (bsdf/bsdf.glsl
 // bsdf_normal_shadowing; bdpt's vertices keep the unperturbed normal for it).
 const bool kNormalShadowing = GLRENDER_NORMAL_SHADOWING != 0;
@@ -97,6 +100,9 @@ const int kVcmMode = GLRENDER_VCM_MODE;
 // vcm with a light vertex cache: each camera vertex connects to this many light vertices
 // drawn from all the iteration's stored ones (0: to its pixel's own light subpath).
 const int kVcmCacheConnections = GLRENDER_VCM_CACHE;
+// Every camera sample of a pass takes one shutter time (u_params.shutter.w), a new one each
+// pass: vcm's merges join light vertices of one time in scenes with motion.
+const bool kSharedTime = GLRENDER_SHARED_TIME != 0;
 
 // Sample generator (sampling/sampler.glsl).
 const int kSamplerIndependent = 0;

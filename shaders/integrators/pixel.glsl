@@ -91,7 +91,8 @@ CameraSample camera_sample(uvec2 pixel, inout SamplerState s) {
     CameraSample c;
     vec2 offset = sample_pixel_filter(sampler_2d(s), u_params.filter_params, c.weight);
     vec2 u_lens = sampler_2d(s);
-    c.time = u_params.shutter.y > u_params.shutter.x ? sample_shutter_time(sampler_1d(s)) : 0.0;
+    c.time = u_params.shutter.y > u_params.shutter.x
+           ? sample_shutter_time(kSharedTime ? u_params.shutter.w : sampler_1d(s)) : 0.0;
     float t_min;
     camera_ray(vec2(pixel) + 0.5 + offset, u_lens, c.time, c.o, c.d, t_min, c.t_max);
     c.o += t_min * c.d;

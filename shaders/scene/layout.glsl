@@ -14,7 +14,8 @@ layout(std140, binding = UBO_RENDER_PARAMS) uniform RenderParams {
     vec4 camera_screen;    // x, y: half the film's extent along camera x, y (perspective: on the plane z = 1, tan(fov / 2);
                            // orthographic: in camera units), z: lens radius, w: focus distance
     vec4 camera_clip;      // x: near clip, y: far clip
-    vec4 shutter;          // x: open, y: close, z: shutter function (0 box, 1 tent)
+    vec4 shutter;          // x: open, y: close, z: shutter function (0 box, 1 tent), w: the uniform number
+                           // whose shutter time every sample of the pass takes (GLRENDER_SHARED_TIME)
     vec4 filter_params;    // x: radius in pixels, y: gaussian stddev, z: Mitchell B, w: Mitchell C
     uvec4 image;           // x: width, y: height, z: tiles along x, w: tile rows in the accumulation
     uvec4 samples;         // x: first sample index, y: samples per pixel this pass, z: spp of one randomization, w: strata columns

@@ -22,6 +22,18 @@ def cornell(size=64) -> m.Scene:
     return scene
 
 
+def cornell_motion(size=64) -> m.Scene:
+    """The Cornell box with a white ball on its small box moving toward the red wall during
+    a box shutter of [0, 1] (vcm: every path of an iteration takes the iteration's time)."""
+    scene = cornell(size)
+    scene.shutter = m.Shutter(open=0.0, close=1.0)
+    white = next(s for s in scene.shapes if s.name == "small box").material
+    ball = m.Shape("sphere", material=white, center=(0.33, -0.2, 0.38), radius=0.2, name="ball")
+    ball.world_from_object_close = m.translate((-0.4, 0.0, 0.0))
+    scene.shapes.append(ball)
+    return scene
+
+
 def glossy(size=64) -> m.Scene:
     """The Cornell box with a rough conductor floor and a rough plastic large box."""
     scene = cornell(size)

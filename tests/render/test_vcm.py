@@ -21,8 +21,8 @@ from glrender.scene import model as m
 from glrender.testing.images import compare_images
 from glrender.vcm import VcmSettings, vcm as vcm_module
 
-from bidir_scenes import (caustic, closed_enclosure, cornell, path_reference, renders, thin_lens,
-                          use_generic_weights)
+from bidir_scenes import (caustic, closed_enclosure, cornell, cornell_motion, path_reference, renders,
+                          thin_lens, use_generic_weights)
 
 SEEDS = tuple(range(100, 116))
 SEEDS_PATH = (11, 12, 13, 14)
@@ -37,6 +37,7 @@ SCENES = {
     "cornell-paths-300": (cornell, 16, 256, 64, "vcm", {"light_paths": 300}),
     "cornell-paths-3000": (cornell, 16, 256, 64, "vcm", {"light_paths": 3000}),
     "cornell-cache": (cornell, 16, 256, 64, "vcm", {"cache_connections": 2}),
+    "cornell-motion": (cornell_motion, 16, 256, 64, "vcm", {}),
     "enclosure-cache": (closed_enclosure, 8, 0, 16, "vcm", {"cache_connections": 1, "light_paths": 700}),
 }
 
@@ -186,15 +187,6 @@ def test07_refusals(gl_ctx):
         VcmSettings(cache_connections=17)
     with pytest.raises(UsageError, match=r"light vertex cache: only in vcm mode 'vcm'"):
         VcmSettings(mode="vm", cache_connections=1)
-    scene = caustic(16)
-    ball = next(s for s in scene.shapes if s.kind == "mesh")
-    ball.world_from_object_close = m.translate((0.0, 0.1, 0.0)) @ ball.world_from_object
-    with pytest.raises(UsageError, match=r"moves during the shutter"):
-        create_driver(scene, settings_from_scene(scene, integrator="vcm", spp=1), VcmSettings(),
-                      ctx=gl_ctx)
-    r = create_driver(scene, settings_from_scene(scene, integrator="vcm", spp=1),
-                      VcmSettings(mode="bpt"), ctx=gl_ctx)    # bdpt renders motion
-    r.release()
 
 
 @pytest.mark.slow
@@ -308,3 +300,28 @@ void main() {
     assert out.read() == block.tobytes()
     params.release()
     out.release()
+
+
+def test12_motion_takes_one_time_per_iteration(gl_ctx):
+    """In a scene with motion every path of an iteration takes the iteration's shutter time
+    (merges join light vertices of one time): the radical inverse of the iteration index,
+    rotated by the seed. A render with motion is deterministic and compiles the shared time
+    only where something moves."""
+    times = [vcm_module.iteration_time(i, 7) for i in range(8)]
+    assert all(0.0 <= t < 1.0 for t in times)
+    # the first 2^k iterations hold one time in each of 2^k equal parts of [0, 1)
+    assert sorted(int(t * 8) for t in times) == list(range(8))
+    assert vcm_module.iteration_time(3, 7) != vcm_module.iteration_time(3, 8)
+    scene = cornell_motion(16)
+    r = create_driver(scene, settings_from_scene(scene, integrator="vcm", spp=2, seed=5),
+                      VcmSettings(), ctx=gl_ctx)
+    assert r.shared_time and r.defines.get("GLRENDER_SHARED_TIME") == 1
+    r.step(2)
+    a = r.film().mean
+    r.release()
+    b = vcm_image(gl_ctx, scene, 2)[0].mean
+    still = create_driver(cornell(16), settings_from_scene(cornell(16), integrator="vcm", spp=1),
+                          VcmSettings(), ctx=gl_ctx)
+    assert not still.shared_time
+    still.release()
+    assert np.array_equal(a, b) and a.max() > 0 and np.isfinite(a).all()
