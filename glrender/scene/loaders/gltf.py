@@ -9,7 +9,8 @@ KHR_materials_ior (default 1.5). A metallicRoughnessTexture varies metallic (blu
 roughness (green) per texel, the BSDF chosen per surface point by the same rule (on
 transmissive materials its mean roughness is used). Emissive factor times
 KHR_materials_emissive_strength, times the emissiveTexture at each point where there is one,
-makes the primitive an area light.
+makes the primitive an area light. KHR_materials_volume on a transmissive material fills its
+meshes with an absorbing medium (:func:`.media.attenuation_medium`).
 
 glTF is top-left based: uv (0, 0) is the first texel of the image, which is Mitsuba's
 convention too, so texture coordinates are used as they are. Light intensities are
@@ -37,8 +38,8 @@ from .pbr import metallic_roughness_material, textured_metallic_roughness_materi
 from .scene_files import SceneFiles, read_bytes
 
 SUPPORTED_EXTENSIONS = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
-                        "KHR_materials_transmission", "KHR_materials_ior", "KHR_texture_transform",
-                        "KHR_draco_mesh_compression"}
+                        "KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_volume",
+                        "KHR_texture_transform", "KHR_draco_mesh_compression"}
 _COMPONENT = {5120: "i1", 5121: "u1", 5122: "<i2", 5123: "<u2", 5125: "<u4", 5126: "<f4"}
 _NORMALIZE = {5120: 127.0, 5121: 255.0, 5122: 32767.0, 5123: 65535.0}
 _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
@@ -55,6 +56,7 @@ class _Gltf:
         self._buffers: dict[int, bytes] = {}
         self._meshes: dict[tuple, MeshData] = {}
         self._materials: dict[tuple, int] = {}
+        self._media: dict[int, int | None] = {}     # material index -> its interior medium
         self._textures: dict[int, m.Texture] = {}
 
     def fail(self, where: str, message: str):
@@ -440,6 +442,44 @@ class _Gltf:
         self._materials[(index,)] = (self.scene.add_material(mat), emission)
         return self._materials[(index,)]
 
+    def medium(self, index) -> int | None:
+        """The medium inside the surfaces of material ``index`` (KHR_materials_volume), as an
+        index into Scene.media; None for a thin-walled material (thicknessFactor 0, the
+        default) and without KHR_materials_transmission (the extension needs it)."""
+        if index is None:
+            return None
+        if index in self._media:
+            return self._media[index]
+        mdef = self.item("materials", index, "material")
+        ext = self.table(mdef.get("extensions"), f"materials[{index}].extensions")
+        where = f"materials[{index}].extensions.KHR_materials_volume"
+        volume = self.table(ext.get("KHR_materials_volume"), where)
+        medium = None
+        thickness = _floats([volume.get("thicknessFactor", 0.0)], 1, self, f"{where}.thicknessFactor")[0]
+        if thickness < 0:
+            self.fail(f"{where}.thicknessFactor", f"expected a thickness >= 0, got {thickness:g}")
+        if thickness > 0 and "KHR_materials_transmission" not in ext:
+            self.notes.add("KHR_materials_volume without KHR_materials_transmission (no medium)")
+        elif thickness > 0:
+            from .media import attenuation_medium
+
+            color = _floats(volume.get("attenuationColor", [1.0, 1.0, 1.0]), 3, self,
+                            f"{where}.attenuationColor")
+            if not all(0.0 <= c <= 1.0 for c in color):
+                self.fail(f"{where}.attenuationColor", f"expected 3 numbers in [0, 1], got "
+                          f"{excerpt(volume['attenuationColor'])}")
+            distance = math.inf
+            if "attenuationDistance" in volume:
+                distance = _floats([volume["attenuationDistance"]], 1, self,
+                                   f"{where}.attenuationDistance")[0]
+                if not distance > 0:
+                    self.fail(f"{where}.attenuationDistance", f"expected a distance > 0, got "
+                              f"{distance:g}")
+            name = str(mdef.get("name", f"material {index}"))
+            medium = self.scene.add_medium(attenuation_medium(tuple(color), distance, name=name))
+        self._media[index] = medium
+        return medium
+
 
 def _floats(value, n: int, g: _Gltf, where: str) -> list[float]:
     if not isinstance(value, list) or len(value) != n or not all(
@@ -571,7 +611,8 @@ def load_gltf(path, **params) -> m.Scene:
                 scene.shapes.append(m.Shape("mesh", material=mat, world_from_object=M,
                                             vertices=mesh.vertices, triangles=mesh.triangles,
                                             normals=mesh.normals, uvs=mesh.uvs, emission=emission,
-                                            name=str(node.get("name", f"node {index}"))))
+                                            name=str(node.get("name", f"node {index}")),
+                                            interior=g.medium(prim.get("material"))))
         if "camera" in node and camera is None:
             camera = _camera(g, node["camera"], M, scene)
         light_ref = g.table(g.table(node.get("extensions"), f"{where}.extensions").get(

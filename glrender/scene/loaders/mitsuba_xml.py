@@ -36,6 +36,7 @@ _PARAM = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
 _BSDF_TYPES = {"twosided", "normalmap", "mask", "bumpmap", "diffuse", "conductor", "roughconductor",
                "dielectric", "roughdielectric", "thindielectric", "plastic", "roughplastic", "null"}
 _TEXTURE_TYPES = {"bitmap", "checkerboard"}
+_GRID_TYPES = ("gridvolume", "grid")      # Mitsuba's plugin name, and the one its manual shows
 
 
 @dataclass
@@ -328,6 +329,7 @@ class _Builder:
         self.r, self.scene = reader, scene
         self.materials: dict[int, int] = {}      # id(Node) -> material index
         self.textures: dict[int, m.Texture] = {}
+        self.media: dict[int, int] = {}           # id(Node) -> medium index
         self.used: set[int] = set()               # id(Node) of every BSDF and texture read
         self.has_camera = False
 
@@ -618,6 +620,15 @@ class _Builder:
                         emission=emission, flip_normals=self.prop(node, "flip_normals", "bool", False),
                         face_normals=self.prop(node, "face_normals", "bool", False),
                         name=node.id or f"{t} (line {node.line})")
+        for side, medium in self.objects(node, "medium"):
+            # Mitsuba's shape: a medium named interior (behind the surface) or exterior (the
+            # side the normal faces); one of each
+            if side not in ("interior", "exterior"):
+                self.r.notes.add("a medium in a shape named neither interior nor exterior", medium.line)
+            elif getattr(shape, side) is not None:
+                node.fail(f"only a single {side} medium can be specified per shape")
+            else:
+                setattr(shape, side, self.medium(medium))
         if t in ("obj", "ply"):
             from .mesh_files import read_mesh
 
@@ -639,6 +650,120 @@ class _Builder:
             shape = disk_shape(shape)
         self.scene.shapes.append(shape)
 
+    # -- participating media ---------------------------------------------------------------
+    def medium(self, node: Node) -> int:
+        """The index in Scene.media of the medium ``node`` describes: one per node, however
+        many shapes and sensors refer to it."""
+        if id(node) in self.media:
+            return self.media[id(node)]
+        from .media import MEDIUM_KINDS, check_scale
+
+        if node.type not in MEDIUM_KINDS:
+            node.fail("unknown medium type (expected homogeneous or heterogeneous)")
+        phase, g = self.phase(node)
+        medium = m.Medium(node.type, sigma_t=self.medium_value(node, "sigma_t", (1.0,) * 3),
+                          albedo=self.medium_value(node, "albedo", (0.75,) * 3),
+                          phase=phase, g=g, name=node.id or f"{node.type} (line {node.line})")
+        scale = self.prop(node, "scale", "float", 1.0)
+        try:
+            medium.scale = check_scale(scale)
+        except SceneError as exc:
+            raise SceneError(f"{node.file}:{node.props['scale'][2]}: scale: {exc}") from None
+        medium.sample_emitters = self.prop(node, "sample_emitters", "bool", True)
+        self.media[id(node)] = self.scene.add_medium(medium)
+        return self.media[id(node)]
+
+    def phase(self, node: Node) -> tuple[str, float]:
+        """(kind, g) of a medium's nested phase function; Mitsuba's default is isotropic."""
+        from .media import HG_DEFAULT_G, PHASES, check_g
+
+        phases = [obj for _, obj in self.objects(node, "phase")]
+        if len(phases) > 1:
+            node.fail("only a single phase function can be specified per medium")
+        if not phases:
+            return "isotropic", 0.0
+        phase = phases[0]
+        if phase.type not in PHASES:
+            phase.fail("unsupported phase function (expected isotropic or hg)")
+        if phase.type == "isotropic":
+            return "isotropic", 0.0
+        g = self.prop(phase, "g", "float", HG_DEFAULT_G)
+        try:
+            return "hg", check_g(g)
+        except SceneError as exc:
+            raise SceneError(f"{phase.file}:{phase.props['g'][2]}: g: {exc}") from None
+
+    def medium_value(self, node: Node, name: str, default: tuple):
+        """A medium's ``sigma_t`` or ``albedo``: a constant (<float>, <rgb>, <spectrum>) or a
+        nested or referenced <volume>, checked against its range. A heterogeneous medium's
+        constant sigma_t is Mitsuba's constvolume: constant over the unit cube."""
+        from .media import check_value
+        from .volumes import constant_volume
+
+        volumes = [obj for child, obj in self.objects(node, "volume") if child == name]
+        if len(volumes) > 1:
+            node.fail(f"{name} is given by {len(volumes)} volumes")
+        bounded = node.type == "heterogeneous" and name == "sigma_t"
+        if volumes:
+            if node.type == "homogeneous" and name == "sigma_t" and volumes[0].type in _GRID_TYPES:
+                volumes[0].fail("a homogeneous medium's sigma_t is a constant (a grid needs "
+                                "<medium type=\"heterogeneous\">)")
+            return self.volume(volumes[0], name, bounded)
+        value = self.color(node, name, default, emitter=name == "sigma_t")
+        if isinstance(value, m.Texture):
+            node.fail(f"{name}: a texture is not a medium value (expected a constant or a <volume>)")
+        where = f"{node.file}:{node.props[name][2]}" if name in node.props else node.where
+        try:
+            value = check_value(value, name)
+        except SceneError as exc:
+            raise SceneError(f"{where}: {name}: {exc}") from None
+        return constant_volume(value, name=name) if bounded else value
+
+    def volume(self, node: Node, name: str, bounded: bool):
+        """A <volume> giving a medium's ``name``: ``constvolume`` (an RGB, or a one-voxel
+        grid where ``bounded``) or ``gridvolume`` (a .vol or .npy file)."""
+        from .media import check_value
+        from .volumes import constant_volume, grid_volume, read_grid
+
+        to_world = self.prop(node, "to_world", "transform", None)
+        if node.type == "constvolume":
+            value = self.color(node, "value", (1.0,) * 3, emitter=name == "sigma_t")
+            if isinstance(value, m.Texture):
+                node.fail("value: textures are not supported in a constvolume")
+            label = f"{name} value"
+        elif node.type in _GRID_TYPES:
+            filename = self.prop(node, "filename", "string", "")
+            path = self.r.files.resolve(filename, node.file, node.line, "volume file",
+                                        tuple(self.r.search))
+            filt = self.prop(node, "filter_type", "string", "trilinear")
+            if filt not in ("trilinear", "nearest"):
+                node.fail(f"filter_type must be trilinear or nearest, got {excerpt(filt)}")
+            wrap = self.prop(node, "wrap_mode", "string", "clamp")
+            if wrap != "clamp":
+                self.r.notes.add(f"gridvolume wrap_mode {excerpt(wrap)} (clamp used)", node.line)
+            use_grid_bbox = self.prop(node, "use_grid_bbox", "bool", False)
+            try:
+                grid = read_grid(path)
+            except SceneError as exc:
+                node.fail(f"volume file {excerpt(filename)}: {exc}")
+            try:
+                value = grid_volume(grid, to_world, filt, use_grid_bbox, name=node.id or path.name)
+            except SceneError as exc:
+                node.fail(str(exc))
+            label = f"{name} from {excerpt(filename)}"
+        else:
+            node.fail("unknown volume type (expected constvolume or gridvolume)")
+        try:
+            value = check_value(value, name)
+        except SceneError as exc:
+            node.fail(f"{label}: {exc}")
+        if bounded and not isinstance(value, m.Volume):
+            try:
+                return constant_volume(value, to_world, name=node.id or name)
+            except SceneError as exc:
+                node.fail(str(exc))
+        return value
+
     def default_material(self, black: bool = False) -> int:
         key = -2 if black else -1
         if key not in self.materials:
@@ -649,6 +774,8 @@ class _Builder:
     def emitter(self, node: Node) -> None:
         t = node.type
         M = self.prop(node, "to_world", "transform", None)
+        for _, medium in self.objects(node, "medium"):
+            self.r.notes.add("a medium inside an emitter", medium.line)
 
         def rgb(name, default):
             value = self.color(node, name, default, emitter=True)
@@ -725,6 +852,11 @@ class _Builder:
             cam.__post_init__()
         except SceneError as exc:
             node.fail(str(exc))
+        media = [medium for _, medium in self.objects(node, "medium")]
+        if len(media) > 1:
+            node.fail("only a single medium can be specified per sensor")
+        if media:
+            cam.medium = self.medium(media[0])
         self.scene.camera = cam
         self.has_camera = True
         for _, film in self.objects(node, "film"):
@@ -832,7 +964,7 @@ def load_mitsuba(path, **params) -> m.Scene:
             b.shape(obj)
         elif obj.tag == "emitter":
             b.emitter(obj)
-        elif obj.tag in ("bsdf", "texture"):
+        elif obj.tag in ("bsdf", "texture") or (obj.tag in ("medium", "volume", "phase") and obj.id):
             pass                # used through <ref>
         else:
             reader.notes.add(f"<{excerpt(obj.tag, quote=False)} type=\"{excerpt(obj.type, quote=False)}\">",
@@ -840,6 +972,8 @@ def load_mitsuba(path, **params) -> m.Scene:
     for _, obj in root.children:
         if isinstance(obj, Node) and obj.tag in ("bsdf", "texture"):
             b.unused(obj)
+        elif isinstance(obj, Node) and obj.tag == "medium" and obj.id and id(obj) not in b.media:
+            reader.notes.add(f"medium {excerpt(obj.id)} (not used by any shape or sensor)", obj.line)
     unused = sorted(set(params) - reader.used)
     if unused:
         warn(f"{path}: parameters given but not used: {', '.join(unused)}")

@@ -175,12 +175,14 @@ def _film(ctx, t) -> m.Film:
     return f
 
 
-def _camera(ctx, t) -> m.Camera:
+def _camera(ctx, t, media: dict[str, int]) -> m.Camera:
     t = ctx.table(t, "camera")
     _check_keys(ctx, t, "camera", {"kind", "fov", "fov_axis", "half_extent", "look_at", "transform",
                                    "transform_close", "aperture_radius", "focus_distance",
-                                   "near_clip", "far_clip"})
+                                   "near_clip", "far_clip", "medium"})
     c = m.Camera()
+    if "medium" in t:
+        c.medium = _medium_ref(ctx, t["medium"], "camera.medium", media)
     c.kind = ctx.string(t.get("kind", c.kind), "camera.kind", m.CAMERA_KINDS)
     # each kind's own keys: another kind's are refused, not ignored
     foreign = {"orthographic": {"fov": "its view is half_extent wide on either side of the axis",
@@ -382,11 +384,12 @@ def _material(ctx, name: str, t) -> m.Material:
     return mat
 
 
-def _shape(ctx, i: int, t, materials: dict[str, int], scene: m.Scene) -> list[m.Shape]:
+def _shape(ctx, i: int, t, materials: dict[str, int], media: dict[str, int]) -> list[m.Shape]:
     key = f"shapes[{i}]"
     t = ctx.table(t, key)
     _check_keys(ctx, t, key, {"type", "material", "transform", "transform_close", "emission", "file",
-                              "center", "radius", "flip_normals", "face_normals", "name"})
+                              "center", "radius", "flip_normals", "face_normals", "name",
+                              "interior", "exterior"})
     kind = ctx.string(t.get("type"), f"{key}.type", ("rectangle", "cube", "sphere", "disk", "mesh"))
     mat_name = ctx.string(t.get("material"), f"{key}.material")
     if mat_name not in materials:
@@ -403,6 +406,9 @@ def _shape(ctx, i: int, t, materials: dict[str, int], scene: m.Scene) -> list[m.
         shape.emission = m.Emission(ctx.color(e.get("radiance"), f"{key}.emission.radiance"),
                                     ctx.boolean(e.get("two_sided", False), f"{key}.emission.two_sided"))
     shape.flip_normals = ctx.boolean(t.get("flip_normals", False), f"{key}.flip_normals")
+    for side in ("interior", "exterior"):
+        if side in t:
+            setattr(shape, side, _medium_ref(ctx, t[side], f"{key}.{side}", media))
     shape.face_normals = ctx.boolean(t.get("face_normals", False), f"{key}.face_normals")
     if kind == "sphere":
         shape.center = ctx.vector(t.get("center", [0, 0, 0]), f"{key}.center")
@@ -419,6 +425,118 @@ def _shape(ctx, i: int, t, materials: dict[str, int], scene: m.Scene) -> list[m.
 
         shape = disk_shape(shape)
     return [shape]
+
+
+# -- participating media ----------------------------------------------------------------------
+_MEDIUM_FIELDS = {"type", "sigma_t", "albedo", "sigma_a", "sigma_s", "scale", "sample_emitters",
+                  "phase"}
+_GRID_FIELDS = {"file", "transform", "filter", "use_grid_bbox"}
+
+
+def _medium(ctx, name: str, t) -> m.Medium:
+    """[media.NAME]: Mitsuba's homogeneous and heterogeneous media; sigma_a / sigma_s (constants)
+    stand for sigma_t and albedo."""
+    from .media import MEDIUM_KINDS, absorption_scattering, check_scale
+
+    key = f"media.{name}"
+    t = ctx.table(t, key)
+    _check_keys(ctx, t, key, _MEDIUM_FIELDS)
+    kind = ctx.string(t.get("type", "homogeneous"), f"{key}.type", MEDIUM_KINDS)
+    medium = m.Medium(kind, name=name)
+    if "sigma_a" in t or "sigma_s" in t:
+        given = sorted({"sigma_t", "albedo"} & set(t))
+        if given:
+            ctx.fail(f"{key}.{given[0]}", "give sigma_t and albedo, or sigma_a and sigma_s, not both")
+        if kind == "heterogeneous":
+            ctx.fail(key, "sigma_a and sigma_s are constants; a heterogeneous medium's sigma_t is "
+                     "a grid (give sigma_t = { file = ... } and albedo)")
+        a, s = (_medium_constant(ctx, t.get(k, 0.0), f"{key}.{k}", "sigma_t")
+                for k in ("sigma_a", "sigma_s"))
+        medium.sigma_t, medium.albedo = absorption_scattering(a, s)
+    else:
+        if kind == "heterogeneous" and not isinstance(t.get("sigma_t"), dict):
+            got = f", got {_show(t['sigma_t'])}" if "sigma_t" in t else ""
+            ctx.fail(f"{key}.sigma_t", f"a heterogeneous medium's sigma_t is a grid: expected "
+                     f"{{ file = ... }}{got}")
+        if kind == "homogeneous" and isinstance(t.get("sigma_t"), dict):
+            ctx.fail(f"{key}.sigma_t", "a homogeneous medium's sigma_t is a constant (a grid "
+                     "needs type = \"heterogeneous\")")
+        for field_name in ("sigma_t", "albedo"):
+            if field_name in t:
+                setattr(medium, field_name, _medium_value(ctx, t[field_name], f"{key}.{field_name}",
+                                                          field_name))
+    if "scale" in t:
+        scale = ctx.number(t["scale"], f"{key}.scale")
+        try:
+            medium.scale = check_scale(scale)
+        except SceneError as exc:
+            ctx.fail(f"{key}.scale", str(exc))
+    medium.sample_emitters = ctx.boolean(t.get("sample_emitters", True), f"{key}.sample_emitters")
+    if "phase" in t:
+        medium.phase, medium.g = _phase(ctx, t["phase"], f"{key}.phase")
+    return medium
+
+
+def _phase(ctx, value, key: str) -> tuple[str, float]:
+    """``"isotropic"``, ``"hg"`` (g = 0.8, Mitsuba's default) or ``{ type = "hg", g = ... }``."""
+    from .media import HG_DEFAULT_G, PHASES, check_g
+
+    t = {"type": value} if isinstance(value, str) else ctx.table(value, key)
+    _check_keys(ctx, t, key, {"type", "g"})
+    kind = ctx.string(t.get("type"), f"{key}.type", PHASES)
+    if kind == "isotropic":
+        if "g" in t:
+            ctx.fail(f"{key}.g", "an isotropic phase function has no g (give type = \"hg\")")
+        return kind, 0.0
+    g = ctx.number(t.get("g", HG_DEFAULT_G), f"{key}.g")
+    try:
+        return kind, check_g(g)
+    except SceneError as exc:
+        ctx.fail(f"{key}.g", str(exc))
+
+
+def _medium_constant(ctx, value, key: str, role: str) -> m.RGB:
+    from .media import check_value
+
+    rgb = ctx.vector(value, key, 3, allow_scalar=True)
+    try:
+        return check_value(rgb, role)
+    except SceneError as exc:
+        ctx.fail(key, str(exc))
+
+
+def _medium_value(ctx, value, key: str, role: str) -> m.MediumValue:
+    """A number, [r, g, b], or a grid table { file, transform, filter, use_grid_bbox }."""
+    from .media import check_value
+    from .volumes import grid_volume, read_grid
+
+    if not isinstance(value, dict):
+        return _medium_constant(ctx, value, key, role)
+    _check_keys(ctx, value, key, _GRID_FIELDS)
+    path = ctx.file(value.get("file"), f"{key}.file")
+    to_world = _transform(ctx, value["transform"], f"{key}.transform") if "transform" in value else None
+    filt = ctx.string(value.get("filter", "trilinear"), f"{key}.filter", ("trilinear", "nearest"))
+    use_grid_bbox = ctx.boolean(value.get("use_grid_bbox", False), f"{key}.use_grid_bbox")
+    try:
+        grid = read_grid(path)
+    except SceneError as exc:
+        ctx.fail(f"{key}.file", f"volume {excerpt(value['file'])}: {exc}")
+    try:
+        volume = grid_volume(grid, to_world, filt, use_grid_bbox, name=path.name)
+    except SceneError as exc:
+        ctx.fail(key, str(exc))
+    try:
+        return check_value(volume, role)
+    except SceneError as exc:
+        ctx.fail(f"{key}.file", f"volume {excerpt(value['file'])}: {exc}")
+
+
+def _medium_ref(ctx, value, key: str, media: dict[str, int]) -> int:
+    name = ctx.string(value, key)
+    if name not in media:
+        ctx.fail(key, f"no medium named {excerpt(name)} (defined: "
+                 f"{excerpt(', '.join(media), quote=False) or 'none'})")
+    return media[name]
 
 
 _LIGHT_FIELDS = {"type", "position", "intensity", "power", "transform", "cutoff_angle", "beam_width",
@@ -465,7 +583,7 @@ def _light(ctx, i: int, t) -> m.Light:
 
 
 _TOP = {"film", "camera", "integrator", "sampler", "shutter", "materials", "shapes", "lights",
-        "textures", "include", "params", "animation"}
+        "textures", "media", "include", "params", "animation"}
 _PARAM = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
 
 
@@ -532,6 +650,7 @@ class _State:
         self.scene, self.files = scene, files
         self.materials: dict[str, int] = {}
         self.textures: dict[str, m.Texture] = {}
+        self.media: dict[str, int] = {}
         self.has_camera = False
         self.used: set[str] = set()
         self.animation = None          # (ctx, table) of the last [animation], read at the end
@@ -567,8 +686,10 @@ def _load_file(path: Path, params: dict, state: _State, stack: tuple) -> None:
         _load_file(inc, ctx.params, state, stack + (resolved,))
     if "film" in data:
         scene.film = _film(ctx, data["film"])
+    for name, t in ctx.table(data.get("media", {}), "media").items():
+        state.media[name] = scene.add_medium(_medium(ctx, name, t))
     if "camera" in data:
-        scene.camera = _camera(ctx, data["camera"])
+        scene.camera = _camera(ctx, data["camera"], state.media)
         state.has_camera = True
     if "integrator" in data:
         scene.integrator = _integrator(ctx, data["integrator"])
@@ -584,7 +705,7 @@ def _load_file(path: Path, params: dict, state: _State, stack: tuple) -> None:
     if not isinstance(shapes, list):
         ctx.fail("shapes", "expected an array of tables ([[shapes]])")
     for i, t in enumerate(shapes):
-        scene.shapes.extend(_shape(ctx, i, t, state.materials, scene))
+        scene.shapes.extend(_shape(ctx, i, t, state.materials, state.media))
     lights = data.get("lights", [])
     if not isinstance(lights, list):
         ctx.fail("lights", "expected an array of tables ([[lights]])")
