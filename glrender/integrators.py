@@ -61,6 +61,8 @@ class IntegratorSpec:
     depth_cap: int | None = 256
     #: it counts the paths its cap cut short (Film.truncated, --stats truncated_paths)
     counts_truncation: bool = False
+    #: it renders participating media (scenes whose shapes or camera name media)
+    media: bool = False
     #: one line for --help and the docs
     summary: str = ""
 
@@ -100,7 +102,7 @@ def running_on(driver: str) -> tuple[str, ...]:
 
 
 register(IntegratorSpec("path", "integrators/path.glsl", splitting=True, seen_emission_pass=True,
-                        counts_truncation=True,
+                        counts_truncation=True, media=True,
                         summary="unidirectional path tracing with next-event estimation and MIS"))
 register(IntegratorSpec("direct", "integrators/direct.glsl",
                         uses_depth=False, depth_cap=None,

@@ -17,6 +17,7 @@ UBO_RENDER_PARAMS = 0       # RenderParams u_params (scene/layout.glsl): every k
 UBO_PHOTON_PARAMS = 1       # PhotonParams u_photon (photon/layout.glsl): SPPM's kernels
 UBO_PHOTON_MAP_PARAMS = 1   # PhotonMapParams u_map (photon/map_layout.glsl): photon mapping
 UBO_VCM_PARAMS = 1          # VcmParams u_vcm (integrators/vcm_layout.glsl): vcm's kernels
+UBO_MEDIA = 2               # Media u_media (scene/layout.glsl): the render kernel in scenes with media
 
 # ---- storage blocks (std430) ------------------------------------------------------------
 # the scene and the accumulation (scene/layout.glsl)
@@ -89,6 +90,12 @@ MATERIAL_FLAG_NORMAL_SHADOWING = 8   # the normal map's shadowing term (bsdf/bsd
 MATERIAL_FLAG_NORMAL_FLIP = 16       # the normal map's flip of invalid normals (bsdf/normal_map.glsl)
 MATERIAL_FLAG_ALPHA_TABLE = 32       # roughplastic reads the coating table over alpha (set on the
                                      # device, bsdf/metallic_roughness.glsl)
+# MaterialData.info.y bits 16-23 and 24-31: the interior and exterior medium + 1 of the shape
+# the record is for (0: none)
+MATERIAL_INTERIOR_SHIFT = 16
+MATERIAL_EXTERIOR_SHIFT = 24
+# MediumData.info.z (media/medium.glsl)
+MEDIUM_FLAG_SAMPLE_EMITTERS = 1
 # LightData.info.y (lights/light.glsl)
 LIGHT_FLAG_TWO_SIDED = 1
 LIGHT_FLAG_RECTANGLE = 2             # a parallelogram with orthogonal edges, sampled as a

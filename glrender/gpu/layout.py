@@ -63,11 +63,23 @@ LIGHT = np.dtype([
     ("pad", "<f4"),
 ])
 
+MAX_MEDIA = 64    # kMaxMedia: the media uniform block's records
+MEDIUM = np.dtype([
+    ("sigma_t", *_V4),   # xyz: extinction (scale applied), w: phase g
+    ("sigma_s", *_V4),   # xyz: albedo times sigma_t
+    ("info", *_U4),      # MEDIUM_KINDS, PHASE_KINDS, bindings.MEDIUM_FLAG_*, -
+])
+MEDIA = np.dtype([
+    ("media_counts", *_U4),   # media, the camera's medium + 1 (0: none)
+    ("media", MEDIUM, (MAX_MEDIA,)),
+])
+
 # std430/std140 sizes of the GLSL structs (16-byte vectors and matrices; MaterialData ends
 # with a float[64], std430 stride 4).
-SIZES = {"RenderParams": 288, "MaterialData": 336, "LightData": 144}
+SIZES = {"RenderParams": 288, "MaterialData": 336, "LightData": 144, "MediumData": 48,
+         "Media": 16 + 48 * MAX_MEDIA}
 for _name, _dtype in (("RenderParams", RENDER_PARAMS), ("MaterialData", MATERIAL),
-                      ("LightData", LIGHT)):
+                      ("LightData", LIGHT), ("MediumData", MEDIUM), ("Media", MEDIA)):
     assert _dtype.itemsize == SIZES[_name], (_name, _dtype.itemsize)
 
 # ---- enumerations shared with GLSL (bsdf/bsdf.glsl, lights/light.glsl) ---------------------
@@ -75,6 +87,8 @@ MATERIAL_KINDS = {
     "diffuse": 0, "conductor": 1, "roughconductor": 2, "dielectric": 3, "roughdielectric": 4,
     "thindielectric": 5, "plastic": 6, "roughplastic": 7, "null": 8, "metallicroughness": 9,
 }
+MEDIUM_KINDS = {"homogeneous": 0, "heterogeneous": 1}   # kMedium* in media/medium.glsl
+PHASE_KINDS = {"isotropic": 0, "hg": 1}                  # kPhase* in media/medium.glsl
 LIGHT_KINDS = {
     "parallelogram": 0, "triangle": 1, "sphere": 2, "disk": 3, "point": 4, "spot": 5,
     "directional": 6, "constant": 7, "envmap": 8,

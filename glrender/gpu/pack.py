@@ -117,6 +117,11 @@ class PackedScene:
     environment: int                        # index + 1 of the environment light, 0 if none
     env_image: np.ndarray | None = None     # H x W x 3 linear RGB of an envmap light
     moving_meshes: list = field(default_factory=list)   # MovingMesh, for motion blur
+    media: np.ndarray | None = None         # layout.MEDIA record; None: no shape or camera names a medium
+
+    @property
+    def has_media(self) -> bool:
+        return self.media is not None
 
     @property
     def has_bvh(self) -> bool:
@@ -317,6 +322,56 @@ def _fresnel_diffuse_reflectance(eta: float) -> float:
     return 0.919317 + x * (-3.4793 + x * (6.75335 + x * (-7.80989 + x * (4.98554 + x * -1.36881))))
 
 
+def pack_medium(med: m.Medium, where: str) -> np.ndarray:
+    """One layout.MEDIUM record: extinction (times scale), scattering, phase function."""
+    rec = np.zeros(1, layout.MEDIUM)[0]
+    if med.kind != "homogeneous" or isinstance(med.sigma_t, m.Volume) or isinstance(med.albedo, m.Volume):
+        raise SceneError(f"{where}: media with grids (heterogeneous, or a grid albedo) are not "
+                         f"rendered yet: give constant sigma_t and albedo")
+    sigma_t = _rgb(med.sigma_t, "sigma_t") * float(med.scale)
+    albedo = _rgb(med.albedo, "albedo")
+    rec["sigma_t"] = (*sigma_t, med.g if med.phase == "hg" else 0.0)
+    rec["sigma_s"][:3] = albedo * sigma_t
+    rec["info"] = (layout.MEDIUM_KINDS[med.kind], layout.PHASE_KINDS[med.phase],
+                   bindings.MEDIUM_FLAG_SAMPLE_EMITTERS if med.sample_emitters else 0, 0)
+    return rec
+
+
+def _media_variants(scene: m.Scene) -> tuple[m.Scene, np.ndarray | None, list[int]]:
+    """Scenes whose shapes or camera name media: the scene with a material record of its own
+    for each (material, interior, exterior) of the shapes that bound media, the media's
+    layout.MEDIA record and each material's medium bits (bindings.MATERIAL_INTERIOR_SHIFT).
+    Other scenes: themselves, None and no bits."""
+    bounded = [s for s in scene.shapes if s.interior is not None or s.exterior is not None]
+    if not bounded and scene.camera.medium is None:
+        return scene, None, []
+    if len(scene.media) > layout.MAX_MEDIA:
+        raise SceneError(f"{scene.source}: {len(scene.media)} media, at most {layout.MAX_MEDIA}")
+    rec = np.zeros(1, layout.MEDIA)[0]
+    for k, med in enumerate(scene.media):
+        rec["media"][k] = pack_medium(med, f"{scene.source}: medium {med.name or k}")
+    camera = scene.camera.medium
+    rec["media_counts"] = (len(scene.media), 0 if camera is None else camera + 1, 0, 0)
+    materials = list(scene.materials)
+    bits = [0] * len(materials)
+    variants: dict[tuple, int] = {}
+    shapes = []
+    for shape in scene.shapes:
+        if shape.interior is None and shape.exterior is None:
+            shapes.append(shape)
+            continue
+        key = (shape.material, shape.interior, shape.exterior)
+        if key not in variants:
+            variants[key] = len(materials)
+            materials.append(scene.materials[shape.material])
+            inside = 0 if shape.interior is None else shape.interior + 1
+            outside = 0 if shape.exterior is None else shape.exterior + 1
+            bits.append((inside << bindings.MATERIAL_INTERIOR_SHIFT) |
+                        (outside << bindings.MATERIAL_EXTERIOR_SHIFT))
+        shapes.append(dataclasses.replace(shape, material=variants[key]))
+    return dataclasses.replace(scene, materials=materials, shapes=shapes), rec, bits
+
+
 def _transform_mesh(shape: m.Shape, where: str):
     v = np.asarray(shape.vertices, np.float64)
     f = np.asarray(shape.triangles, np.int64)
@@ -363,6 +418,7 @@ def _transform_mesh(shape: m.Shape, where: str):
 def pack_scene(scene: m.Scene) -> PackedScene:
     """Flatten a scene into compiled primitives, BVH triangles, materials and lights."""
     scene.validate()
+    scene, media, medium_bits = _media_variants(scene)
     quads: list[Parallelogram] = []
     spheres: list[Sphere] = []
     soup = MeshSoup()
@@ -581,6 +637,8 @@ def pack_scene(scene: m.Scene) -> PackedScene:
 
     materials = np.array([pack_material(mat, textures) for mat in scene.materials], layout.MATERIAL) \
         if scene.materials else layout.zeros(layout.MATERIAL)
+    if medium_bits:
+        materials["info"][:, 1] |= np.asarray(medium_bits, np.uint32)
     light_arr = np.array(lights, layout.LIGHT) if lights else np.zeros(0, layout.LIGHT)
     return PackedScene(
         quads=quads, spheres=spheres, mesh=soup.arrays(), materials=materials,
@@ -588,4 +646,5 @@ def pack_scene(scene: m.Scene) -> PackedScene:
         bounds=(lo, hi), material_kinds=material_kinds(scene.materials),
         light_kinds={k for k, v in layout.LIGHT_KINDS.items()
                      if len(light_arr) and (light_arr["info"][:, 0] == v).any()},
-        environment=environment, env_image=env_image, textures=textures, moving_meshes=moving)
+        environment=environment, env_image=env_image, textures=textures, moving_meshes=moving,
+        media=media)

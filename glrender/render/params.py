@@ -30,6 +30,7 @@ OPTIONAL_DEFINES = {
     "GLRENDER_VCM_MODE": "vertex connection and merging: 1 connections and merges, 2 merges alone",
     "GLRENDER_VCM_CACHE": "vcm: connections per camera vertex to a light vertex cache (0: none)",
     "GLRENDER_SHARED_TIME": "every sample of a pass takes one shutter time (vcm with motion)",
+    "GLRENDER_MEDIA": "shapes or the camera name participating media",
 }
 
 

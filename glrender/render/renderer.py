@@ -255,6 +255,8 @@ class Renderer:
                                     else layout.zeros(layout.LIGHT).tobytes())
         self._dist = self._buffer(table.distributions.tobytes())
         self._params = self.gl.buffer(reserve=layout.RENDER_PARAMS.itemsize)
+        media = self.packed.media
+        self._media = self._buffer(media.tobytes()) if media is not None else None
 
     def _buffer(self, data: bytes) -> Any:
         buf = self.gl.buffer(data if len(data) else b"\0" * 16)
@@ -291,6 +293,14 @@ class Renderer:
             self.defines["GLRENDER_METALLIC_ROUGHNESS"] = 1  # bsdf/metallic_roughness.glsl
         if codegen.has_emission_textures(p):
             self.defines["GLRENDER_EMISSION_TEXTURES"] = 1   # lights/light.glsl area_light_radiance
+        if p.has_media:
+            takers = [n for n in integrators.names() if integrators.get(n).media]
+            if not spec.media or s.executor != "megakernel" or integ.light_samples != 1 \
+                    or integ.split != 1:
+                raise UsageError(f"{self.scene.source}: participating media are rendered by "
+                                 f"--integrator {' or '.join(takers)} (the megakernel, one light "
+                                 f"sample and one branch a vertex) so far, not {integ.kind}")
+            self.defines["GLRENDER_MEDIA"] = 1   # media/medium.glsl, integrators/path.glsl
         if s.strategy_depth:
             self._check_strategy_images()
             self.defines["GLRENDER_STRATEGY_DEPTH"] = s.strategy_depth
@@ -396,6 +406,8 @@ class Renderer:
         yield "kernel", repr(self._source_fingerprint).encode()
         yield "materials", np.ascontiguousarray(self.packed.materials).tobytes()
         yield "lights", np.ascontiguousarray(self.lights_final).tobytes()
+        if self.packed.media is not None:
+            yield "media", self.packed.media.tobytes()
         if self.packed.mesh is not None:
             for arr in self.packed.mesh:
                 yield "geometry", np.ascontiguousarray(arr).tobytes()
@@ -535,6 +547,8 @@ class Renderer:
         self._lights.bind_to_storage_buffer(bindings.SSBO_LIGHTS)
         self._dist.bind_to_storage_buffer(bindings.SSBO_DISTRIBUTIONS)
         self._params.bind_to_uniform_block(bindings.UBO_RENDER_PARAMS)
+        if self._media is not None:
+            self._media.bind_to_uniform_block(bindings.UBO_MEDIA)
         assert self.device_scene is not None, "the renderer was released"
         self.device_scene.bind()
 

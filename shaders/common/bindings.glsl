@@ -12,6 +12,7 @@
 #define UBO_PHOTON_PARAMS 1
 #define UBO_PHOTON_MAP_PARAMS 1
 #define UBO_VCM_PARAMS 1
+#define UBO_MEDIA 2
 
 // ---- storage blocks (std430) ------------------------------------------------------------
 // the scene and the accumulation (scene/layout.glsl)
@@ -84,6 +85,12 @@ const uint kMaterialFlagNonlinear = 4u;
 const uint kMaterialFlagNormalShadowing = 8u;   // the normal map's shadowing term (bsdf/bsdf.glsl)
 const uint kMaterialFlagNormalFlip = 16u;       // the normal map's flip of invalid normals
 const uint kMaterialFlagAlphaTable = 32u;       // roughplastic reads the coating table over alpha
+// MaterialData.info.y bits 16-23 and 24-31: the interior and exterior medium + 1 of the
+// shape the material record is for (0: none; the shape bounds no medium on that side)
+const uint kMaterialInteriorShift = 16u;
+const uint kMaterialExteriorShift = 24u;
+// MediumData.info.z
+const uint kMediumFlagSampleEmitters = 1u;   // next-event estimation from the medium's points
 // LightData.info.y
 const uint kLightFlagTwoSided = 1u;
 const uint kLightFlagRectangle = 2u;   // a parallelogram with orthogonal edges (spherical rectangle)

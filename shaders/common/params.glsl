@@ -62,6 +62,9 @@
 #ifndef GLRENDER_SHARED_TIME
 #define GLRENDER_SHARED_TIME 0
 #endif
+#ifndef GLRENDER_MEDIA
+#define GLRENDER_MEDIA 0
+#endif
 // A material's normal map has Mitsuba's shadowing term (bsdf/bsdf.glsl
 // bsdf_normal_shadowing; bdpt's vertices keep the unperturbed normal for it).
 const bool kNormalShadowing = GLRENDER_NORMAL_SHADOWING != 0;
@@ -103,6 +106,9 @@ const int kVcmCacheConnections = GLRENDER_VCM_CACHE;
 // Every camera sample of a pass takes one shutter time (u_params.shutter.w), a new one each
 // pass: vcm's merges join light vertices of one time in scenes with motion.
 const bool kSharedTime = GLRENDER_SHARED_TIME != 0;
+// The scene's shapes or camera name participating media (media/medium.glsl): paths track
+// the medium they are in, scatter in it and see its transmittance.
+const bool kMedia = GLRENDER_MEDIA != 0;
 
 // Sample generator (sampling/sampler.glsl).
 const int kSamplerIndependent = 0;

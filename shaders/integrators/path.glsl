@@ -18,6 +18,14 @@
 // takes the emitters found along the same delta chain: the light seen directly, in a
 // mirror or through glass, with the weights the radiance gives it.
 //
+// Participating media (kMedia, media/medium.glsl): the path knows the medium it is in
+// (the camera's at first, then the one across each surface that bounds media), samples a
+// free-flight distance in it before each surface, and scatters there by the phase
+// function, with next-event estimation through the media's transmittance and MIS against
+// phase sampling. Null surfaces (media boundaries) are passed through: they are not
+// vertices and do not count toward the depth, and an emitter found beyond them is weighed
+// from the last real vertex, as in Mitsuba's volpath.
+//
 // Path regeneration: llvmpipe runs 8 pixels in lock step, so a loop over whole paths
 // waits for the longest of the 8 each time (measured: 72% of lane work useful on the
 // Cornell box, 52% on the caustic scene). integrator_pixel instead advances every
@@ -50,6 +58,7 @@ struct PathState {
     vec3 split_beta;
     float split_eta;
     ShadowRay shadow;      // kWavefront: this segment's light sample, value times throughput
+    int medium;            // kMedia: the medium the segment runs in (kNoMedium: none)
 };
 
 PathState path_start(vec3 o, vec3 d, float t_max, float time) {
@@ -70,6 +79,7 @@ PathState path_start(vec3 o, vec3 d, float t_max, float time) {
     st.aov_weight = vec3(1.0);
     st.split_left = 0;
     st.shadow = kNoShadowRay;
+    st.medium = kMedia ? camera_medium() : kNoMedium;
     return st;
 }
 
@@ -99,6 +109,46 @@ bool path_continue(inout PathState st, SurfaceHit hit, Bsdf b, Frame frame, vec3
     st.o = offset_ray_origin(hit.p, hit.ng, wi);
     st.d = wi;
     st.t_max = kInfinity;
+    if (kMedia) st.medium = medium_after(hit.material, hit.ng, wi, st.medium);
+    return true;
+}
+
+// A scattering event at p in the path's medium, reached after `depth` segments: next-event
+// estimation by the phase function (where the medium samples emitters), phase sampling to
+// go on (its weight is 1), and Russian roulette as at surfaces; false when the path ends.
+bool path_medium_vertex(inout PathState st, inout SamplerState s, vec3 p, int depth, int max_segments) {
+    if (kAovs && st.aov_open) {   // a denoiser's albedo and normal: none in a medium
+        st.aov.albedo = vec3(0.0);
+        st.aov.normal = vec3(0.0);
+        st.aov_open = false;
+    }
+    if (depth + 1 >= max_segments) {
+        if (kMaxDepth < 0) g_truncated_paths += 1u;
+        return false;
+    }
+    if (kEmissionOnly) return false;
+    vec2 u_choice = sampler_2d(s);
+    vec2 u_light = sampler_2d(s);
+    vec2 u_phase = sampler_2d(s);
+    float u_rr = sampler_1d(s);
+    int m = st.medium;
+    bool nee = kStrategy != kStrategyBsdf && medium_samples_emitters(m);
+    if (nee)
+        st.L += st.beta * medium_next_event(p, st.d, m, st.time, u_choice.x, u_light,
+                                            kStrategy != kStrategyLight);
+    vec3 wi = medium_sample_phase(m, st.d, u_phase);
+    st.prev_pdf = medium_phase(m, st.d, wi);
+    st.prev_delta = !nee;    // without light samples here, emitters found count whole
+    st.prev_p = p;
+    if (roulette_applies(depth + 1)) {
+        float q = roulette_survival(max_component(st.beta) * st.eta_product * st.eta_product);
+        if (!(u_rr < q)) return false;
+        st.beta /= q;
+    }
+    if (max_component(st.beta) <= 0.0) return false;
+    st.o = p;
+    st.d = wi;
+    st.t_max = kInfinity;
     return true;
 }
 
@@ -109,7 +159,14 @@ bool path_segment(inout PathState st, inout SamplerState s) {
     st.depth += 1;
     SurfaceHit hit;
     RAY_TICK();
-    if (!scene_intersect(st.o, st.d, st.t_max, st.time, hit)) {
+    bool found = scene_intersect(st.o, st.d, st.t_max, st.time, hit);
+    if (kMedia && st.medium != kNoMedium) {
+        MediumEvent ev = medium_sample(st.medium, found ? hit.t : st.t_max, sampler_2d(s));
+        st.beta *= ev.weight;
+        if (ev.scatter) return path_medium_vertex(st, s, st.o + ev.t * st.d, depth, max_segments);
+        if (max_component(st.beta) <= 0.0) return false;
+    }
+    if (!found) {
         vec3 Le = environment_contribution_n(st.d, depth, st.prev_p, st.prev_pdf,
                                              st.prev_delta, 1.0, float(kLightSamples));
         st.L += st.beta * Le;
@@ -128,10 +185,23 @@ bool path_segment(inout PathState st, inout SamplerState s) {
 
     // Emission of an area light found by the camera ray or by BSDF sampling
     if (hit.light != 0u) {
-        vec3 Le = emitter_hit_contribution_n(hit, st.d, depth, st.prev_p, st.prev_pdf,
+        SurfaceHit at = hit;
+        // weighed from the last vertex, across any null surfaces since (kMedia)
+        if (kMedia) at.t = distance(st.prev_p, hit.p);
+        vec3 Le = emitter_hit_contribution_n(at, st.d, depth, st.prev_p, st.prev_pdf,
                                              st.prev_delta, 1.0, float(kLightSamples));
         st.L += st.beta * Le;
         if (kAovs && seen) st.aov.emission += st.beta * Le;
+    }
+
+    // A null surface only bounds media: the path goes on through it, neither a vertex nor
+    // a bounce (the depth and the last vertex stay)
+    if (kMedia && material_is_null(hit.material)) {
+        st.medium = medium_after(hit.material, hit.ng, st.d, st.medium);
+        st.o = offset_ray_origin(hit.p, hit.ng, st.d);
+        st.t_max = kInfinity;
+        st.depth = depth;
+        return true;
     }
 
     // Possibly stop: the next segment would exceed the maximum depth
@@ -162,6 +232,7 @@ bool path_segment(inout PathState st, inout SamplerState s) {
             st.shadow.value = st.beta * st.shadow.value;
         }
     } else if (kLightSamples == 1) {
+        g_medium = st.medium;
         if (use_light)
             st.L += st.beta * next_event(p, hit, b, frame, wo, st.time, u_choice.x, u_light,
                                          kStrategy != kStrategyLight);

@@ -9,6 +9,7 @@
 #include "lights/light.glsl"
 #include "lights/light_selection.glsl"
 #include "@scene"
+#include "media/medium.glsl"
 
 // Rays to lights stop this fraction short of the sampled point (pbrt's ShadowEpsilon).
 const float kShadowEpsilon = 1e-4;
@@ -116,14 +117,38 @@ ShadowRay next_event_ray(vec3 p, SurfaceHit hit, Bsdf b, Frame frame, vec3 wo, f
     return ShadowRay(o, ls.wi, t_max, light.info.z, f * ls.Le * (w / pdf_light), true);
 }
 
-// The same light sample with its shadow ray traced: f |cos| Le w / pdf, or zero.
+// The medium of the path at the vertex that takes a light sample (kMedia): its shadow ray
+// starts in it, or across the vertex's surface where that bounds media.
+int g_medium = kNoMedium;
+
+// The same light sample with its shadow ray traced: f |cos| Le w / pdf, or zero (times the
+// transmittance of the media along the ray, kMedia).
 vec3 next_event_n(vec3 p, SurfaceHit hit, Bsdf b, Frame frame, vec3 wo, float time, float u_select,
                   vec2 u_light, bool use_mis, float n_light, float n_bsdf) {
     ShadowRay r = next_event_ray(p, hit, b, frame, wo, u_select, u_light, use_mis, n_light, n_bsdf);
     if (!r.valid) return vec3(0.0);
+    if (kMedia)
+        return r.value * scene_transmittance(r.o, r.d, r.t_max, time, r.ignore,
+                                             medium_after(hit.material, hit.ng, r.d, g_medium));
     RAY_TICK();
     if (scene_occluded(r.o, r.d, r.t_max, time, r.ignore)) return vec3(0.0);
     return r.value;
+}
+
+// Next-event estimation at a point p of medium m reached along d: one light sample, its
+// phase function value times Le over its density with the transmittance of the media on
+// the way, weighted against phase sampling as surfaces weigh it against BSDF sampling.
+vec3 medium_next_event(vec3 p, vec3 d, int m, float time, float u_select, vec2 u_light, bool use_mis) {
+    if (u_params.counts.x == 0u) return vec3(0.0);
+    LightChoice choice = select_light(u_select);
+    LightData light = scene_light(choice.index);
+    LightSample ls = sample_light(light, p, u_light);
+    if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return vec3(0.0);
+    float f = medium_phase(m, d, ls.wi);
+    float pdf_light = choice.pmf * ls.pdf;
+    float w = (ls.delta || !use_mis) ? 1.0 : mis_weight_n(1.0, pdf_light, 1.0, f);
+    float t_max = isinf(ls.dist) ? kInfinity : ls.dist * (1.0 - kShadowEpsilon);
+    return scene_transmittance(p, ls.wi, t_max, time, light.info.z, m) * f * ls.Le * (w / pdf_light);
 }
 
 vec3 next_event(vec3 p, SurfaceHit hit, Bsdf b, Frame frame, vec3 wo, float time, float u_select,

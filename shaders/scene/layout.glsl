@@ -28,6 +28,20 @@ layout(std140, binding = UBO_RENDER_PARAMS) uniform RenderParams {
     float unused;
 } u_params;
 
+// ---- uniform block 2: participating media (std140; media/medium.glsl reads them) ------
+// Scenes whose shapes or camera name media (GLRENDER_MEDIA); a material record of a shape
+// that bounds media names them in MaterialData.info.y (kMaterialInteriorShift).
+const int kMaxMedia = 64;    // glrender/gpu/layout.py MAX_MEDIA
+struct MediumData {
+    vec4 sigma_t;   // xyz: extinction per unit length (scale applied), w: the phase function's g
+    vec4 sigma_s;   // xyz: scattering coefficient (albedo times sigma_t), w: -
+    uvec4 info;     // x: kind (kMedium*), y: phase function (kPhase*), z: flags (kMediumFlag*), w: -
+};
+layout(std140, binding = UBO_MEDIA) uniform Media {
+    uvec4 media_counts;    // x: media, y: the camera's medium + 1 (0: none)
+    MediumData media[kMaxMedia];
+} u_media;
+
 // ---- storage blocks (std430) ---------------------------------------------------
 // 0, 1: accumulation per pixel, exact 128-bit fixed-point sums (film/accum.glsl):
 //   accum_sum[4 i + c] = sum of channel c (r, g, b) of the finite samples, c < 3;

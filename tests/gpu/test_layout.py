@@ -20,7 +20,8 @@ def struct_fields(name):
     return [(t, n) for t, n in re.findall(r"^\s*(\w+)\s+(\w+)(?:\[\d+\])?;", body, re.M)]
 
 
-@pytest.mark.parametrize("struct, dtype", [("MaterialData", layout.MATERIAL), ("LightData", layout.LIGHT)])
+@pytest.mark.parametrize("struct, dtype", [("MaterialData", layout.MATERIAL), ("LightData", layout.LIGHT),
+                                           ("MediumData", layout.MEDIUM)])
 def test02_struct_fields_in_order(struct, dtype):
     assert [n for _, n in struct_fields(struct)] == list(dtype.names)
 
@@ -52,6 +53,10 @@ void main() {
     put(k, u_params.scene_sphere);
     put(k, uvec4(floatBitsToUint(u_params.ao_distance), floatBitsToUint(u_params.sample_clamp),
                  u_params.camera_projection, floatBitsToUint(u_params.unused)));
+    put(k, u_media.media_counts);
+    for (int i = 0; i < kMaxMedia; ++i) {
+        put(k, u_media.media[i].sigma_t); put(k, u_media.media[i].sigma_s); put(k, u_media.media[i].info);
+    }
 }
 """
 
@@ -68,17 +73,20 @@ def test03_structs_round_trip_on_device(gl_ctx):
     mats = fill(layout.MATERIAL, 2, 1000)
     lights = fill(layout.LIGHT, 2, 2000)
     params = fill(layout.RENDER_PARAMS, 1, 3000)
+    media = fill(layout.MEDIA, 1, 4000)
     program = compile_compute(gl_ctx, source=COPY_SHADER, defines=shader_defines())
-    n_words = (mats.nbytes + lights.nbytes + params.nbytes) // 4
+    n_words = (mats.nbytes + lights.nbytes + params.nbytes + media.nbytes) // 4
     bufs = [gl.buffer(mats.tobytes()), gl.buffer(lights.tobytes()), gl.buffer(params.tobytes()),
-            gl.buffer(reserve=4 * n_words)]
+            gl.buffer(media.tobytes()), gl.buffer(reserve=4 * n_words)]
     bufs[0].bind_to_storage_buffer(bindings.SSBO_MATERIALS)
     bufs[1].bind_to_storage_buffer(bindings.SSBO_LIGHTS)
     bufs[2].bind_to_uniform_block(bindings.UBO_RENDER_PARAMS)
-    bufs[3].bind_to_storage_buffer(7)
+    bufs[3].bind_to_uniform_block(bindings.UBO_MEDIA)
+    bufs[4].bind_to_storage_buffer(7)
     program.run(1)
-    out = np.frombuffer(bufs[3].read(), np.uint32)
-    expected = np.concatenate([mats.view(np.uint32), lights.view(np.uint32), params.view(np.uint32)])
+    out = np.frombuffer(bufs[4].read(), np.uint32)
+    expected = np.concatenate([mats.view(np.uint32), lights.view(np.uint32), params.view(np.uint32),
+                               media.view(np.uint32)])
     np.testing.assert_array_equal(out, expected)
     for b in bufs:
         b.release()
