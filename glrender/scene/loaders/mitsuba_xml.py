@@ -908,7 +908,9 @@ class _Builder:
             if inner:
                 return self.integrator(inner[0])
             t = "path"
-        if t == "volpath" or t == "volpathmis" or t == "prb":
+        if t in ("volpath", "volpathmis"):
+            t = "path"      # the path tracer renders media as volpath does
+        if t == "prb":
             self.r.notes.add(f"integrator {excerpt(t)} (path used)", node.line)
             t = "path"
         if t not in ("path", "direct"):
