@@ -80,6 +80,7 @@ TEX_GLOBAL_MAP = 11
 TEX_CAUSTIC_MAP = 12
 TEX_GLOBAL_CELLS = 13
 TEX_CAUSTIC_CELLS = 14
+TEX_MEDIA_GRIDS = 15        # the voxels of heterogeneous media (scene/layout.glsl)
 
 # ---- flag bits --------------------------------------------------------------------------
 # MaterialData.info.y (bsdf/bsdf_common.glsl)
@@ -96,6 +97,7 @@ MATERIAL_INTERIOR_SHIFT = 16
 MATERIAL_EXTERIOR_SHIFT = 24
 # MediumData.info.z (media/medium.glsl)
 MEDIUM_FLAG_SAMPLE_EMITTERS = 1
+MEDIUM_FLAG_NEAREST = 2              # its grids' lookups take the nearest voxel (else trilinear)
 # LightData.info.y (lights/light.glsl)
 LIGHT_FLAG_TWO_SIDED = 1
 LIGHT_FLAG_RECTANGLE = 2             # a parallelogram with orthogonal edges, sampled as a

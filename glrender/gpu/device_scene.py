@@ -65,6 +65,7 @@ class DeviceScene:
                 self._upload_mesh()
             self._upload_textures()
             self._upload_microfacet_tables()
+            self._upload_media_grids()
         except BaseException:
             self._free()
             raise
@@ -177,6 +178,17 @@ class DeviceScene:
                                 "microfacet tables")
             self._owned.append(tex)
             self._units.append((bindings.TEX_MICROFACET_TABLES, tex.bind))
+
+    def _upload_media_grids(self) -> None:
+        """The voxels of heterogeneous media (scenes with such media only)."""
+        from ..gl.buffers import BufferTexture
+
+        grids = self.packed.media_grids
+        if grids is not None:
+            tex = BufferTexture(self.ctx, np.ascontiguousarray(grids, np.float32).reshape(-1), "rgba32f",
+                                "media grids")
+            self._owned.append(tex)
+            self._units.append((bindings.TEX_MEDIA_GRIDS, tex.bind))
 
     def _upload_mesh(self) -> None:
         """BVH over the static mesh triangles (world space) plus one tree per moving mesh

@@ -65,9 +65,13 @@ LIGHT = np.dtype([
 
 MAX_MEDIA = 64    # kMaxMedia: the media uniform block's records
 MEDIUM = np.dtype([
-    ("sigma_t", *_V4),   # xyz: extinction (scale applied), w: phase g
-    ("sigma_s", *_V4),   # xyz: albedo times sigma_t
+    ("sigma_t", *_V4),   # xyz: extinction (scale applied; heterogeneous: the scale), w: phase g
+    ("sigma_s", *_V4),   # xyz: albedo times sigma_t (heterogeneous: the constant albedo)
     ("info", *_U4),      # MEDIUM_KINDS, PHASE_KINDS, bindings.MEDIUM_FLAG_*, -
+    ("grid_from_world", "<f4", (4, 4)),   # heterogeneous: world to the grids' unit cube (stored .T)
+    ("sigma_grid", *_U4),    # first texel in the grid texture, voxels x, y, z
+    ("albedo_grid", *_U4),   # first texel + 1 (0: constant albedo), voxels x, y, z
+    ("majorant", *_V4),      # x: a bound on sigma_t over the grid (every channel, scale applied)
 ])
 MEDIA = np.dtype([
     ("media_counts", *_U4),   # media, the camera's medium + 1 (0: none)
@@ -76,8 +80,8 @@ MEDIA = np.dtype([
 
 # std430/std140 sizes of the GLSL structs (16-byte vectors and matrices; MaterialData ends
 # with a float[64], std430 stride 4).
-SIZES = {"RenderParams": 288, "MaterialData": 336, "LightData": 144, "MediumData": 48,
-         "Media": 16 + 48 * MAX_MEDIA}
+SIZES = {"RenderParams": 288, "MaterialData": 336, "LightData": 144, "MediumData": 160,
+         "Media": 16 + 160 * MAX_MEDIA}
 for _name, _dtype in (("RenderParams", RENDER_PARAMS), ("MaterialData", MATERIAL),
                       ("LightData", LIGHT), ("MediumData", MEDIUM), ("Media", MEDIA)):
     assert _dtype.itemsize == SIZES[_name], (_name, _dtype.itemsize)

@@ -118,6 +118,7 @@ class PackedScene:
     env_image: np.ndarray | None = None     # H x W x 3 linear RGB of an envmap light
     moving_meshes: list = field(default_factory=list)   # MovingMesh, for motion blur
     media: np.ndarray | None = None         # layout.MEDIA record; None: no shape or camera names a medium
+    media_grids: np.ndarray | None = None   # (N, 4) float32 voxels of heterogeneous media (TEX_MEDIA_GRIDS)
 
     @property
     def has_media(self) -> bool:
@@ -322,34 +323,74 @@ def _fresnel_diffuse_reflectance(eta: float) -> float:
     return 0.919317 + x * (-3.4793 + x * (6.75335 + x * (-7.80989 + x * (4.98554 + x * -1.36881))))
 
 
-def pack_medium(med: m.Medium, where: str) -> np.ndarray:
-    """One layout.MEDIUM record: extinction (times scale), scattering, phase function."""
+def _grid_texels(volume: m.Volume, what: str) -> np.ndarray:
+    """A grid's voxels as RGBA texels, x fastest (a one-channel grid repeats its value)."""
+    data = np.asarray(volume.data, np.float32)
+    if data.ndim != 4 or data.shape[3] not in (1, 3):
+        raise SceneError(f"{what}: expected a grid of 1 or 3 channels, got shape {data.shape}")
+    flat = data.reshape(-1, data.shape[3])
+    texels = np.zeros((len(flat), 4), np.float32)
+    texels[:, :3] = flat if flat.shape[1] == 3 else np.repeat(flat, 3, axis=1)
+    return texels
+
+
+def pack_medium(med: m.Medium, where: str, grids: list[np.ndarray]) -> np.ndarray:
+    """One layout.MEDIUM record: extinction (times scale), scattering, phase function; a
+    heterogeneous medium's grids are appended to ``grids`` (their texels' offsets counted
+    from the texels already there) with its majorant."""
     rec = np.zeros(1, layout.MEDIUM)[0]
-    if med.kind != "homogeneous" or isinstance(med.sigma_t, m.Volume) or isinstance(med.albedo, m.Volume):
-        raise SceneError(f"{where}: media with grids (heterogeneous, or a grid albedo) are not "
-                         f"rendered yet: give constant sigma_t and albedo")
-    sigma_t = _rgb(med.sigma_t, "sigma_t") * float(med.scale)
-    albedo = _rgb(med.albedo, "albedo")
-    rec["sigma_t"] = (*sigma_t, med.g if med.phase == "hg" else 0.0)
-    rec["sigma_s"][:3] = albedo * sigma_t
-    rec["info"] = (layout.MEDIUM_KINDS[med.kind], layout.PHASE_KINDS[med.phase],
-                   bindings.MEDIUM_FLAG_SAMPLE_EMITTERS if med.sample_emitters else 0, 0)
+    g = med.g if med.phase == "hg" else 0.0
+    flags = bindings.MEDIUM_FLAG_SAMPLE_EMITTERS if med.sample_emitters else 0
+    if med.kind == "homogeneous":
+        if isinstance(med.sigma_t, m.Volume) or isinstance(med.albedo, m.Volume):
+            raise SceneError(f"{where}: a homogeneous medium with a grid: make it heterogeneous")
+        sigma_t = _rgb(med.sigma_t, "sigma_t") * float(med.scale)
+        rec["sigma_t"] = (*sigma_t, g)
+        rec["sigma_s"][:3] = _rgb(med.albedo, "albedo") * sigma_t
+    else:
+        volume = med.sigma_t
+        if not isinstance(volume, m.Volume):
+            volume = m.Volume(np.asarray(_rgb(volume, "sigma_t"), np.float32).reshape(1, 1, 1, 3))
+        first = sum(len(t) for t in grids)
+        texels = _grid_texels(volume, f"{where}: sigma_t")
+        grids.append(texels)
+        x, y, z = volume.resolution
+        rec["sigma_grid"] = (first, x, y, z)
+        rec["grid_from_world"] = np.linalg.inv(np.asarray(volume.world_from_object, np.float64)).T
+        scale = float(med.scale)
+        rec["sigma_t"] = (scale, scale, scale, g)
+        rec["majorant"][0] = scale * float(texels[:, :3].max(initial=0.0))
+        if volume.filter == "nearest":
+            flags |= bindings.MEDIUM_FLAG_NEAREST
+        if isinstance(med.albedo, m.Volume):
+            if med.albedo.resolution != volume.resolution or not np.allclose(
+                    med.albedo.world_from_object, volume.world_from_object):
+                raise SceneError(f"{where}: the albedo grid must have the sigma_t grid's voxels "
+                                 f"and placement (to_world)")
+            first = sum(len(t) for t in grids)
+            grids.append(_grid_texels(med.albedo, f"{where}: albedo"))
+            rec["albedo_grid"] = (first + 1, x, y, z)
+        else:
+            rec["sigma_s"][:3] = _rgb(med.albedo, "albedo")
+    rec["info"] = (layout.MEDIUM_KINDS[med.kind], layout.PHASE_KINDS[med.phase], flags, 0)
     return rec
 
 
-def _media_variants(scene: m.Scene) -> tuple[m.Scene, np.ndarray | None, list[int]]:
+def _media_variants(scene: m.Scene) -> tuple[m.Scene, np.ndarray | None, list[int], np.ndarray | None]:
     """Scenes whose shapes or camera name media: the scene with a material record of its own
     for each (material, interior, exterior) of the shapes that bound media, the media's
-    layout.MEDIA record and each material's medium bits (bindings.MATERIAL_INTERIOR_SHIFT).
-    Other scenes: themselves, None and no bits."""
+    layout.MEDIA record, each material's medium bits (bindings.MATERIAL_INTERIOR_SHIFT) and
+    the heterogeneous media's grid texels (None: no grids). Other scenes: themselves, None,
+    no bits and None."""
     bounded = [s for s in scene.shapes if s.interior is not None or s.exterior is not None]
     if not bounded and scene.camera.medium is None:
-        return scene, None, []
+        return scene, None, [], None
     if len(scene.media) > layout.MAX_MEDIA:
         raise SceneError(f"{scene.source}: {len(scene.media)} media, at most {layout.MAX_MEDIA}")
     rec = np.zeros(1, layout.MEDIA)[0]
+    grids: list[np.ndarray] = []
     for k, med in enumerate(scene.media):
-        rec["media"][k] = pack_medium(med, f"{scene.source}: medium {med.name or k}")
+        rec["media"][k] = pack_medium(med, f"{scene.source}: medium {med.name or k}", grids)
     camera = scene.camera.medium
     rec["media_counts"] = (len(scene.media), 0 if camera is None else camera + 1, 0, 0)
     materials = list(scene.materials)
@@ -369,7 +410,8 @@ def _media_variants(scene: m.Scene) -> tuple[m.Scene, np.ndarray | None, list[in
             bits.append((inside << bindings.MATERIAL_INTERIOR_SHIFT) |
                         (outside << bindings.MATERIAL_EXTERIOR_SHIFT))
         shapes.append(dataclasses.replace(shape, material=variants[key]))
-    return dataclasses.replace(scene, materials=materials, shapes=shapes), rec, bits
+    texels = np.concatenate(grids) if grids else None
+    return dataclasses.replace(scene, materials=materials, shapes=shapes), rec, bits, texels
 
 
 def _transform_mesh(shape: m.Shape, where: str):
@@ -418,7 +460,7 @@ def _transform_mesh(shape: m.Shape, where: str):
 def pack_scene(scene: m.Scene) -> PackedScene:
     """Flatten a scene into compiled primitives, BVH triangles, materials and lights."""
     scene.validate()
-    scene, media, medium_bits = _media_variants(scene)
+    scene, media, medium_bits, media_grids = _media_variants(scene)
     quads: list[Parallelogram] = []
     spheres: list[Sphere] = []
     soup = MeshSoup()
@@ -647,4 +689,4 @@ def pack_scene(scene: m.Scene) -> PackedScene:
         light_kinds={k for k, v in layout.LIGHT_KINDS.items()
                      if len(light_arr) and (light_arr["info"][:, 0] == v).any()},
         environment=environment, env_image=env_image, textures=textures, moving_meshes=moving,
-        media=media)
+        media=media, media_grids=media_grids)

@@ -408,6 +408,8 @@ class Renderer:
         yield "lights", np.ascontiguousarray(self.lights_final).tobytes()
         if self.packed.media is not None:
             yield "media", self.packed.media.tobytes()
+        if self.packed.media_grids is not None:
+            yield "media grids", self.packed.media_grids.tobytes()
         if self.packed.mesh is not None:
             for arr in self.packed.mesh:
                 yield "geometry", np.ascontiguousarray(arr).tobytes()

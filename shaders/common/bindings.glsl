@@ -76,6 +76,8 @@
 #define TEX_CAUSTIC_MAP 12
 #define TEX_GLOBAL_CELLS 13
 #define TEX_CAUSTIC_CELLS 14
+// the grids of heterogeneous media (scene/layout.glsl)
+#define TEX_MEDIA_GRIDS 15
 
 // ---- flag bits --------------------------------------------------------------------------
 // MaterialData.info.y
@@ -91,6 +93,7 @@ const uint kMaterialInteriorShift = 16u;
 const uint kMaterialExteriorShift = 24u;
 // MediumData.info.z
 const uint kMediumFlagSampleEmitters = 1u;   // next-event estimation from the medium's points
+const uint kMediumFlagNearest = 2u;          // its grids' lookups take the nearest voxel
 // LightData.info.y
 const uint kLightFlagTwoSided = 1u;
 const uint kLightFlagRectangle = 2u;   // a parallelogram with orthogonal edges (spherical rectangle)

@@ -59,6 +59,8 @@ struct PathState {
     float split_eta;
     ShadowRay shadow;      // kWavefront: this segment's light sample, value times throughput
     int medium;            // kMedia: the medium the segment runs in (kNoMedium: none)
+    int hero;              // kMedia: the channel whose coefficients sample free flights
+    vec3 chan;             // kMedia: the product of the medium events' densities per channel
 };
 
 PathState path_start(vec3 o, vec3 d, float t_max, float time) {
@@ -80,6 +82,8 @@ PathState path_start(vec3 o, vec3 d, float t_max, float time) {
     st.split_left = 0;
     st.shadow = kNoShadowRay;
     st.medium = kMedia ? camera_medium() : kNoMedium;
+    st.hero = 0;
+    st.chan = vec3(1.0);
     return st;
 }
 
@@ -111,6 +115,18 @@ bool path_continue(inout PathState st, SurfaceHit hit, Bsdf b, Frame frame, vec3
     st.t_max = kInfinity;
     if (kMedia) st.medium = medium_after(hit.material, hit.ng, wi, st.medium);
     return true;
+}
+
+// A medium event's contribution f and densities p per channel into the path: the throughput
+// becomes the product of the f's over the channels' mean density of the whole path (spectral
+// MIS over hero channels), chan the densities' products, rescaled (only their ratios count).
+void path_medium_weight(inout PathState st, vec3 f, vec3 p) {
+    float before = dot(st.chan, vec3(1.0));
+    st.chan *= p;
+    float after = dot(st.chan, vec3(1.0));
+    st.beta *= after > 0.0 ? f * (before / after) : vec3(0.0);
+    float top = max_component(st.chan);
+    if (top > 0.0) st.chan /= top;
 }
 
 // A scattering event at p in the path's medium, reached after `depth` segments: next-event
@@ -160,11 +176,17 @@ bool path_segment(inout PathState st, inout SamplerState s) {
     SurfaceHit hit;
     RAY_TICK();
     bool found = scene_intersect(st.o, st.d, st.t_max, st.time, hit);
-    if (kMedia && st.medium != kNoMedium) {
-        MediumEvent ev = medium_sample(st.medium, found ? hit.t : st.t_max, sampler_2d(s));
-        st.beta *= ev.weight;
-        if (ev.scatter) return path_medium_vertex(st, s, st.o + ev.t * st.d, depth, max_segments);
-        if (max_component(st.beta) <= 0.0) return false;
+    if (kMedia) {
+        vec2 u_medium = sampler_2d(s);
+        g_medium_rng = pcg_hash(floatBitsToUint(u_medium.y) ^ uint(depth));
+        if (depth == 0) st.hero = min(int(medium_random() * 3.0), 2);
+        if (st.medium != kNoMedium) {
+            MediumEvent ev = medium_sample(st.medium, st.o, st.d, found ? hit.t : st.t_max,
+                                           u_medium.x, st.hero);
+            path_medium_weight(st, ev.f, ev.p);
+            if (ev.scatter) return path_medium_vertex(st, s, st.o + ev.t * st.d, depth, max_segments);
+            if (max_component(st.beta) <= 0.0) return false;
+        }
     }
     if (!found) {
         vec3 Le = environment_contribution_n(st.d, depth, st.prev_p, st.prev_pdf,

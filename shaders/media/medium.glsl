@@ -1,19 +1,31 @@
-// Participating media (homogeneous): free-flight sampling, transmittance and the phase
-// function, on the records of scene/layout.glsl's media block (glrender/gpu/pack.py).
+// Participating media: free-flight sampling, transmittance and the phase function, on the
+// records of scene/layout.glsl's media block (glrender/gpu/pack.py).
 //
-// Chromatic media (sigma_t differs per channel) are sampled by one-sample MIS over the
-// three channels (the balance heuristic, as in Miller, Georgiev and Jarosz 2019's
-// spectral tracking with hero channels): a channel c is drawn uniformly and the distance
-// from its exponential, and every estimate divides by the density averaged over the
-// channels, pdf(t) = (1/3) sum_c sigma_t,c exp(-sigma_t,c t), or for passing the surface at
-// t_max, P = (1/3) sum_c exp(-sigma_t,c t_max). That stays unbiased (the average density is
-// positive wherever any channel's is) and keeps the weights of every channel bounded.
+// Heterogeneous media (Mitsuba's gridvolume: a grid over the unit cube placed by its
+// to_world, cell-centred lookups, trilinear or nearest) are tracked against the medium's
+// majorant mu >= sigma_t,c(x) for every channel (Novák et al. 2014): tentative collisions
+// at exponential steps of rate mu inside the grid's box; at each, the hero channel h
+// scatters with probability sigma_s,h / mu, goes on (a null collision, sigma_n = mu -
+// sigma_t) with sigma_n,h / mu, else is absorbed; each event's f and p per channel are its
+// sigma_s or sigma_n (delta tracking under the null-scattering path integral: unbiased
+// for chromatic media). Shadow rays take ratio tracking's transmittance, the product of
+// 1 - sigma_t,c / mu over the tentative collisions. Their random numbers come from
+// g_medium_rng, a hash chain that each path segment seeds from its sampler.
+//
+// Chromatic media (sigma_t differs per channel) are sampled by spectral MIS over the three
+// channels at the level of whole paths (Miller, Georgiev and Jarosz 2019; the balance
+// heuristic over hero channels): each path draws one hero channel and samples its free
+// flights with that channel's coefficients; every medium event multiplies the path's
+// contribution f per channel and its per-channel densities p (PathState.chan), and the
+// path's throughput is f over the channels' mean density, which stays bounded (by 3) where
+// a per-event average would compound. Events report (f, p) up to a common factor.
 //
 // Media are entered and left through the surfaces that bound them: a shape's material
 // record carries its interior and exterior medium (kMaterialInteriorShift), and a ray
 // leaving a surface on the side its geometric normal faces is in the exterior medium,
 // otherwise in the interior one, as Mitsuba's SurfaceInteraction::target_medium. Surfaces
 // of the null material only bound media: paths and shadow rays pass through them.
+#include "common/hash.glsl"
 #include "integrators/integrator_common.glsl"
 #include "bsdf/material.glsl"
 #include "sampling/phase.glsl"
@@ -26,6 +38,17 @@ const uint kPhaseHg = 1u;
 const int kNoMedium = -1;
 // Null surfaces a shadow ray passes through at most; one more blocks it.
 const int kMaxNullCrossings = 32;
+// Tentative collisions of one tracking at most (the medium then ends the path or blocks the
+// shadow ray): far above mu times the grid's extent in any scene that renders in time.
+const int kMaxTrackingSteps = 4096;
+
+// Random numbers of the trackings (see above).
+uint g_medium_rng = 0u;
+
+float medium_random() {
+    g_medium_rng = pcg_hash(g_medium_rng);
+    return uint_to_unit_float(g_medium_rng);
+}
 
 // The medium the camera's rays start in (kNoMedium: none).
 int camera_medium() {
@@ -53,28 +76,129 @@ vec3 medium_transmittance(int m, float t) {
                 st.z > 0.0 ? exp(-st.z * t) : 1.0);
 }
 
-// A free-flight sample along a ray in medium m whose surface lies at t_max (kInfinity:
-// none): a scattering event at distance t < t_max, or none. weight: what the throughput
-// is multiplied by, sigma_s T(t) / pdf(t) at a scattering event, T(t_max) / P otherwise.
+// A free-flight sample along a ray in a medium whose surface lies at t_max (kInfinity:
+// none): a scattering event at distance t < t_max, or none (the surface reached, t =
+// t_max); f and p: the contribution and the densities per channel of what was sampled,
+// up to a common factor (integrators/path.glsl path_medium_weight applies them).
 struct MediumEvent {
     bool scatter;
     float t;
-    vec3 weight;
+    vec3 f;
+    vec3 p;
 };
 
-MediumEvent medium_sample(int m, float t_max, vec2 u) {
+bool medium_is_grid(int m) {
+    return u_media.media[m].info.x == kMediumHeterogeneous;
+}
+
+// Voxel v of the grid whose first texel is `first` and whose voxels along x, y, z are res.
+vec3 medium_voxel(uint first, uvec3 res, uvec3 v) {
+    return texelFetch(u_media_grids, int(first + (v.z * res.y + v.y) * res.x + v.x)).rgb;
+}
+
+// A grid's value at point u of its unit cube: cell-centred (u res - 0.5), clamped to the
+// outer voxels' centres, trilinear or the voxel holding u.
+vec3 medium_grid_value(uint first, uvec3 res, vec3 u, bool nearest) {
+    vec3 r = vec3(res);
+    if (nearest) return medium_voxel(first, res, min(uvec3(max(floor(u * r), 0.0)), res - 1u));
+    vec3 c = clamp(u * r - 0.5, vec3(0.0), r - 1.0);
+    uvec3 a = uvec3(c);
+    uvec3 b = min(a + 1u, res - 1u);
+    vec3 f = c - vec3(a);
+    vec3 x00 = mix(medium_voxel(first, res, a), medium_voxel(first, res, uvec3(b.x, a.y, a.z)), f.x);
+    vec3 x10 = mix(medium_voxel(first, res, uvec3(a.x, b.y, a.z)), medium_voxel(first, res, uvec3(b.x, b.y, a.z)), f.x);
+    vec3 x01 = mix(medium_voxel(first, res, uvec3(a.x, a.y, b.z)), medium_voxel(first, res, uvec3(b.x, a.y, b.z)), f.x);
+    vec3 x11 = mix(medium_voxel(first, res, uvec3(a.x, b.y, b.z)), medium_voxel(first, res, b), f.x);
+    return mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z);
+}
+
+// sigma_t and sigma_s of heterogeneous medium m at world point p (0 outside its grid's box).
+void medium_coefficients(int m, vec3 p, out vec3 sigma_t, out vec3 sigma_s) {
+    MediumData md = u_media.media[m];
+    vec3 u = (md.grid_from_world * vec4(p, 1.0)).xyz;
+    sigma_t = vec3(0.0);
+    sigma_s = vec3(0.0);
+    if (any(lessThan(u, vec3(0.0))) || any(greaterThan(u, vec3(1.0)))) return;
+    bool nearest = (md.info.z & kMediumFlagNearest) != 0u;
+    sigma_t = md.sigma_t.xyz * medium_grid_value(md.sigma_grid.x, md.sigma_grid.yzw, u, nearest);
+    vec3 albedo = md.albedo_grid.x != 0u
+                ? medium_grid_value(md.albedo_grid.x - 1u, md.albedo_grid.yzw, u, nearest) : md.sigma_s.xyz;
+    sigma_s = albedo * sigma_t;
+}
+
+// The part [t0, t1] of the ray o + t d, t in [0, t_max], inside heterogeneous medium m's
+// grid box; false when it misses the box.
+bool medium_box(int m, vec3 o, vec3 d, float t_max, out float t0, out float t1) {
+    mat4 g = u_media.media[m].grid_from_world;
+    vec3 og = (g * vec4(o, 1.0)).xyz;
+    vec3 inv = 1.0 / (g * vec4(d, 0.0)).xyz;
+    vec3 ta = -og * inv, tb = (1.0 - og) * inv;
+    vec3 lo = min(ta, tb), hi = max(ta, tb);
+    t0 = max(max(lo.x, lo.y), max(lo.z, 0.0));
+    t1 = min(min(hi.x, hi.y), min(hi.z, t_max));
+    return t0 < t1;
+}
+
+// Delta tracking of hero channel h in heterogeneous medium m along o + t d up to t_max.
+MediumEvent medium_sample_grid(int m, vec3 o, vec3 d, float t_max, int h) {
+    float mu = u_media.media[m].majorant.x, t0, t1;
+    if (!(mu > 0.0) || !medium_box(m, o, d, t_max, t0, t1))
+        return MediumEvent(false, t_max, vec3(1.0), vec3(1.0));
+    vec3 w = vec3(1.0);   // the null collisions' f = p so far, scaled to a largest channel of 1
+    float t = t0;
+    for (int k = 0; k < kMaxTrackingSteps; ++k) {
+        LOOP_TICK();
+        t -= log(1.0 - medium_random()) / mu;
+        if (t >= t1) return MediumEvent(false, t_max, w, w);
+        vec3 st, ss;
+        medium_coefficients(m, o + t * d, st, ss);
+        vec3 sn = max(vec3(mu) - st, vec3(0.0));
+        float u = medium_random() * mu;
+        if (u < ss[h]) return MediumEvent(true, t, w * ss, w * ss);
+        if (u >= ss[h] + sn[h]) return MediumEvent(false, t, vec3(0.0), vec3(1.0));   // absorbed
+        w *= sn;
+        w /= max_component(w);
+    }
+    return MediumEvent(false, t_max, vec3(0.0), vec3(1.0));
+}
+
+// Ratio tracking's transmittance of heterogeneous medium m along o + t d over [0, t_max].
+vec3 medium_transmittance_grid(int m, vec3 o, vec3 d, float t_max) {
+    float mu = u_media.media[m].majorant.x, t0, t1;
+    if (!(mu > 0.0) || !medium_box(m, o, d, t_max, t0, t1)) return vec3(1.0);
+    vec3 tr = vec3(1.0);
+    float t = t0;
+    for (int k = 0; k < kMaxTrackingSteps; ++k) {
+        LOOP_TICK();
+        t -= log(1.0 - medium_random()) / mu;
+        if (t >= t1) return tr;
+        vec3 st, ss;
+        medium_coefficients(m, o + t * d, st, ss);
+        tr *= max(1.0 - st / mu, vec3(0.0));
+        if (max_component(tr) <= 0.0) return vec3(0.0);
+    }
+    return vec3(0.0);
+}
+
+// The transmittance of medium m along o + t d over [0, t].
+vec3 medium_segment_transmittance(int m, vec3 o, vec3 d, float t) {
+    return medium_is_grid(m) ? medium_transmittance_grid(m, o, d, t) : medium_transmittance(m, t);
+}
+
+// A free-flight sample of hero channel h in medium m along the ray o + t d whose surface
+// lies at t_max; u: the homogeneous media's number (heterogeneous ones draw from
+// g_medium_rng). Homogeneous: t from the hero's exponential; a scattering event has
+// f = sigma_s T(t), p = sigma_t T(t), passing the surface f = p = T(t_max).
+MediumEvent medium_sample(int m, vec3 o, vec3 d, float t_max, float u, int h) {
+    if (medium_is_grid(m)) return medium_sample_grid(m, o, d, t_max, h);
     vec3 st = u_media.media[m].sigma_t.xyz;
-    int c = min(int(u.x * 3.0), 2);
-    float sc = st[c];
-    float t = sc > 0.0 ? -log(1.0 - u.y) / sc : kInfinity;
+    float t = st[h] > 0.0 ? -log(1.0 - u) / st[h] : kInfinity;
     if (t < t_max) {
         vec3 T = medium_transmittance(m, t);
-        float pdf = dot(st * T, vec3(1.0 / 3.0));
-        return MediumEvent(true, t, pdf > 0.0 ? u_media.media[m].sigma_s.xyz * T / pdf : vec3(0.0));
+        return MediumEvent(true, t, u_media.media[m].sigma_s.xyz * T, st * T);
     }
     vec3 T = medium_transmittance(m, t_max);
-    float p = dot(T, vec3(1.0 / 3.0));
-    return MediumEvent(false, t_max, p > 0.0 ? T / p : vec3(0.0));
+    return MediumEvent(false, t_max, T, T);
 }
 
 // The phase function of medium m for light arriving along d and leaving along wi (both
@@ -103,7 +227,7 @@ vec3 scene_transmittance(vec3 o, vec3 d, float t_max, float time, uint ignore, i
         SurfaceHit h;
         RAY_TICK();
         bool found = scene_intersect(o, d, t_max, time, h) && h.prim != ignore;
-        if (m != kNoMedium) tr *= medium_transmittance(m, found ? h.t : t_max);
+        if (m != kNoMedium) tr *= medium_segment_transmittance(m, o, d, found ? h.t : t_max);
         if (!found) return tr;
         if (!material_is_null(h.material) || k == kMaxNullCrossings || max_component(tr) <= 0.0)
             return vec3(0.0);

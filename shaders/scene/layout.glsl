@@ -33,9 +33,15 @@ layout(std140, binding = UBO_RENDER_PARAMS) uniform RenderParams {
 // that bounds media names them in MaterialData.info.y (kMaterialInteriorShift).
 const int kMaxMedia = 64;    // glrender/gpu/layout.py MAX_MEDIA
 struct MediumData {
-    vec4 sigma_t;   // xyz: extinction per unit length (scale applied), w: the phase function's g
-    vec4 sigma_s;   // xyz: scattering coefficient (albedo times sigma_t), w: -
+    vec4 sigma_t;   // xyz: extinction per unit length (scale applied; heterogeneous: the scale,
+                    // which multiplies the grid's values), w: the phase function's g
+    vec4 sigma_s;   // xyz: scattering coefficient (albedo times sigma_t; heterogeneous: the
+                    // constant albedo, when there is no albedo grid), w: -
     uvec4 info;     // x: kind (kMedium*), y: phase function (kPhase*), z: flags (kMediumFlag*), w: -
+    mat4 grid_from_world;   // heterogeneous: world to the grids' unit cube
+    uvec4 sigma_grid;       // heterogeneous: x the sigma_t grid's first texel in u_media_grids, yzw its voxels along x, y, z
+    uvec4 albedo_grid;      // x: the albedo grid's first texel + 1 (0: constant albedo), yzw: its voxels
+    vec4 majorant;          // x: heterogeneous: a bound on sigma_t over the grid, every channel (scale applied)
 };
 layout(std140, binding = UBO_MEDIA) uniform Media {
     uvec4 media_counts;    // x: media, y: the camera's medium + 1 (0: none)
@@ -136,6 +142,9 @@ layout(binding = TEX_TEXTURE_RECORDS) uniform samplerBuffer u_texture_records;
 // sqrt(alpha), each T(cos theta) at 64 cosines and R_int (glrender/gpu/microfacet_tables.py
 // alpha_table; read by bsdf/roughplastic.glsl). Bound only for scenes that use it.
 layout(binding = TEX_MICROFACET_TABLES) uniform samplerBuffer u_microfacet_tables;
+// 15: the voxels of heterogeneous media's grids, one RGBA32F texel each (x fastest, then y,
+// z; a one-channel grid repeats its value in rgb), at MediumData's sigma_grid / albedo_grid.
+layout(binding = TEX_MEDIA_GRIDS) uniform samplerBuffer u_media_grids;
 
 // The packed distribution array for sampling/distribution_data.glsl's prototype.
 float distribution_fetch(uint i) {

@@ -26,7 +26,7 @@ def block_tests(size=SIZE, block=BLOCK):
     return 3 * (size // block) ** 2 + 2
 
 
-COMPARISONS = 4    # the statistical comparisons of this file (Šidák)
+COMPARISONS = 7    # the statistical comparisons of this file (Šidák)
 
 
 def fog_sphere(sigma_t=2.0, albedo=1.0, phase="isotropic", g=0.0, size=SIZE, **integrator) -> m.Scene:
@@ -137,13 +137,70 @@ def test05_a_scene_without_media_compiles_none(gl_ctx):
 
 
 def test06_what_media_refuse(gl_ctx):
-    """Integrators and settings that do not render media yet, and grids, say so in one line."""
+    """Integrators and settings that do not render media yet, and an albedo grid that is not
+    the sigma_t grid's, say so in one line."""
     scene = fog_sphere()
     for options in ({"integrator": "bdpt"}, {"integrator": "direct"}, {"light_samples": 2}):
         with pytest.raises(UsageError, match=r"participating media are rendered by --integrator path"):
             glrender.render(scene, spp=1, progress=False, **options)
-    grid = fog_sphere()
-    grid.media[0] = m.Medium(kind="heterogeneous",
-                             sigma_t=m.Volume(np.ones((2, 2, 2, 1), np.float32)))
-    with pytest.raises(SceneError, match=r"media with grids .* are not rendered yet"):
-        glrender.render(grid, spp=1, progress=False)
+    odd = fog_sphere()
+    odd.media[0] = m.Medium(kind="heterogeneous", sigma_t=grid_volume(4),
+                            albedo=m.Volume(np.ones((2, 2, 2, 1), np.float32)))
+    with pytest.raises(SceneError, match=r"the albedo grid must have the sigma_t grid's voxels"):
+        glrender.render(odd, spp=1, progress=False)
+
+
+def grid_volume(n=8, value=1.0, corner=None) -> m.Volume:
+    """An n^3 grid of ``value`` over the cube [-1, 1]^3 around the fog sphere, voxel
+    (0, 0, 0) set to ``corner``: with trilinear lookups it reaches only points within
+    1.5 voxels of that corner of the cube, all outside the unit sphere, so the sphere's
+    fog stays ``value`` while the majorant is the corner's."""
+    data = np.full((n, n, n, 1), value, np.float32)
+    if corner is not None:
+        data[0, 0, 0, 0] = corner
+    return m.Volume(data, world_from_object=m.translate((-1.0, -1.0, -1.0)) @ m.scale(2.0))
+
+
+def grid_fog(scene, volume, albedo, scale=1.0):
+    scene.media[0] = m.Medium(kind="heterogeneous", sigma_t=volume, albedo=(albedo,) * 3,
+                              scale=scale, phase=scene.media[0].phase, g=scene.media[0].g)
+    return scene
+
+
+@pytest.mark.parametrize("corner", [None, 4.0], ids=["tight", "majorant-2x"])
+def test07_grid_fog_furnace_by_phase_sampling_is_exactly_one(gl_ctx, corner):
+    """A heterogeneous white fog (a grid with a smooth bump, 8^3 voxels, scale 2, and once
+    with a corner voxel that doubles the majorant): delta tracking's null collisions and
+    scattering events weigh exactly 1 in a grey medium, so by phase sampling alone every
+    sample is 1."""
+    n = 8
+    z, y, x = np.meshgrid(*(np.linspace(-1, 1, n),) * 3, indexing="ij")
+    data = (1.0 + 0.8 * np.exp(-(x * x + y * y + z * z) * 2.0)).astype(np.float32)[..., None]
+    if corner is not None:
+        data[0, 0, 0, 0] = corner
+    volume = m.Volume(data, world_from_object=m.translate((-1.0, -1.0, -1.0)) @ m.scale(2.0))
+    scene = grid_fog(fog_sphere(phase="hg", g=0.4, strategy="bsdf", rr="off", max_depth=-1),
+                     volume, 1.0, scale=2.0)
+    film = glrender.render(scene, spp=16, seed=5, sampler="independent", progress=False)
+    assert np.sum(film.truncated) == 0
+    assert np.abs(film.mean - 1.0).max() <= 1e-5, float(np.abs(film.mean - 1.0).max())
+
+
+@pytest.mark.parametrize("corner", [None, 2.0], ids=["tight", "majorant-2x"])
+def test08_constant_grid_fog_matches_the_closed_forms(gl_ctx, corner):
+    """A grid of constant density 1.5 (once with a majorant twice too large): black, each
+    pixel is its chords' transmittance exp(-1.5 l) (delta tracking's free flights); white
+    with light samples (ratio tracking's transmittance toward the environment), 1."""
+    black = grid_fog(fog_sphere(max_depth=-1), grid_volume(value=1.0, corner=corner and corner / 1.5),
+                     0.0, scale=1.5)
+    v = renders(black, 64)
+    extra = (COMPARISONS - 1) * block_tests()
+    c = compare_images(v, chord_transmittance(black, (1.5,) * 3), block=BLOCK, extra_tests=extra)
+    assert c.passed, c.summary() + " " + "; ".join(c.messages)
+    assert c.detectable_bias < 0.01, c.summary()
+    white = grid_fog(fog_sphere(phase="hg", g=0.6, max_depth=-1),
+                     grid_volume(value=1.0, corner=corner and corner / 1.5), 1.0, scale=1.5)
+    v = renders(white, 64)
+    c = compare_images(v, np.ones(v.shape[1:]), block=BLOCK, extra_tests=extra)
+    assert c.passed, c.summary() + " " + "; ".join(c.messages)
+    assert c.detectable_bias < 0.01, c.summary()
