@@ -94,7 +94,7 @@ def test_examples_and_pages(site):
         first = (ROOT / "examples" / script).read_text().splitlines()[0].strip('"')
         assert first in examples
     for page in ("getting-started.html", "scene-format.html", "scale-out.html",
-                 "integrators.html", "bidirectional.html", "photon-mapping.html",
+                 "integrators.html", "bidirectional.html", "photon-mapping.html", "media.html",
                  "checkpoints.html", "production.html", "denoising.html", "preview.html",
                  "sampling.html", "estimator-lab.html", "benchmarks.html"):
         assert (site / page).is_file()
