@@ -28,7 +28,8 @@ OPTIONS = {
 # scenes given in two formats: the same scene from either file, and the integrator that
 # compares them (bdpt where it can; media render only by the path tracer)
 TWINS = [("door/scene.toml", "door/scene.xml", "bdpt"),
-         ("cornell-fog/scene.toml", "cornell-fog/scene.xml", "path")]
+         ("cornell-fog/scene.toml", "cornell-fog/scene.xml", "path"),
+         ("smoke/scene.toml", "smoke/scene.xml", "path")]
 
 
 def _files() -> tuple[list[Path], list[Path]]:
