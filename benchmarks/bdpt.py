@@ -87,12 +87,12 @@ def mse_of(img, ref, ref_var, window=None):
     return max(err - noise, 1e-30)
 
 
-def arguments(doc: str) -> argparse.Namespace:
+def arguments(doc: str, scenes: str = "cornell,door,caustic") -> argparse.Namespace:
     """--seconds, --rounds and --scenes of an equal-time benchmark (``doc``: its docstring)."""
     ap = argparse.ArgumentParser(description=doc.split("\n\n")[0])
     ap.add_argument("--seconds", type=float, default=20.0, help="render time per config")
     ap.add_argument("--rounds", type=int, default=1, help="alternating rounds (medians reported)")
-    ap.add_argument("--scenes", default="cornell,door,caustic")
+    ap.add_argument("--scenes", default=scenes)
     return ap.parse_args()
 
 
@@ -104,7 +104,7 @@ def label_of(integrator: str) -> str:
     return f"glrender {name}" + (f" ({', '.join(items)})" if items else "")
 
 
-def equal_time(tmp: Path, args, integrators, extra=None):
+def equal_time(tmp: Path, args, integrators, extra=None, table=None):
     """Per scene of ``args.scenes``: render glrender's ``integrators`` and, where the scene
     has a Mitsuba XML, Mitsuba's path tracer (independent, multijitter), each config in its
     own process for ``args.seconds`` after its warm-up, in ``args.rounds`` rounds that
@@ -112,8 +112,9 @@ def equal_time(tmp: Path, args, integrators, extra=None):
     ran on); a median record holds seconds, spp, mse, mse_window, spp_s, mean, eff,
     eff_window and what ``extra(info)`` adds from the config's JSON output. An integrator
     "name:key=value,..." renders with those of its own settings (integers), labelled
-    "glrender name (key value, ...)"."""
-    table = scenes(tmp)
+    "glrender name (key value, ...)". ``table``: name -> (TOML, XML or None, reference,
+    reference variance or None), by default this module's scenes."""
+    table = scenes(tmp) if table is None else table
     for name in args.scenes.split(","):
         toml, xml, ref_path, ref_var = table[name]
         ref = np.load(ref_path).astype(np.float64)[..., :3]
@@ -128,7 +129,8 @@ def equal_time(tmp: Path, args, integrators, extra=None):
                 out = tmp / f"{name}-{label.replace(' ', '_').replace(',', '')}-{rnd}.npy"
                 if who == "mitsuba":
                     info = run([sys.executable, "-c", MITSUBA_SCRIPT, str(xml), what, str(args.seconds),
-                                "16", str(rnd + 1), str(out)], env={"DRJIT_LIBLLVM_PATH": LLVM})
+                                "16", str(rnd + 1), str(out)], env={"DRJIT_LIBLLVM_PATH": LLVM},
+                               cwd=Path(xml).parent)
                 else:
                     info = run([sys.executable, "-c", GLRENDER_SCRIPT, str(toml), what, str(args.seconds),
                                 str(rnd + 1), str(out)])
@@ -166,17 +168,18 @@ def main() -> None:
     write_results(rows, device, commit, args)
 
 
-def conditions(commit, device, args, load=None) -> str:
+def conditions(commit, device, args, load=None, known="Cornell, door", window=True) -> str:
     """The opening of a run's header paragraph: date, commit, devices, ``load`` (the load
     average at the start and the end) where given, the time each config renders and how the
-    error and the efficiency are measured."""
+    error and the efficiency are measured (``known``: the scenes whose reference noise is
+    subtracted; ``window``: the table has the caustic window's columns)."""
     load = "" if load is None else f"; load average {load[0]:.2f} at the start, {load[1]:.2f} at the end"
     return (f"{datetime.date.today()}, commit `{commit}`, glrender on `{device}`, Mitsuba 3 `llvm_ad_rgb` "
             f"on the same CPU ({os.cpu_count()} cores, shared with other work: timings are noisy{load}). "
             f"Each config renders {args.seconds:g} s after its warm-up, {args.rounds} round(s), "
             f"medians. MSE against the scene's reference minus the reference's own noise where "
-            f"known (Cornell, door); 'window' = the caustic window, rows 130-170 x columns 130-200. "
-            f"Efficiency = 1/(MSE x time)")
+            f"known ({known})" + ("; 'window' = the caustic window, rows 130-170 x columns 130-200" if window
+                                  else "") + ". Efficiency = 1/(MSE x time)")
 
 
 def write_results(rows, device, commit, args) -> None:

@@ -89,8 +89,11 @@ print(json.dumps({"seconds": t, "spp": f.spp, "device": r.ctx.renderer,
 """
 
 
-def run(cmd, env=None) -> dict:
-    result = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, **(env or {})})
+def run(cmd, env=None, cwd=None) -> dict:
+    """Run a benchmark step; its JSON summary (the last line it prints). ``cwd``: where it
+    runs (a Mitsuba scene loaded from a string finds its files there)."""
+    result = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, **(env or {})},
+                            cwd=cwd)
     if result.returncode != 0:
         raise SystemExit(f"benchmark step failed: {' '.join(map(str, cmd[:3]))}...\n{result.stderr[-2000:]}")
     return json.loads(result.stdout.strip().splitlines()[-1])

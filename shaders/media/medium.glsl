@@ -219,21 +219,31 @@ bool medium_samples_emitters(int m) {
 
 // The transmittance of a shadow ray from o along d over t_max that starts in medium m:
 // the media's along its segments, through null surfaces (into the medium on their far
-// side), 0 at any other surface (`ignore`: the primitive it aims at, not a blocker).
+// side), 0 at any other surface (`ignore`: the primitive it aims at, not a blocker). The
+// ray goes on from a point offset off each surface it passes, parallel to the first: a
+// segment's length counts from the surface's plane (the offset's lead along d) to the next
+// hit, so that the offsets do not shorten any medium's part.
 vec3 scene_transmittance(vec3 o, vec3 d, float t_max, float time, uint ignore, int m) {
     vec3 tr = vec3(1.0);
+    vec3 from = o;          // the ray continues from here (offset past the last surface)
+    float s = 0.0;          // the length along d covered up to the last surface passed
+    float lead = 0.0;       // from that surface's plane to `from`, along d
     for (int k = 0; k <= kMaxNullCrossings; ++k) {
         LOOP_TICK();
         SurfaceHit h;
         RAY_TICK();
-        bool found = scene_intersect(o, d, t_max, time, h) && h.prim != ignore;
-        if (m != kNoMedium) tr *= medium_segment_transmittance(m, o, d, found ? h.t : t_max);
+        bool found = scene_intersect(from, d, max(t_max - s - lead, 0.0), time, h) && h.prim != ignore;
+        float length = found ? lead + h.t : max(t_max - s, 0.0);
+        if (m != kNoMedium) tr *= medium_segment_transmittance(m, from - lead * d, d, length);
         if (!found) return tr;
         if (!material_is_null(h.material) || k == kMaxNullCrossings || max_component(tr) <= 0.0)
             return vec3(0.0);
         m = medium_after(h.material, h.ng, d, m);
-        o = offset_ray_origin(h.p, h.ng, d);
-        t_max -= h.t;
+        s += length;
+        from = offset_ray_origin(h.p, h.ng, d);
+        // (at grazing angles at most 64 offsets: the lead is ill-conditioned there)
+        float offset = abs(dot(from - h.p, h.ng));
+        lead = offset / max(abs(dot(d, h.ng)), 1.0 / 64.0);
     }
     return vec3(0.0);
 }

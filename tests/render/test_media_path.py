@@ -204,3 +204,33 @@ def test08_constant_grid_fog_matches_the_closed_forms(gl_ctx, corner):
     c = compare_images(v, np.ones(v.shape[1:]), block=BLOCK, extra_tests=extra)
     assert c.passed, c.summary() + " " + "; ".join(c.messages)
     assert c.detectable_bias < 0.01, c.summary()
+
+
+def test09_light_through_an_absorbing_slab_is_its_closed_form(gl_ctx):
+    """A diffuse plane (albedo 0.5) seen from straight above, lit by a directional light at
+    60 degrees from the vertical through a slab of absorbing fog (sigma_t (0.3, 0.8, 1.6),
+    0.5 thick, bounded by a null box) that the camera rays do not cross: direct lighting
+    alone (max depth 2) gives every sample rho / pi E cos(60) exp(-sigma_t 0.5 / cos(60))
+    where the light's path crosses the whole slab, and the same without the exponential
+    where it misses it, to 1e-5 (the transmittance of a homogeneous medium is closed form)."""
+    from render_scenes import plane_points, plane_under_light
+
+    theta = np.radians(60.0)
+    light = m.Light("directional", direction=(np.sin(theta), 0.0, -np.cos(theta)), irradiance=(3.0,) * 3)
+    scene = plane_under_light(light, albedo=0.5, width=SIZE, height=SIZE, max_depth=2)
+    null = scene.add_material(m.Material("null"))
+    sigma = np.array([0.3, 0.8, 1.6])
+    slab = scene.add_medium(m.Medium(sigma_t=tuple(sigma), albedo=(0.0,) * 3))
+    # x in [-5, -1.5], |y| <= 2, z in [1, 1.5]: the light's rays to the plane at x <= 0.2
+    # cross it whole, those to x >= 1.1 miss it; the camera sees |x|, |y| <= 1.4
+    box = m.translate((-3.25, 0.0, 1.25)) @ m.scale((1.75, 2.0, 0.25))
+    scene.shapes.append(m.Shape("cube", material=null, interior=slab, world_from_object=box))
+    film = glrender.render(scene, spp=4, seed=1, sampler="independent", progress=False)
+    x = plane_points(scene, supersample=4)[..., 0]
+    lit = 0.5 / np.pi * 3.0 * np.cos(theta)
+    through = np.all(x <= 0.2, axis=-1)
+    clear = np.all(x >= 1.1, axis=-1)
+    assert through.sum() > 50 and clear.sum() > 50
+    want = lit * np.exp(-sigma * 0.5 / np.cos(theta))
+    np.testing.assert_allclose(film.mean[through], np.broadcast_to(want, film.mean[through].shape), rtol=1e-5)
+    np.testing.assert_allclose(film.mean[clear], lit, rtol=1e-5)

@@ -1,0 +1,85 @@
+"""Participating media: glrender's path tracer against Mitsuba 3's volpath, at equal time.
+
+Scenes: cornell-fog (a homogeneous ball of fog in the Cornell box) and smoke (a plume from a
+voxel grid), each in TOML and in Mitsuba's XML (the same scene), with references from
+benchmarks/media_reference.py (Mitsuba's volpath at long time, their own noise subtracted).
+Configs: glrender path (the scenes' Sobol' sampler and max depth) and Mitsuba 3's volpath
+(llvm_ad_rgb, independent and multijitter). bdpt, vcm and sppm do not render media yet and
+are not measured. Each config renders in its own process for the same wall time after its
+kernel is compiled and warmed up; rounds alternate, medians are reported. Reported per scene
+and config: spp/s, RMSE against the reference, mean against the reference, efficiency
+1 / (MSE x time) and its ratio to Mitsuba's volpath with the independent sampler. Target:
+the path tracer's efficiency at least Mitsuba's on both scenes. Writes the "## Participating
+media" section of benchmarks/RESULTS.md: its header, table and target lines (the notes after
+them stay).
+
+    .venv/bin/python benchmarks/media.py [--seconds 15] [--rounds 1] [--scenes cornell-fog,smoke]
+"""
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bdpt import arguments, conditions, equal_time  # noqa: E402
+from cornell_vs_mitsuba import ROOT  # noqa: E402
+from results_md import END_OF_RUN, commit, put_run  # noqa: E402
+
+RESULTS = ROOT / "benchmarks" / "RESULTS.md"
+MARKER = "## Participating media"
+MITSUBA = "Mitsuba path, independent"
+TARGET = {"cornell-fog": 1.0, "smoke": 1.0}   # path efficiency / Mitsuba volpath's (independent)
+
+
+def table() -> dict:
+    """name -> (TOML, Mitsuba XML, reference, reference per-pixel variance)."""
+    out = {}
+    for name in ("cornell-fog", "smoke"):
+        ref = ROOT / "benchmarks" / "refs" / f"{name}-ref.npy"
+        if not ref.exists():
+            raise SystemExit(f"{ref}: no reference (run benchmarks/media_reference.py first)")
+        var = np.load(ref.with_name(f"{name}-ref-stderr.npy")).astype(np.float64) ** 2
+        out[name] = (ROOT / "scenes" / name / "scene.toml", ROOT / "scenes" / name / "scene.xml", ref, var)
+    return out
+
+
+def main() -> None:
+    args = arguments(__doc__, scenes="cornell-fog,smoke")
+    load_start = os.getloadavg()
+    with tempfile.TemporaryDirectory(prefix="glrender-media-bench-") as tmp:
+        runs = list(equal_time(Path(tmp), args, ("path",), table=table()))
+    write_results(runs, args, load_start, os.getloadavg())
+
+
+def write_results(runs, args, load_start, load_end) -> None:
+    device = runs[-1][2]
+    lines = [f"{MARKER}: the path tracer vs Mitsuba 3's volpath (equal time)", "",
+             conditions(commit(), device, args, (load_start[0], load_end[0]), known="both scenes",
+                        window=False) +
+             ". The 'Mitsuba' rows are its volpath integrator (the scenes' XML). Rerun: `.venv/bin/python benchmarks/media.py` "
+             "(references: `benchmarks/media_reference.py`).", "",
+             "| scene | renderer | spp/s | RMSE | mean vs ref | efficiency | eff. vs Mitsuba |",
+             "|---|---|---|---|---|---|---|"]
+    targets = []
+    for name, med, _ in runs:
+        mitsuba = med.get(MITSUBA)
+        for label, m in med.items():
+            label = label.replace("Mitsuba path", "Mitsuba volpath")
+            vs = f"{m['eff'] / mitsuba['eff']:.3g}x" if mitsuba else "—"
+            lines.append(f"| {name} | {label} | {m['spp_s']:.2f} | {m['mse'] ** 0.5:.4g} | "
+                         f"{m['mean']:+.2%} | {m['eff']:.4g} | {vs} |")
+        if mitsuba and name in TARGET:
+            r = med["glrender path"]["eff"] / mitsuba["eff"]
+            targets.append(f"- {name}: the path tracer's efficiency is {r:.3g}x Mitsuba's volpath's; "
+                           f"target at least {TARGET[name]:g}x: {'met' if r >= TARGET[name] else 'missed'}.")
+    section = "\n".join(lines + ["", "Targets:", ""] + targets + ["", END_OF_RUN]) + "\n"
+    put_run(RESULTS, MARKER, section)
+    print(section)
+
+
+if __name__ == "__main__":
+    main()

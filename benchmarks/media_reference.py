@@ -1,0 +1,58 @@
+"""The media scenes' reference images: Mitsuba 3's volpath (llvm_ad_rgb, independent
+sampler) on each scene's Mitsuba XML, k independent seeds rendered for a fixed time each;
+their mean is the reference and the spread between them its per-pixel standard error.
+Writes benchmarks/refs/NAME-ref.npy, NAME-ref-stderr.npy and NAME-ref.json (spp, seconds,
+Mitsuba's version) for NAME in cornell-fog and smoke.
+
+    .venv/bin/python benchmarks/media_reference.py [--seconds 90] [--seeds 4] [--scenes cornell-fog,smoke]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from cornell_vs_mitsuba import LLVM, MITSUBA_SCRIPT, ROOT, run  # noqa: E402
+
+OUT = ROOT / "benchmarks" / "refs"
+SCENES = {"cornell-fog": ROOT / "scenes/cornell-fog/scene.xml", "smoke": ROOT / "scenes/smoke/scene.xml"}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seconds", type=float, default=90.0, help="render time per seed")
+    ap.add_argument("--seeds", type=int, default=4)
+    ap.add_argument("--scenes", default=",".join(SCENES))
+    args = ap.parse_args()
+    OUT.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="glrender-media-ref-") as tmp:
+        for name in args.scenes.split(","):
+            xml = SCENES[name]
+            # Mitsuba reads the scene's files (grids) beside it: render a copy there
+            images, spps, version = [], [], None
+            for seed in range(args.seeds):
+                out = Path(tmp) / f"{name}-{seed}.npy"
+                info = run([sys.executable, "-c", MITSUBA_SCRIPT, str(xml), "independent",
+                            str(args.seconds), "16", str(1000 + seed), str(out)],
+                           env={"DRJIT_LIBLLVM_PATH": LLVM}, cwd=xml.parent)
+                images.append(np.load(out).astype(np.float64))
+                spps.append(info["spp"])
+                version = info["version"]
+                print(f"{name} seed {seed}: {info['spp']} spp", flush=True)
+            stack = np.stack(images)
+            np.save(OUT / f"{name}-ref.npy", stack.mean(axis=0).astype(np.float32))
+            np.save(OUT / f"{name}-ref-stderr.npy",
+                    (stack.std(axis=0, ddof=1) / np.sqrt(len(images))).astype(np.float32))
+            (OUT / f"{name}-ref.json").write_text(json.dumps({
+                "renderer": "Mitsuba 3 volpath", "version": version, "variant": "llvm_ad_rgb",
+                "sampler": "independent", "seeds": len(images), "spp": spps,
+                "seconds_per_seed": args.seconds}, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()
