@@ -1,8 +1,11 @@
-"""The media scenes' reference images: Mitsuba 3's volpath (llvm_ad_rgb, independent
-sampler) on each scene's Mitsuba XML, k independent seeds rendered for a fixed time each;
+"""The media scenes' reference images, k independent seeds rendered for a fixed time each;
 their mean is the reference and the spread between them its per-pixel standard error.
-Writes benchmarks/refs/NAME-ref.npy, NAME-ref-stderr.npy and NAME-ref.json (spp, seconds,
-Mitsuba's version) for NAME in cornell-fog and smoke.
+cornell-fog: Mitsuba 3's volpath (llvm_ad_rgb, independent sampler) on its Mitsuba XML.
+smoke: glrender's path tracer (Sobol'), checked against Mitsuba's volpath by the parity
+suite's grid case: Mitsuba takes about 1 s per sample per pixel on the smoke at 256x256 on
+2 cores, so a reference of many times the benchmark's samples would take hours. Writes
+benchmarks/refs/NAME-ref.npy, NAME-ref-stderr.npy and NAME-ref.json (renderer, spp,
+seconds).
 
     .venv/bin/python benchmarks/media_reference.py [--seconds 90] [--seeds 4] [--scenes cornell-fog,smoke]
 """
@@ -21,6 +24,20 @@ from cornell_vs_mitsuba import LLVM, MITSUBA_SCRIPT, ROOT, run  # noqa: E402
 
 OUT = ROOT / "benchmarks" / "refs"
 SCENES = {"cornell-fog": ROOT / "scenes/cornell-fog/scene.xml", "smoke": ROOT / "scenes/smoke/scene.xml"}
+MITSUBA_REFERENCE = {"cornell-fog"}     # the others: glrender's path tracer
+
+GLRENDER_SCRIPT = r"""
+import json, sys, time, numpy as np, glrender
+from glrender.render.renderer import Renderer, settings_from_scene
+toml, seconds, seed, out = sys.argv[1:5]
+scene = glrender.load(toml)
+r = Renderer(scene, settings_from_scene(scene, seed=int(seed), spp=1 << 20))
+t0 = time.perf_counter()
+while time.perf_counter() - t0 < float(seconds):
+    r.step(r.samples_per_pass)
+np.save(out, r.film().mean)
+print(json.dumps({"spp": r.spp_done, "version": "glrender path, " + r.ctx.renderer}))
+"""
 
 
 def main() -> None:
@@ -37,9 +54,13 @@ def main() -> None:
             images, spps, version = [], [], None
             for seed in range(args.seeds):
                 out = Path(tmp) / f"{name}-{seed}.npy"
-                info = run([sys.executable, "-c", MITSUBA_SCRIPT, str(xml), "independent",
-                            str(args.seconds), "16", str(1000 + seed), str(out)],
-                           env={"DRJIT_LIBLLVM_PATH": LLVM}, cwd=xml.parent)
+                if name in MITSUBA_REFERENCE:
+                    info = run([sys.executable, "-c", MITSUBA_SCRIPT, str(xml), "independent",
+                                str(args.seconds), "16", str(1000 + seed), str(out)],
+                               env={"DRJIT_LIBLLVM_PATH": LLVM}, cwd=xml.parent)
+                else:
+                    info = run([sys.executable, "-c", GLRENDER_SCRIPT, str(xml.with_suffix(".toml")),
+                                str(args.seconds), str(1000 + seed), str(out)])
                 images.append(np.load(out).astype(np.float64))
                 spps.append(info["spp"])
                 version = info["version"]
@@ -49,8 +70,8 @@ def main() -> None:
             np.save(OUT / f"{name}-ref-stderr.npy",
                     (stack.std(axis=0, ddof=1) / np.sqrt(len(images))).astype(np.float32))
             (OUT / f"{name}-ref.json").write_text(json.dumps({
-                "renderer": "Mitsuba 3 volpath", "version": version, "variant": "llvm_ad_rgb",
-                "sampler": "independent", "seeds": len(images), "spp": spps,
+                "renderer": "Mitsuba 3 volpath (llvm_ad_rgb, independent)" if name in MITSUBA_REFERENCE
+                else "glrender path (sobol)", "version": version, "seeds": len(images), "spp": spps,
                 "seconds_per_seed": args.seconds}, indent=1) + "\n")
 
 

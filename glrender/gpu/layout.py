@@ -64,6 +64,7 @@ LIGHT = np.dtype([
 ])
 
 MAX_MEDIA = 64    # kMaxMedia: the media uniform block's records
+SUPERVOXEL = 8    # kSupervoxel: voxels along a side of a heterogeneous medium's supervoxel
 MEDIUM = np.dtype([
     ("sigma_t", *_V4),   # xyz: extinction (scale applied; heterogeneous: the scale), w: phase g
     ("sigma_s", *_V4),   # xyz: albedo times sigma_t (heterogeneous: the constant albedo)
@@ -72,6 +73,7 @@ MEDIUM = np.dtype([
     ("sigma_grid", *_U4),    # first texel in the grid texture, voxels x, y, z
     ("albedo_grid", *_U4),   # first texel + 1 (0: constant albedo), voxels x, y, z
     ("majorant", *_V4),      # x: a bound on sigma_t over the grid (every channel, scale applied)
+    ("majorant_grid", *_U4),  # first texel of the supervoxels' bounds, supervoxels x, y, z
 ])
 MEDIA = np.dtype([
     ("media_counts", *_U4),   # media, the camera's medium + 1 (0: none)
@@ -80,8 +82,8 @@ MEDIA = np.dtype([
 
 # std430/std140 sizes of the GLSL structs (16-byte vectors and matrices; MaterialData ends
 # with a float[64], std430 stride 4).
-SIZES = {"RenderParams": 288, "MaterialData": 336, "LightData": 144, "MediumData": 160,
-         "Media": 16 + 160 * MAX_MEDIA}
+SIZES = {"RenderParams": 288, "MaterialData": 336, "LightData": 144, "MediumData": 176,
+         "Media": 16 + 176 * MAX_MEDIA}
 for _name, _dtype in (("RenderParams", RENDER_PARAMS), ("MaterialData", MATERIAL),
                       ("LightData", LIGHT), ("MediumData", MEDIUM), ("Media", MEDIA)):
     assert _dtype.itemsize == SIZES[_name], (_name, _dtype.itemsize)

@@ -334,6 +334,25 @@ def _grid_texels(volume: m.Volume, what: str) -> np.ndarray:
     return texels
 
 
+def supervoxel_majorants(values: np.ndarray, scale: float) -> np.ndarray:
+    """Per supervoxel (layout.SUPERVOXEL voxels a side) of a grid of (Z, Y, X) voxel values
+    (each its largest channel): a bound on what a lookup inside it returns, times ``scale``.
+    A trilinear lookup reads voxels half a voxel beyond the supervoxel, so each bound takes
+    the largest value of its voxels and a one-voxel apron around them (clamped at the
+    grid's edges, as the lookups are). Returns (SZ, SY, SX)."""
+    v = np.asarray(values, np.float64)
+    for axis in range(3):    # the apron: the largest of each voxel's neighbours along each axis
+        padded = np.concatenate([np.take(v, [0], axis), v, np.take(v, [-1], axis)], axis=axis)
+        n = v.shape[axis]
+        v = np.maximum(np.maximum(np.take(padded, range(0, n), axis), np.take(padded, range(1, n + 1), axis)),
+                       np.take(padded, range(2, n + 2), axis))
+    s = layout.SUPERVOXEL
+    counts = [-(-n // s) for n in v.shape]
+    v = np.pad(v, [(0, c * s - n) for c, n in zip(counts, v.shape)], mode="edge")
+    blocks = v.reshape(counts[0], s, counts[1], s, counts[2], s).max(axis=(1, 3, 5))
+    return blocks * scale
+
+
 def pack_medium(med: m.Medium, where: str, grids: list[np.ndarray]) -> np.ndarray:
     """One layout.MEDIUM record: extinction (times scale), scattering, phase function; a
     heterogeneous medium's grids are appended to ``grids`` (their texels' offsets counted
@@ -360,6 +379,11 @@ def pack_medium(med: m.Medium, where: str, grids: list[np.ndarray]) -> np.ndarra
         scale = float(med.scale)
         rec["sigma_t"] = (scale, scale, scale, g)
         rec["majorant"][0] = scale * float(texels[:, :3].max(initial=0.0))
+        bounds = supervoxel_majorants(texels[:, :3].max(axis=1).reshape(z, y, x), scale)
+        first = sum(len(t) for t in grids)
+        grids.append(np.repeat(bounds.reshape(-1, 1), 4, axis=1).astype(np.float32))
+        sz, sy, sx = bounds.shape
+        rec["majorant_grid"] = (first, sx, sy, sz)
         if volume.filter == "nearest":
             flags |= bindings.MEDIUM_FLAG_NEAREST
         if isinstance(med.albedo, m.Volume):

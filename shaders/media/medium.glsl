@@ -4,7 +4,9 @@
 // Heterogeneous media (Mitsuba's gridvolume: a grid over the unit cube placed by its
 // to_world, cell-centred lookups, trilinear or nearest) are tracked against the medium's
 // majorant mu >= sigma_t,c(x) for every channel (Novák et al. 2014): tentative collisions
-// at exponential steps of rate mu inside the grid's box; at each, the hero channel h
+// at exponential steps of rate mu inside the grid's box, mu the local majorant of the
+// supervoxel (kSupervoxel^3 voxels and a one-voxel apron) the step is in, walked by a 3D
+// DDA, so sparse smoke takes few steps where it is thin; at each, the hero channel h
 // scatters with probability sigma_s,h / mu, goes on (a null collision, sigma_n = mu -
 // sigma_t) with sigma_n,h / mu, else is absorbed; each event's f and p per channel are its
 // sigma_s or sigma_n (delta tracking under the null-scattering path integral: unbiased
@@ -139,45 +141,114 @@ bool medium_box(int m, vec3 o, vec3 d, float t_max, out float t0, out float t1) 
     return t0 < t1;
 }
 
-// Delta tracking of hero channel h in heterogeneous medium m along o + t d up to t_max.
-MediumEvent medium_sample_grid(int m, vec3 o, vec3 d, float t_max, int h) {
-    float mu = u_media.media[m].majorant.x, t0, t1;
-    if (!(mu > 0.0) || !medium_box(m, o, d, t_max, t0, t1))
-        return MediumEvent(false, t_max, vec3(1.0), vec3(1.0));
-    vec3 w = vec3(1.0);   // the null collisions' f = p so far, scaled to a largest channel of 1
-    float t = t0;
+// Tentative collisions along o + t d in heterogeneous medium m, supervoxel by supervoxel
+// (a 3D DDA over its grid of local majorants): within each, exponential steps at that
+// supervoxel's majorant; a step that leaves it starts afresh in the next (the exponential
+// has no memory), one without extinction is crossed at once.
+struct Tracker {
+    float t;        // the current tentative collision (or where the walk stands)
+    float mu;       // the majorant there
+    float t_end;    // where the ray leaves the grid's box (or reaches its end)
+    ivec3 cell;     // the supervoxel
+    ivec3 step;
+    vec3 t_next;    // where the ray crosses the next supervoxel boundary along each axis
+    vec3 t_delta;   // the ray's length across one supervoxel along each axis
+    uvec4 grid;     // MediumData.majorant_grid
+    bool capped;    // the walk ran past kMaxTrackingSteps
+};
+
+// A tracker over the part of o + t d, t in [0, t_max], inside medium m's grid; false when
+// the ray misses it or the medium has no extinction.
+bool tracker_begin(int m, vec3 o, vec3 d, float t_max, out Tracker tk) {
+    MediumData md = u_media.media[m];
+    float t0, t1;
+    tk.capped = false;
+    if (!(md.majorant.x > 0.0) || !medium_box(m, o, d, t_max, t0, t1)) return false;
+    tk.grid = md.majorant_grid;
+    // supervoxel coordinates: kSupervoxel voxels to a unit (the last one may be partial)
+    vec3 per_unit = vec3(md.sigma_grid.yzw) / float(kSupervoxel);
+    vec3 q0 = (md.grid_from_world * vec4(o, 1.0)).xyz * per_unit;
+    vec3 dq = (md.grid_from_world * vec4(d, 0.0)).xyz * per_unit;
+    vec3 q = q0 + t0 * dq;
+    tk.cell = clamp(ivec3(floor(q)), ivec3(0), ivec3(tk.grid.yzw) - 1);
+    for (int a = 0; a < 3; ++a) {
+        if (dq[a] > 0.0) {
+            tk.step[a] = 1;
+            tk.t_delta[a] = 1.0 / dq[a];
+            tk.t_next[a] = t0 + (float(tk.cell[a] + 1) - q[a]) / dq[a];
+        } else if (dq[a] < 0.0) {
+            tk.step[a] = -1;
+            tk.t_delta[a] = -1.0 / dq[a];
+            tk.t_next[a] = t0 + (float(tk.cell[a]) - q[a]) / dq[a];
+        } else {
+            tk.step[a] = 0;
+            tk.t_delta[a] = kInfinity;
+            tk.t_next[a] = kInfinity;
+        }
+    }
+    tk.t = t0;
+    tk.t_end = t1;
+    tk.mu = 0.0;
+    return true;
+}
+
+// The next tentative collision (tk.t, tk.mu); false when the ray leaves the grid first.
+bool tracker_next(inout Tracker tk) {
     for (int k = 0; k < kMaxTrackingSteps; ++k) {
         LOOP_TICK();
-        t -= log(1.0 - medium_random()) / mu;
-        if (t >= t1) return MediumEvent(false, t_max, w, w);
+        float t_exit = min(min(min(tk.t_next.x, tk.t_next.y), tk.t_next.z), tk.t_end);
+        uint at = tk.grid.x + (uint(tk.cell.z) * tk.grid.z + uint(tk.cell.y)) * tk.grid.y + uint(tk.cell.x);
+        float mu = texelFetch(u_media_grids, int(at)).r;
+        if (mu > 0.0) {
+            float t = tk.t - log(1.0 - medium_random()) / mu;
+            if (t < t_exit) {
+                tk.t = t;
+                tk.mu = mu;
+                return true;
+            }
+        }
+        tk.t = t_exit;
+        if (t_exit >= tk.t_end) return false;
+        int a = tk.t_next.x <= tk.t_next.y ? (tk.t_next.x <= tk.t_next.z ? 0 : 2)
+                                            : (tk.t_next.y <= tk.t_next.z ? 1 : 2);
+        tk.cell[a] += tk.step[a];
+        tk.t_next[a] += tk.t_delta[a];
+        if (tk.cell[a] < 0 || tk.cell[a] >= int(tk.grid[a + 1])) return false;
+    }
+    tk.capped = true;
+    return false;
+}
+
+// Delta tracking of hero channel h in heterogeneous medium m along o + t d up to t_max.
+MediumEvent medium_sample_grid(int m, vec3 o, vec3 d, float t_max, int h) {
+    Tracker tk;
+    if (!tracker_begin(m, o, d, t_max, tk)) return MediumEvent(false, t_max, vec3(1.0), vec3(1.0));
+    vec3 w = vec3(1.0);   // the null collisions' f = p so far, scaled to a largest channel of 1
+    while (tracker_next(tk)) {
         vec3 st, ss;
-        medium_coefficients(m, o + t * d, st, ss);
-        vec3 sn = max(vec3(mu) - st, vec3(0.0));
-        float u = medium_random() * mu;
-        if (u < ss[h]) return MediumEvent(true, t, w * ss, w * ss);
-        if (u >= ss[h] + sn[h]) return MediumEvent(false, t, vec3(0.0), vec3(1.0));   // absorbed
+        medium_coefficients(m, o + tk.t * d, st, ss);
+        vec3 sn = max(vec3(tk.mu) - st, vec3(0.0));
+        float u = medium_random() * tk.mu;
+        if (u < ss[h]) return MediumEvent(true, tk.t, w * ss, w * ss);
+        if (u >= ss[h] + sn[h]) return MediumEvent(false, tk.t, vec3(0.0), vec3(1.0));   // absorbed
         w *= sn;
         w /= max_component(w);
     }
-    return MediumEvent(false, t_max, vec3(0.0), vec3(1.0));
+    return tk.capped ? MediumEvent(false, t_max, vec3(0.0), vec3(1.0)) : MediumEvent(false, t_max, w, w);
 }
 
 // Ratio tracking's transmittance of heterogeneous medium m along o + t d over [0, t_max].
 vec3 medium_transmittance_grid(int m, vec3 o, vec3 d, float t_max) {
-    float mu = u_media.media[m].majorant.x, t0, t1;
-    if (!(mu > 0.0) || !medium_box(m, o, d, t_max, t0, t1)) return vec3(1.0);
+    Tracker tk;
+    if (!tracker_begin(m, o, d, t_max, tk)) return vec3(1.0);
     vec3 tr = vec3(1.0);
-    float t = t0;
-    for (int k = 0; k < kMaxTrackingSteps; ++k) {
-        LOOP_TICK();
-        t -= log(1.0 - medium_random()) / mu;
-        if (t >= t1) return tr;
+    while (tracker_next(tk)) {
         vec3 st, ss;
-        medium_coefficients(m, o + t * d, st, ss);
-        tr *= max(1.0 - st / mu, vec3(0.0));
+        medium_coefficients(m, o + tk.t * d, st, ss);
+        tr *= max(1.0 - st / tk.mu, vec3(0.0));
         if (max_component(tr) <= 0.0) return vec3(0.0);
     }
-    return vec3(0.0);
+    return tk.capped ? vec3(0.0) : tr;
 }
 
 // The transmittance of medium m along o + t d over [0, t].

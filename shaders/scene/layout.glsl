@@ -32,6 +32,7 @@ layout(std140, binding = UBO_RENDER_PARAMS) uniform RenderParams {
 // Scenes whose shapes or camera name media (GLRENDER_MEDIA); a material record of a shape
 // that bounds media names them in MaterialData.info.y (kMaterialInteriorShift).
 const int kMaxMedia = 64;    // glrender/gpu/layout.py MAX_MEDIA
+const uint kSupervoxel = 8u;   // voxels along a side of a supervoxel (layout.py SUPERVOXEL)
 struct MediumData {
     vec4 sigma_t;   // xyz: extinction per unit length (scale applied; heterogeneous: the scale,
                     // which multiplies the grid's values), w: the phase function's g
@@ -42,6 +43,8 @@ struct MediumData {
     uvec4 sigma_grid;       // heterogeneous: x the sigma_t grid's first texel in u_media_grids, yzw its voxels along x, y, z
     uvec4 albedo_grid;      // x: the albedo grid's first texel + 1 (0: constant albedo), yzw: its voxels
     vec4 majorant;          // x: heterogeneous: a bound on sigma_t over the grid, every channel (scale applied)
+    uvec4 majorant_grid;    // heterogeneous: x the first texel of its supervoxels' bounds (one texel each,
+                            // in .r), yzw the supervoxels along x, y, z (kSupervoxel voxels a side)
 };
 layout(std140, binding = UBO_MEDIA) uniform Media {
     uvec4 media_counts;    // x: media, y: the camera's medium + 1 (0: none)

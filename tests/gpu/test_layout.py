@@ -55,7 +55,9 @@ void main() {
                  u_params.camera_projection, floatBitsToUint(u_params.unused)));
     put(k, u_media.media_counts);
     for (int i = 0; i < kMaxMedia; ++i) {
-        put(k, u_media.media[i].sigma_t); put(k, u_media.media[i].sigma_s); put(k, u_media.media[i].info);
+        MediumData d = u_media.media[i];
+        put(k, d.sigma_t); put(k, d.sigma_s); put(k, d.info); put(k, d.grid_from_world);
+        put(k, d.sigma_grid); put(k, d.albedo_grid); put(k, d.majorant); put(k, d.majorant_grid);
     }
 }
 """

@@ -150,11 +150,12 @@ def test06_what_media_refuse(gl_ctx):
         glrender.render(odd, spp=1, progress=False)
 
 
-def grid_volume(n=8, value=1.0, corner=None) -> m.Volume:
+def grid_volume(n=20, value=1.0, corner=None) -> m.Volume:
     """An n^3 grid of ``value`` over the cube [-1, 1]^3 around the fog sphere, voxel
     (0, 0, 0) set to ``corner``: with trilinear lookups it reaches only points within
     1.5 voxels of that corner of the cube, all outside the unit sphere, so the sphere's
-    fog stays ``value`` while the majorant is the corner's."""
+    fog stays ``value`` while the majorant of the corner's supervoxel (8 voxels a side, with
+    a one-voxel apron: the rays through the sphere cross it) is the corner's."""
     data = np.full((n, n, n, 1), value, np.float32)
     if corner is not None:
         data[0, 0, 0, 0] = corner
@@ -169,11 +170,11 @@ def grid_fog(scene, volume, albedo, scale=1.0):
 
 @pytest.mark.parametrize("corner", [None, 4.0], ids=["tight", "majorant-2x"])
 def test07_grid_fog_furnace_by_phase_sampling_is_exactly_one(gl_ctx, corner):
-    """A heterogeneous white fog (a grid with a smooth bump, 8^3 voxels, scale 2, and once
-    with a corner voxel that doubles the majorant): delta tracking's null collisions and
-    scattering events weigh exactly 1 in a grey medium, so by phase sampling alone every
-    sample is 1."""
-    n = 8
+    """A heterogeneous white fog (a grid with a smooth bump, 21^3 voxels: 3 x 3 x 3
+    supervoxels, the last ones partial; scale 2, and once with a corner voxel that raises
+    its supervoxel's majorant): delta tracking's null collisions and scattering events weigh
+    exactly 1 in a grey medium, so by phase sampling alone every sample is 1."""
+    n = 21
     z, y, x = np.meshgrid(*(np.linspace(-1, 1, n),) * 3, indexing="ij")
     data = (1.0 + 0.8 * np.exp(-(x * x + y * y + z * z) * 2.0)).astype(np.float32)[..., None]
     if corner is not None:
@@ -234,3 +235,35 @@ def test09_light_through_an_absorbing_slab_is_its_closed_form(gl_ctx):
     want = lit * np.exp(-sigma * 0.5 / np.cos(theta))
     np.testing.assert_allclose(film.mean[through], np.broadcast_to(want, film.mean[through].shape), rtol=1e-5)
     np.testing.assert_allclose(film.mean[clear], lit, rtol=1e-5)
+
+
+def test10_supervoxel_majorants_bound_every_lookup():
+    """The local majorants of a heterogeneous medium (glrender/gpu/pack.py
+    supervoxel_majorants): at 20,000 random points of a random grid of 3 channels (odd
+    sizes: partial supervoxels), the trilinear lookup's largest channel never exceeds the
+    bound of the supervoxel holding the point (the one-voxel apron covers the half voxel a
+    lookup reads beyond it), and each bound is attained within its supervoxel and apron."""
+    from glrender.gpu import layout
+    from glrender.gpu.pack import supervoxel_majorants
+
+    rng = np.random.default_rng(4)
+    res = np.array([19, 11, 26])   # x, y, z
+    data = rng.random((res[2], res[1], res[0], 3)) ** 4 * 5.0
+    bounds = supervoxel_majorants(data.max(axis=3), 2.0)
+    u = rng.random((20000, 3))
+    c = np.clip(u * res - 0.5, 0, res - 1)
+    a = np.floor(c).astype(int)
+    b = np.minimum(a + 1, res - 1)
+    f = c - a
+    value = 0.0
+    for dx in (0, 1):
+        for dy in (0, 1):
+            for dz in (0, 1):
+                ix, iy, iz = (b if dx else a)[:, 0], (b if dy else a)[:, 1], (b if dz else a)[:, 2]
+                w = (f[:, 0] if dx else 1 - f[:, 0]) * (f[:, 1] if dy else 1 - f[:, 1]) * \
+                    (f[:, 2] if dz else 1 - f[:, 2])
+                value = value + w[:, None] * data[iz, iy, ix]
+    cell = np.minimum((u * res / layout.SUPERVOXEL).astype(int), np.array(bounds.shape[::-1]) - 1)
+    bound = bounds[cell[:, 2], cell[:, 1], cell[:, 0]]
+    assert np.all(2.0 * value.max(axis=1) <= bound * (1 + 1e-12))
+    assert bounds.shape == (4, 2, 3) and bounds.max() == 2.0 * data.max()
