@@ -406,8 +406,7 @@ def _media_variants(scene: m.Scene) -> tuple[m.Scene, np.ndarray | None, list[in
     layout.MEDIA record, each material's medium bits (bindings.MATERIAL_INTERIOR_SHIFT) and
     the heterogeneous media's grid texels (None: no grids). Other scenes: themselves, None,
     no bits and None."""
-    bounded = [s for s in scene.shapes if s.interior is not None or s.exterior is not None]
-    if not bounded and scene.camera.medium is None:
+    if not scene.has_media:
         return scene, None, [], None
     if len(scene.media) > layout.MAX_MEDIA:
         raise SceneError(f"{scene.source}: {len(scene.media)} media, at most {layout.MAX_MEDIA}")

@@ -99,7 +99,7 @@ class PreviewApp:
         self.out = out
         integ = scene.integrator
         self.integrator = options.integrator or integ.kind
-        if self.integrator not in INTEGRATOR_ORDER:
+        if self.integrator not in self._integrator_order():
             self.integrator = "path"
         self.strategy = options.strategy or integ.strategy
         self.max_depth = options.max_depth if options.max_depth is not None else integ.max_depth
@@ -240,8 +240,15 @@ class PreviewApp:
         self.controller.reset()
         self._restart()
 
+    def _integrator_order(self) -> tuple[str, ...]:
+        """The integrators key I cycles through: those that render the scene (with media,
+        the ones that render media)."""
+        if self.scene.has_media:
+            return tuple(n for n in INTEGRATOR_ORDER if integrators.get(n).media)
+        return tuple(INTEGRATOR_ORDER)
+
     def action_next_integrator(self, shift, index):
-        self.integrator = self._cycle(INTEGRATOR_ORDER, self.integrator, shift)
+        self.integrator = self._cycle(self._integrator_order(), self.integrator, shift)
         self._rebuild_wanted = True
 
     def action_next_strategy(self, shift, index):

@@ -573,6 +573,12 @@ class Scene:
         self.materials.append(material)
         return len(self.materials) - 1
 
+    @property
+    def has_media(self) -> bool:
+        """Whether a shape or the camera names a medium (what the renderer must render)."""
+        return self.camera.medium is not None or any(
+            s.interior is not None or s.exterior is not None for s in self.shapes)
+
     def add_medium(self, medium: Medium) -> int:
         """Append ``medium``; returns its index for ``Shape.interior`` / ``exterior`` and
         ``Camera.medium``."""
