@@ -105,7 +105,7 @@ register(IntegratorSpec("path", "integrators/path.glsl", splitting=True, seen_em
                         counts_truncation=True, media=True,
                         summary="unidirectional path tracing with next-event estimation and MIS"))
 register(IntegratorSpec("direct", "integrators/direct.glsl",
-                        uses_depth=False, depth_cap=None,
+                        uses_depth=False, depth_cap=None, media=True,
                         summary="direct lighting only, by light, BSDF or MIS sampling"))
 register(IntegratorSpec("ao", "integrators/ao.glsl", emission_aov=False, uses_strategy=False,
                         uses_depth=False, depth_cap=None,

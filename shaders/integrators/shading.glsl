@@ -135,10 +135,47 @@ vec3 next_event_n(vec3 p, SurfaceHit hit, Bsdf b, Frame frame, vec3 wo, float ti
     return r.value;
 }
 
+// The emission that a ray from vertex p (a surface point whose geometric normal is ng, or
+// a point in a medium: ng 0) along w finds, through null surfaces and the media on the way
+// (their transmittance estimated, kMedia): an area light or the environment, weighed by
+// MIS against light sampling as emitter_hit_contribution_n weighs it (pdf: the density w
+// was sampled with, delta: a delta BSDF's; n_bsdf, n_light: the sample counts). m: the
+// medium the ray starts in.
+vec3 emission_through(vec3 p, vec3 ng, vec3 w, float time, int m, float pdf, bool delta,
+                      float n_bsdf, float n_light) {
+    vec3 tr = vec3(1.0);
+    vec3 from = dot(ng, ng) > 0.0 ? offset_ray_origin(p, ng, w) : p;
+    float lead = 0.0;
+    for (int k = 0; k <= kMaxNullCrossings; ++k) {
+        LOOP_TICK();
+        SurfaceHit h;
+        RAY_TICK();
+        bool found = scene_intersect(from, w, kInfinity, time, h);
+        if (m != kNoMedium)
+            tr *= medium_segment_transmittance(m, from - lead * w, w, found ? lead + h.t : kInfinity);
+        if (max_component(tr) <= 0.0) return vec3(0.0);
+        if (!found) return tr * environment_contribution_n(w, 1, p, pdf, delta, n_bsdf, n_light);
+        vec3 Le = vec3(0.0);
+        if (h.light != 0u) {
+            SurfaceHit at = h;
+            at.t = distance(p, h.p);   // the light's density from p, across null surfaces
+            Le = tr * emitter_hit_contribution_n(at, w, 1, p, pdf, delta, n_bsdf, n_light);
+        }
+        if (!material_is_null(h.material) || k == kMaxNullCrossings) return Le;
+        m = medium_after(h.material, h.ng, w, m);
+        from = offset_ray_origin(h.p, h.ng, w);
+        lead = abs(dot(from - h.p, h.ng)) / max(abs(dot(w, h.ng)), 1.0 / 64.0);
+        if (max_component(Le) > 0.0) return Le;
+    }
+    return vec3(0.0);
+}
+
 // Next-event estimation at a point p of medium m reached along d: one light sample, its
 // phase function value times Le over its density with the transmittance of the media on
-// the way, weighted against phase sampling as surfaces weigh it against BSDF sampling.
-vec3 medium_next_event(vec3 p, vec3 d, int m, float time, float u_select, vec2 u_light, bool use_mis) {
+// the way, weighted against phase sampling as surfaces weigh it against BSDF sampling
+// (n_light light and n_phase phase samples taken there).
+vec3 medium_next_event_n(vec3 p, vec3 d, int m, float time, float u_select, vec2 u_light, bool use_mis,
+                         float n_light, float n_phase) {
     if (u_params.counts.x == 0u) return vec3(0.0);
     LightChoice choice = select_light(u_select);
     LightData light = scene_light(choice.index);
@@ -146,9 +183,13 @@ vec3 medium_next_event(vec3 p, vec3 d, int m, float time, float u_select, vec2 u
     if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return vec3(0.0);
     float f = medium_phase(m, d, ls.wi);
     float pdf_light = choice.pmf * ls.pdf;
-    float w = (ls.delta || !use_mis) ? 1.0 : mis_weight_n(1.0, pdf_light, 1.0, f);
+    float w = (ls.delta || !use_mis) ? 1.0 : mis_weight_n(n_light, pdf_light, n_phase, f);
     float t_max = isinf(ls.dist) ? kInfinity : ls.dist * (1.0 - kShadowEpsilon);
     return scene_transmittance(p, ls.wi, t_max, time, light.info.z, m) * f * ls.Le * (w / pdf_light);
+}
+
+vec3 medium_next_event(vec3 p, vec3 d, int m, float time, float u_select, vec2 u_light, bool use_mis) {
+    return medium_next_event_n(p, d, m, time, u_select, u_light, use_mis, 1.0, 1.0);
 }
 
 vec3 next_event(vec3 p, SurfaceHit hit, Bsdf b, Frame frame, vec3 wo, float time, float u_select,
