@@ -20,24 +20,11 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from cornell_vs_mitsuba import LLVM, MITSUBA_SCRIPT, ROOT, run  # noqa: E402
+from cornell_vs_mitsuba import GLRENDER_SCRIPT, LLVM, MITSUBA_SCRIPT, ROOT, run  # noqa: E402
 
 OUT = ROOT / "benchmarks" / "refs"
 SCENES = {"cornell-fog": ROOT / "scenes/cornell-fog/scene.xml", "smoke": ROOT / "scenes/smoke/scene.xml"}
 MITSUBA_REFERENCE = {"cornell-fog"}     # the others: glrender's path tracer
-
-GLRENDER_SCRIPT = r"""
-import json, sys, time, numpy as np, glrender
-from glrender.render.renderer import Renderer, settings_from_scene
-toml, seconds, seed, out = sys.argv[1:5]
-scene = glrender.load(toml)
-r = Renderer(scene, settings_from_scene(scene, seed=int(seed), spp=1 << 20))
-t0 = time.perf_counter()
-while time.perf_counter() - t0 < float(seconds):
-    r.step(r.samples_per_pass)
-np.save(out, r.film().mean)
-print(json.dumps({"spp": r.spp_done, "version": "glrender path, " + r.ctx.renderer}))
-"""
 
 
 def main() -> None:
@@ -60,7 +47,8 @@ def main() -> None:
                                env={"DRJIT_LIBLLVM_PATH": LLVM}, cwd=xml.parent)
                 else:
                     info = run([sys.executable, "-c", GLRENDER_SCRIPT, str(xml.with_suffix(".toml")),
-                                str(args.seconds), str(1000 + seed), str(out)])
+                                "sobol", str(args.seconds), str(1000 + seed), str(out)])
+                    info["version"] = "glrender path, " + info["device"]
                 images.append(np.load(out).astype(np.float64))
                 spps.append(info["spp"])
                 version = info["version"]

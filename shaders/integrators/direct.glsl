@@ -85,11 +85,7 @@ vec3 direct_li_media(vec3 o, vec3 d, float t_max, float time, inout SamplerState
         bool found = scene_intersect(from, d, reach, time, hit);
         if (m != kNoMedium) {
             MediumEvent ev = medium_sample(m, from, d, found ? hit.t : reach, u_medium.x, hero);
-            float before = dot(chan, vec3(1.0));
-            chan *= ev.p;
-            float after = dot(chan, vec3(1.0));
-            beta *= after > 0.0 ? ev.f * (before / after) : vec3(0.0);
-            chan /= max(max_component(chan), 1e-30);
+            medium_event_weight(beta, chan, ev.f, ev.p);
             if (max_component(beta) <= 0.0) return L;
             if (ev.scatter) {
                 if (kMaxDepth == 1) return L;

@@ -117,18 +117,6 @@ bool path_continue(inout PathState st, SurfaceHit hit, Bsdf b, Frame frame, vec3
     return true;
 }
 
-// A medium event's contribution f and densities p per channel into the path: the throughput
-// becomes the product of the f's over the channels' mean density of the whole path (spectral
-// MIS over hero channels), chan the densities' products, rescaled (only their ratios count).
-void path_medium_weight(inout PathState st, vec3 f, vec3 p) {
-    float before = dot(st.chan, vec3(1.0));
-    st.chan *= p;
-    float after = dot(st.chan, vec3(1.0));
-    st.beta *= after > 0.0 ? f * (before / after) : vec3(0.0);
-    float top = max_component(st.chan);
-    if (top > 0.0) st.chan /= top;
-}
-
 // A scattering event at p in the path's medium, reached after `depth` segments: next-event
 // estimation by the phase function (where the medium samples emitters), phase sampling to
 // go on (its weight is 1), and Russian roulette as at surfaces; false when the path ends.
@@ -183,7 +171,7 @@ bool path_segment(inout PathState st, inout SamplerState s) {
         if (st.medium != kNoMedium) {
             MediumEvent ev = medium_sample(st.medium, st.o, st.d, found ? hit.t : st.t_max,
                                            u_medium.x, st.hero);
-            path_medium_weight(st, ev.f, ev.p);
+            medium_event_weight(st.beta, st.chan, ev.f, ev.p);
             if (ev.scatter) return path_medium_vertex(st, s, st.o + ev.t * st.d, depth, max_segments);
             if (max_component(st.beta) <= 0.0) return false;
         }

@@ -164,7 +164,7 @@ vec3 emission_through(vec3 p, vec3 ng, vec3 w, float time, int m, float pdf, boo
         if (!material_is_null(h.material) || k == kMaxNullCrossings) return Le;
         m = medium_after(h.material, h.ng, w, m);
         from = offset_ray_origin(h.p, h.ng, w);
-        lead = abs(dot(from - h.p, h.ng)) / max(abs(dot(w, h.ng)), 1.0 / 64.0);
+        lead = crossing_lead(from, h, w);
         if (max_component(Le) > 0.0) return Le;
     }
     return vec3(0.0);

@@ -81,7 +81,7 @@ vec3 medium_transmittance(int m, float t) {
 // A free-flight sample along a ray in a medium whose surface lies at t_max (kInfinity:
 // none): a scattering event at distance t < t_max, or none (the surface reached, t =
 // t_max); f and p: the contribution and the densities per channel of what was sampled,
-// up to a common factor (integrators/path.glsl path_medium_weight applies them).
+// up to a common factor (medium_event_weight applies them).
 struct MediumEvent {
     bool scatter;
     float t;
@@ -288,6 +288,26 @@ bool medium_samples_emitters(int m) {
     return (u_media.media[m].info.z & kMediumFlagSampleEmitters) != 0u;
 }
 
+// A medium event's contribution f and densities p per channel into a path's throughput
+// beta and its per-channel density products chan: beta becomes the product of the f's over
+// the channels' mean density of the whole path (spectral MIS over hero channels), chan the
+// densities' products, rescaled (only their ratios count).
+void medium_event_weight(inout vec3 beta, inout vec3 chan, vec3 f, vec3 p) {
+    float before = dot(chan, vec3(1.0));
+    chan *= p;
+    float after = dot(chan, vec3(1.0));
+    beta *= after > 0.0 ? f * (before / after) : vec3(0.0);
+    float top = max_component(chan);
+    if (top > 0.0) chan /= top;
+}
+
+// A ray that goes on past surface h along d from `from`, offset off it: the length along d
+// from the surface's plane to `from`, which the next medium segment counts too (at grazing
+// angles at most 64 offsets: the lead is ill-conditioned there).
+float crossing_lead(vec3 from, SurfaceHit h, vec3 d) {
+    return abs(dot(from - h.p, h.ng)) / max(abs(dot(d, h.ng)), 1.0 / 64.0);
+}
+
 // The transmittance of a shadow ray from o along d over t_max that starts in medium m:
 // the media's along its segments, through null surfaces (into the medium on their far
 // side), 0 at any other surface (`ignore`: the primitive it aims at, not a blocker). The
@@ -312,9 +332,7 @@ vec3 scene_transmittance(vec3 o, vec3 d, float t_max, float time, uint ignore, i
         m = medium_after(h.material, h.ng, d, m);
         s += length;
         from = offset_ray_origin(h.p, h.ng, d);
-        // (at grazing angles at most 64 offsets: the lead is ill-conditioned there)
-        float offset = abs(dot(from - h.p, h.ng));
-        lead = offset / max(abs(dot(d, h.ng)), 1.0 / 64.0);
+        lead = crossing_lead(from, h, d);
     }
     return vec3(0.0);
 }
