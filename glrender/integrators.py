@@ -111,10 +111,10 @@ register(IntegratorSpec("ao", "integrators/ao.glsl", emission_aov=False, uses_st
                         uses_depth=False, depth_cap=None,
                         summary="ambient occlusion: the unoccluded fraction of a cosine lobe"))
 register(IntegratorSpec("lighttrace", "integrators/lighttrace.glsl", splatting=True,
-                        emission_aov=False, counts_truncation=True, needs_lens=True,
+                        emission_aov=False, counts_truncation=True, needs_lens=True, media=True,
                         summary="light tracing: paths from the lights connected to the lens"))
 register(IntegratorSpec("bdpt", "integrators/bdpt.glsl", splatting=True, strategies=True,
-                        depth_cap=16, counts_truncation=True,
+                        depth_cap=16, counts_truncation=True, media=True,
                         summary="bidirectional path tracing, every strategy weighted by MIS"))
 register(IntegratorSpec("sppm", None, driver="sppm",
                         emission_aov=False, distributed=False, open_ended=False,
@@ -123,6 +123,6 @@ register(IntegratorSpec("sppm", None, driver="sppm",
 register(IntegratorSpec("photon", "integrators/photon.glsl", driver="photon", uses_strategy=False,
                         summary="photon mapping: global and caustic maps, then camera paths"))
 register(IntegratorSpec("vcm", "integrators/vcm.glsl", driver="vcm", splatting=True,
-                        strategies=True, depth_cap=16, counts_truncation=True,
+                        strategies=True, depth_cap=16, counts_truncation=True, media=True,
                         summary="vertex connection and merging: bdpt's connections and photon "
                                 "merges under one MIS (iterations as spp)"))

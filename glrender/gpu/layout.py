@@ -72,7 +72,8 @@ MEDIUM = np.dtype([
     ("grid_from_world", "<f4", (4, 4)),   # heterogeneous: world to the grids' unit cube (stored .T)
     ("sigma_grid", *_U4),    # first texel in the grid texture, voxels x, y, z
     ("albedo_grid", *_U4),   # first texel + 1 (0: constant albedo), voxels x, y, z
-    ("majorant", *_V4),      # x: a bound on sigma_t over the grid (every channel, scale applied)
+    ("majorant", *_V4),      # x: a bound on sigma_t over the grid (every channel, scale applied),
+                             # y: the mean extinction that bidirectional MIS weights assume
     ("majorant_grid", *_U4),  # first texel of the supervoxels' bounds, supervoxels x, y, z
 ])
 MEDIA = np.dtype([

@@ -366,6 +366,7 @@ def pack_medium(med: m.Medium, where: str, grids: list[np.ndarray]) -> np.ndarra
         sigma_t = _rgb(med.sigma_t, "sigma_t") * float(med.scale)
         rec["sigma_t"] = (*sigma_t, g)
         rec["sigma_s"][:3] = _rgb(med.albedo, "albedo") * sigma_t
+        rec["majorant"][1] = float(np.mean(sigma_t))
     else:
         volume = med.sigma_t
         if not isinstance(volume, m.Volume):
@@ -379,6 +380,7 @@ def pack_medium(med: m.Medium, where: str, grids: list[np.ndarray]) -> np.ndarra
         scale = float(med.scale)
         rec["sigma_t"] = (scale, scale, scale, g)
         rec["majorant"][0] = scale * float(texels[:, :3].max(initial=0.0))
+        rec["majorant"][1] = scale * float(texels[:, :3].mean()) if len(texels) else 0.0
         bounds = supervoxel_majorants(texels[:, :3].max(axis=1).reshape(z, y, x), scale)
         first = sum(len(t) for t in grids)
         grids.append(np.repeat(bounds.reshape(-1, 1), 4, axis=1).astype(np.float32))

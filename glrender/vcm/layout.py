@@ -15,9 +15,10 @@ VCM_PARAMS = np.dtype([
 assert VCM_PARAMS.itemsize == 96
 
 #: bytes per stored light vertex (kVcmVertexTexels records of 16 bytes; 7 in scenes whose
-#: normal maps have the shadowing term, which keeps the unperturbed normal)
-def vertex_bytes(normal_shadowing: bool) -> int:
-    return 16 * (7 if normal_shadowing else 6)
+#: normal maps have the shadowing term, which keeps the unperturbed normal, and in scenes with
+#: participating media, which keep the MIS transmittance of the segment before the vertex)
+def vertex_bytes(normal_shadowing: bool, media: bool = False) -> int:
+    return 16 * (7 if normal_shadowing or media else 6)
 
 
 MERGE_KEY_BYTES = 16       # position and (light path * 32 + vertex index)

@@ -168,7 +168,8 @@ class VcmRenderer(Renderer):
             library=self.library)
         self.order_kernel: Any = shaders.compile_compute(self.ctx, "kernels/vcm_order.comp.glsl")
         self.light_paths = int(self.vcm.light_paths or self.width * self.height)
-        self._vertex_bytes = vl.vertex_bytes(bool(self.defines.get("GLRENDER_NORMAL_SHADOWING")))
+        self._vertex_bytes = vl.vertex_bytes(bool(self.defines.get("GLRENDER_NORMAL_SHADOWING")),
+                                             bool(self.defines.get("GLRENDER_MEDIA")))
         gl = self.gl
         self._vcm_params = gl.buffer(reserve=vl.VCM_PARAMS.itemsize)
         self._paths = gl.buffer(reserve=vl.PATH_BYTES * self.light_paths)

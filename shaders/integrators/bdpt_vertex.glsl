@@ -35,6 +35,12 @@ const uint kVertexSurface = 2u;
 // density of the emission disk's point (pdf_pos |cos|, pbrt-v3's BDPT).
 const uint kVertexInfinite = 3u;
 const float kInfiniteVertexDistance = 2.0;
+// A scattering event in a participating medium (kMedia): no normal (ng = 0), the phase
+// function of its medium (vertex_medium) in place of a BSDF; its densities are per unit
+// volume, and a segment's free-flight density enters them through the MIS transmittance
+// of the media it crosses (tr_mis below; the extinction at the vertex is a factor of both
+// of its densities and cancels in every ratio).
+const uint kVertexMedium = 4u;
 
 struct Vertex {
     vec3 p;
@@ -48,39 +54,72 @@ struct Vertex {
     vec2 uv;
     uint material;
     // one word (a record of a dynamically indexed array costs llvmpipe a scatter or
-    // gather per word and lane): bits 0-1 the kind (kVertexCamera, kVertexLight,
-    // kVertexSurface, kVertexInfinite), bit 2 delta (a Dirac lobe was sampled here: no
-    // strategy may end a subpath here), bit 3 connectible (not a delta-only surface: a
-    // connection can end here), bits 4-31 the index + 1 of the light at p (light
-    // vertices, emitting surfaces; 0: none); read and set through the functions below
+    // gather per word and lane): bits 0-2 the kind (kVertexCamera, kVertexLight,
+    // kVertexSurface, kVertexInfinite, kVertexMedium), bit 3 delta (a Dirac lobe was
+    // sampled here: no strategy may end a subpath here), bit 4 connectible (not a
+    // delta-only surface: a connection can end here), bits 5-11 the medium + 1 the
+    // subpath arrived in (kMedia; a medium vertex's own medium, the camera's at the lens, a
+    // light path's first medium at the light; 0: none), bits 12-31 the index + 1 of the
+    // light at p (light vertices, emitting surfaces; 0: none); read and set through the
+    // functions below
     uint info;
     float pdf_fwd;  // area density of this vertex from its own subpath
     float pdf_rev;  // area density of this vertex from the other direction
+#if GLRENDER_MEDIA
+    float tr_mis;   // the MIS transmittance of the segment to the vertex before it on its subpath
+#endif
 };
 
-const uint kVertexDeltaBit = 4u;
-const uint kVertexConnectibleBit = 8u;
+const uint kVertexKindMask = 7u;
+const uint kVertexDeltaBit = 8u;
+const uint kVertexConnectibleBit = 16u;
+const uint kVertexMediumShift = 5u;
+const uint kVertexLightShift = 12u;
 
 uint vertex_info(uint kind, uint light, bool delta, bool connectible) {
-    return kind | (delta ? kVertexDeltaBit : 0u) | (connectible ? kVertexConnectibleBit : 0u) | (light << 4);
+    return kind | (delta ? kVertexDeltaBit : 0u) | (connectible ? kVertexConnectibleBit : 0u) |
+           (light << kVertexLightShift);
 }
 
 // The fields of an info word (of a stored vertex: read its info alone, e.g.
 // info_delta(g_camera[i].info), not the whole record).
-uint info_kind(uint info) { return info & 3u; }
-uint info_light(uint info) { return info >> 4; }
+uint info_kind(uint info) { return info & kVertexKindMask; }
+uint info_light(uint info) { return info >> kVertexLightShift; }
 bool info_delta(uint info) { return (info & kVertexDeltaBit) != 0u; }
 bool info_connectible(uint info) { return (info & kVertexConnectibleBit) != 0u; }
+int info_medium(uint info) { return int((info >> kVertexMediumShift) & 127u) - 1; }
 
 uint vertex_kind(Vertex v) { return info_kind(v.info); }
 uint vertex_light(Vertex v) { return info_light(v.info); }
 bool vertex_delta(Vertex v) { return info_delta(v.info); }
 bool vertex_connectible(Vertex v) { return info_connectible(v.info); }
 
-void vertex_set_kind(inout Vertex v, uint kind) { v.info = (v.info & ~3u) | kind; }
-void vertex_set_light(inout Vertex v, uint light) { v.info = (v.info & 15u) | (light << 4); }
+void vertex_set_kind(inout Vertex v, uint kind) { v.info = (v.info & ~kVertexKindMask) | kind; }
+void vertex_set_light(inout Vertex v, uint light) {
+    v.info = (v.info & ((1u << kVertexLightShift) - 1u)) | (light << kVertexLightShift);
+}
+int vertex_medium(Vertex v) { return info_medium(v.info); }
+void vertex_set_medium(inout Vertex v, int m) {
+    v.info = (v.info & ~(127u << kVertexMediumShift)) | (uint(m + 1) << kVertexMediumShift);
+}
 void vertex_set_delta(inout Vertex v, bool delta) {
     v.info = (v.info & ~kVertexDeltaBit) | (delta ? kVertexDeltaBit : 0u);
+}
+
+// Vertex's last constructor argument, the MIS transmittance (kMedia only).
+#if GLRENDER_MEDIA
+#define VERTEX_TR(x) , x
+#else
+#define VERTEX_TR(x)
+#endif
+
+// The MIS transmittance of the segment from v to the vertex before it (1 without media).
+float vertex_tr_mis(Vertex v) {
+#if GLRENDER_MEDIA
+    return v.tr_mis;
+#else
+    return 1.0;
+#endif
 }
 
 // Vertex's constructor argument ns0 (n), in scenes with a normal map's shadowing term only:
@@ -113,7 +152,7 @@ float g_time;   // the sample's shutter time
 
 Vertex vertex_point(uint kind, vec3 p, vec3 ng, vec3 beta) {
     return Vertex(p, ng, ng, VERTEX_NS0(ng) vec3(0.0), beta, vec2(0.0), 0u, vertex_info(kind, 0u, false, true),
-                  0.0, 0.0);
+                  0.0, 0.0 VERTEX_TR(1.0));
 }
 
 // The shading frame of a surface vertex, as its hit's shading_frame gave it.
@@ -173,11 +212,24 @@ float vertex_pdf_light_origin(Vertex v, Vertex next) {
     return light_selection_pmf(vertex_light(v) - 1u) * pdf_pos;
 }
 
-// Area density at `next` with which vertex v samples it, v having been reached from prev.
+// The phase function of medium vertex v between the directions toward `from` and `to` (both
+// unit, from v): its value, and the density of sampling either one from the other.
+float vertex_phase(Vertex v, vec3 w_from, vec3 w_to) {
+#if GLRENDER_MEDIA
+    return medium_phase(vertex_medium(v), -w_from, w_to);
+#else
+    return 0.0;
+#endif
+}
+
+// Area density at `next` with which vertex v samples it, v having been reached from prev
+// (without the MIS transmittance of the segment between them).
 float vertex_pdf(Vertex v, Vertex prev, Vertex next) {
     if (vertex_kind(v) == kVertexLight || vertex_kind(v) == kVertexInfinite) return vertex_pdf_light(v, next);
     vec3 wn = normalize(next.p - v.p);
     if (vertex_kind(v) == kVertexCamera) return solid_angle_to_area(camera_pdf_dir(wn, g_time), v, next);
+    if (vertex_kind(v) == kVertexMedium)
+        return solid_angle_to_area(vertex_phase(v, normalize(prev.p - v.p), wn), v, next);
     Frame f = vertex_frame(v);
     float pdf = bsdf_pdf(bsdf_from_material(v.material, v.uv), frame_to_local(f, normalize(prev.p - v.p)),
                          frame_to_local(f, wn));
@@ -377,6 +429,23 @@ float bdpt_mis_weight_pdfs(int s, int t, ConnectionPdfs c) {
     return bdpt_mis_weight_ends(s, t, c, s > 0 ? g_light[max(s - 1, 0)].pdf_fwd : 0.0, g_light_delta);
 }
 
+// The medium that a ray leaving vertex v along w runs in (kMedia; kNoMedium without media):
+// the one across v's surface where that bounds media, else the one v was reached in.
+int vertex_exit_medium(Vertex v, vec3 w) {
+#if GLRENDER_MEDIA
+    int m = vertex_medium(v);
+    if (vertex_kind(v) == kVertexSurface) m = medium_after(v.material, v.ng, w, m);
+    return m;
+#else
+    return -1;
+#endif
+}
+
+// The MIS transmittance of the connection whose weight bdpt_mis_weight evaluates: set by
+// the strategy that traced it (kMedia; the densities from the BSDFs and lights are evaluated
+// afresh, the media's from the walk along the segment).
+float g_connection_tr_mis = 1.0;
+
 // MIS weight of strategy (s, t) for the path g_light[0, s) + g_camera[0, t) (for s = 1
 // or t = 1 the caller has put the sampled light or lens vertex at index 0), every
 // density of the connection evaluated afresh (the rest from bdpt_mis_prepare).
@@ -388,10 +457,11 @@ float bdpt_mis_weight(int s, int t) {
     Vertex qs = g_light[max(s - 1, 0)];
     Vertex qs_minus = g_light[max(s - 2, 0)];
     ConnectionPdfs c;
-    c.pt_rev = has_qs ? vertex_pdf(qs, qs_minus, pt) : vertex_pdf_light_origin(pt, pt_minus);
+    float tr = has_qs ? g_connection_tr_mis : 1.0;
+    c.pt_rev = has_qs ? vertex_pdf(qs, qs_minus, pt) * tr : vertex_pdf_light_origin(pt, pt_minus);
     c.pt_minus_rev = !has_pt_minus ? 0.0
-                   : (has_qs ? vertex_pdf(pt, qs, pt_minus) : vertex_pdf_light(pt, pt_minus));
-    c.qs_rev = has_qs ? vertex_pdf(pt, pt_minus, qs) : 0.0;
-    c.qs_minus_rev = has_qs_minus ? vertex_pdf(qs, pt, qs_minus) : 0.0;
+                   : (has_qs ? vertex_pdf(pt, qs, pt_minus) : vertex_pdf_light(pt, pt_minus)) * vertex_tr_mis(pt);
+    c.qs_rev = has_qs ? vertex_pdf(pt, pt_minus, qs) * tr : 0.0;
+    c.qs_minus_rev = has_qs_minus ? vertex_pdf(qs, pt, qs_minus) * vertex_tr_mis(qs) : 0.0;
     return bdpt_mis_weight_ends(s, t, c, qs.pdf_fwd, has_qs && light_is_delta(g_light[0]));
 }

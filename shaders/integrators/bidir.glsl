@@ -68,20 +68,36 @@ float lens_weight_generic(int s, Vertex lens) {
 
 Vertex vertex_from_hit(SurfaceHit hit, Frame frame, Bsdf b, vec3 beta) {
     return Vertex(hit.p, hit.ng, frame.z, VERTEX_NS0(hit.ns0) frame.x, beta, hit.uv, hit.material,
-                  vertex_info(kVertexSurface, hit.light, false, !bsdf_is_delta(b)), 0.0, 0.0);
+                  vertex_info(kVertexSurface, hit.light, false, !bsdf_is_delta(b)), 0.0, 0.0 VERTEX_TR(1.0));
 }
 
-// Extends a subpath from path[n - 1] along (o, d) until it leaves the scene, reaches
-// max_vertices vertices, or a sample or Russian roulette ends it; radiance (camera) or
-// importance (light, adjoint) transport. Russian roulette from kRrDepth vertices on by
-// the rule kRrRule (integrators/roulette.glsl; the throughput rule on the product of BSDF
-// weights, times eta^2 for radiance, as the path tracer): it scales beta by 1 / q and
-// leaves the MIS densities alone (any weights that sum to 1 over the strategies keep the
-// estimator unbiased). Returns the vertex count.
+void vertex_set_tr_mis(inout Vertex v, float tr_mis) {
+#if GLRENDER_MEDIA
+    v.tr_mis = tr_mis;
+#endif
+}
+
+// Extends a subpath from path[n - 1] along (o, d), which starts in `medium` (kMedia), until
+// it leaves the scene, reaches max_vertices vertices, or a sample or Russian roulette ends
+// it; radiance (camera) or importance (light, adjoint) transport. Russian roulette from
+// kRrDepth vertices on by the rule kRrRule (integrators/roulette.glsl; the throughput rule on
+// the product of BSDF weights, times eta^2 for radiance, as the path tracer): it scales beta
+// by 1 / q and leaves the MIS densities alone (any weights that sum to 1 over the strategies
+// keep the estimator unbiased). Returns the vertex count.
+// In media the walk samples a free flight before each surface, as the path tracer does
+// (media/medium.glsl: one hero channel per subpath, its spectral MIS in beta): a scattering
+// event is a medium vertex, which continues by sampling the phase function; null surfaces
+// are passed, neither vertices nor bounces. Every density of a segment carries the MIS
+// transmittance of the media it crosses (tr_mis).
 int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, float pdf_sa,
-                int max_vertices, inout SamplerState s, inout Aov aov) {
+                int max_vertices, int medium, inout SamplerState s, inout Aov aov) {
     vec3 throughput = vec3(1.0);
     float eta_product = 1.0;
+    vec3 chan = vec3(1.0);   // kMedia: the medium events' densities per channel (spectral MIS)
+    int hero = 0;            // kMedia: the channel that samples the free flights
+    float tr_mis = 1.0;      // kMedia: the MIS transmittance since the last vertex
+    int crossings = 0;       // kMedia: null surfaces passed
+    bool first = true;
     // The newest vertex (index n - 1) stays in registers until its reverse density and
     // delta flag are known and is then stored once, whole: llvmpipe stores a record of a
     // dynamically indexed array word by word, lane by lane (the vertex before the walk's
@@ -91,14 +107,41 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
         LOOP_TICK();
         SurfaceHit hit;
         g_light_path_rays = light_path;   // a normal map's flip is for camera paths
-        if (!scene_intersect(o, d, t_max, g_time, hit)) {
+        bool found = scene_intersect(o, d, t_max, g_time, hit);
+        bool in_medium = false;           // a scattering event in the medium before the surface
+        float t_event = 0.0;
+        if (kMedia) {
+            vec2 u_medium = sampler_2d(s);
+            g_medium_rng = pcg_hash(floatBitsToUint(u_medium.y) ^ uint(n + 32 * crossings));
+            if (first) hero = min(int(medium_random() * 3.0), 2);
+            first = false;
+            if (medium != kNoMedium) {
+                MediumEvent ev = medium_sample(medium, o, d, found ? hit.t : t_max, u_medium.x, hero);
+                vec3 w = vec3(1.0);
+                medium_event_weight(w, chan, ev.f, ev.p);
+                beta *= w;
+                throughput *= w;
+                tr_mis *= medium_mis_transmittance(medium, o, d, ev.t);
+                in_medium = ev.scatter;
+                t_event = ev.t;
+                if (max_component(beta) <= 0.0) break;
+            }
+            if (!in_medium && found && material_is_null(hit.material)) {
+                // a boundary of media only: the walk goes on through it
+                if (!medium_cross_null(hit, d, medium, o, crossings)) break;
+                t_max = kInfinity;
+                continue;
+            }
+        }
+        if (!in_medium && !found) {
             // a camera subpath that leaves the scene ends on the environment (s = 0)
             if (!light_path && u_params.counts.z != 0u) {
                 Vertex v = vertex_point(kVertexInfinite,
                                         prev.p + kInfiniteVertexDistance * u_params.scene_sphere.w * d,
                                         vec3(0.0), beta);
                 v.info = vertex_info(kVertexInfinite, u_params.counts.z, false, false);
-                v.pdf_fwd = pdf_sa;
+                v.pdf_fwd = pdf_sa * tr_mis;
+                vertex_set_tr_mis(v, tr_mis);
                 STORE_AT(g_camera, n - 1, prev);
                 prev = v;
                 n += 1;
@@ -108,22 +151,39 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
         vec2 u_choice = sampler_2d(s);
         vec2 u_bsdf = sampler_2d(s);
         float u_rr = sampler_1d(s);
-        Bsdf b = bsdf_from_material(hit.material, hit.uv);
-        Frame frame = shading_frame(hit);
-        bsdf_normal_frame(b, hit.ns0, frame);
-        // the light side (light_side_valid): a light path's arrival, a camera path's
-        // sampled direction (below)
-        if (light_path && !light_side_valid(-d, hit.ng, frame.z)) break;
-        Vertex v = vertex_from_hit(hit, frame, b, beta);
-        v.pdf_fwd = solid_angle_to_area(pdf_sa, prev, v);
-        if (!light_path && n == 1) record_aov(aov, hit);
+        Bsdf b;
+        Frame frame;
+        Vertex v;
+        if (in_medium) {
+            v = vertex_point(kVertexMedium, o + t_event * d, vec3(0.0), beta);
+        } else {
+            b = bsdf_from_material(hit.material, hit.uv);
+            frame = shading_frame(hit);
+            bsdf_normal_frame(b, hit.ns0, frame);
+            // the light side (light_side_valid): a light path's arrival, a camera path's
+            // sampled direction (below)
+            if (light_path && !light_side_valid(-d, hit.ng, frame.z)) break;
+            v = vertex_from_hit(hit, frame, b, beta);
+            if (!light_path && n == 1) record_aov(aov, hit);
+        }
+        if (kMedia) {
+            vertex_set_medium(v, medium);
+            vertex_set_tr_mis(v, tr_mis);
+        }
+        v.pdf_fwd = solid_angle_to_area(pdf_sa, prev, v) * tr_mis;
         n += 1;
         // from here the pending vertices are prev (index n - 2) and v (n - 1)
         bool stop = n >= max_vertices;
         if (stop && kBdptDepthCapped) g_truncated_paths += 1u;   // cut by kBdptDepthCap
-        BsdfSample bs;
         vec3 wi = vec3(0.0);
-        if (!stop) {
+        if (!stop && in_medium) {
+            // the phase function: its sample's weight is 1, its density its value, the same
+            // both ways
+            wi = medium_sample_phase(medium, d, u_bsdf);
+            pdf_sa = medium_phase(medium, d, wi);
+            prev.pdf_rev = solid_angle_to_area(pdf_sa, v, prev) * tr_mis;
+        } else if (!stop) {
+            BsdfSample bs;
             vec3 wo = frame_to_local(frame, -d);
             bs = bsdf_sample(b, wo, u_choice.x, u_bsdf, light_path);
             wi = frame_from_local(frame, bs.wi);
@@ -137,7 +197,7 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
                 // densities: forward of the next vertex, reverse of the previous one
                 pdf_sa = bs.delta ? 0.0 : bs.pdf;
                 float pdf_rev_sa = bs.delta ? 0.0 : bsdf_pdf(b, bs.wi, wo);
-                prev.pdf_rev = solid_angle_to_area(pdf_rev_sa, v, prev);
+                prev.pdf_rev = solid_angle_to_area(pdf_rev_sa, v, prev) * tr_mis;
                 vertex_set_delta(v, bs.delta);
             }
         }
@@ -151,9 +211,16 @@ int random_walk(bool light_path, int n, vec3 o, vec3 d, float t_max, vec3 beta, 
             throughput /= q;
         }
         if (max_component(beta) <= 0.0) break;
-        o = offset_ray_origin(hit.p, hit.ng, wi);
+        if (in_medium) {
+            o = v.p;
+        } else {
+            o = offset_ray_origin(hit.p, hit.ng, wi);
+            if (kMedia) medium = medium_after(hit.material, hit.ng, wi, medium);
+        }
         d = wi;
         t_max = kInfinity;
+        tr_mis = 1.0;
+        crossings = 0;
     }
     if (light_path) { STORE_AT(g_light, n - 1, prev); } else { STORE_AT(g_camera, n - 1, prev); }
     return n;
@@ -179,8 +246,16 @@ VertexBsdf vertex_bsdf(Vertex v) {
 }
 
 // vertex_f with v's BSDF already looked up (vertex_bsdf).
+// A medium vertex (kMedia) has its phase function in place of f |cos| (the scattering
+// coefficient is in its subpath's beta), which is also both densities.
 vec3 vertex_f_bsdf(Vertex v, VertexBsdf vb, vec3 from, vec3 to, bool adjoint, out float pdf_to, out float pdf_from) {
     vec3 wo_w = normalize(from - v.p), wi_w = normalize(to - v.p);
+    if (kMedia && vertex_kind(v) == kVertexMedium) {
+        float ph = vertex_phase(v, wo_w, wi_w);
+        pdf_to = ph;
+        pdf_from = ph;
+        return vec3(ph);
+    }
     vec3 wo = frame_to_local(vb.frame, wo_w), wi = frame_to_local(vb.frame, wi_w);
     vec3 f = bsdf_eval_pdf(vb.b, wo, wi, adjoint, pdf_to);
     pdf_from = bsdf_pdf(vb.b, wi, wo);
@@ -208,20 +283,27 @@ bool vertex_light_side_valid(Vertex v, vec3 w) {
     return !vertex_on_surface(v) || light_side_valid(w, v.ng, v.ns);
 }
 
+// The transmittance of the segment from a to b: 1 or 0 by a visibility ray, and with media
+// (kMedia) the media's along it through null surfaces, from the medium a leaves into (its
+// MIS transmittance into g_connection_tr_mis, for the connection's weight).
 // Both ends are offset off their surfaces (pbrt's SpawnRayTo): with only the start offset,
 // the shadow ray's end, short of b by kShadowEpsilon of the distance, lies beyond b's own
 // surface wherever the start offset (up to 256 ulps of a's coordinates along a.ng) exceeds
 // that margin, and b's surface occludes its own connection: short connections between
 // facing surfaces (a door ajar and the wall beside it) were lost, BDPT 1-3% dark there.
-bool segment_visible(Vertex a, Vertex b, uint ignore) {
+vec3 segment_transmittance(Vertex a, Vertex b, uint ignore) {
     vec3 d = b.p - a.p;
-    if (!(dot(d, d) > 0.0)) return false;
+    if (!(dot(d, d) > 0.0)) return vec3(0.0);
     vec3 o = vertex_on_surface(a) ? offset_ray_origin(a.p, a.ng, d) : a.p;
     vec3 e = vertex_on_surface(b) ? offset_ray_origin(b.p, b.ng, -d) : b.p;
     vec3 w = e - o;
     float dist = length(w);
-    if (!(dist > 0.0)) return false;
-    return !scene_occluded(o, w / dist, dist * (1.0 - kShadowEpsilon), g_time, ignore);
+    if (!(dist > 0.0)) return vec3(0.0);
+    w /= dist;
+    if (kMedia)
+        return scene_transmittance_mis(o, w, dist * (1.0 - kShadowEpsilon), g_time, ignore,
+                                       vertex_exit_medium(a, w), g_connection_tr_mis);
+    return scene_occluded(o, w, dist * (1.0 - kShadowEpsilon), g_time, ignore) ? vec3(0.0) : vec3(1.0);
 }
 
 // s = 0: the camera subpath's vertex t - 1 lies on an area light or at infinity.
@@ -256,15 +338,24 @@ vec3 strategy_light_sample(int t, inout SamplerState smp) {
     float pdf_light, pdf_back;
     vec3 L = pt.beta * vertex_f(pt, pt_minus.p, q, false, pdf_light, pdf_back) * ls.Le / (choice.pmf * ls.pdf);
     if (max_component(L) <= 0.0) return vec3(0.0);
-    vec3 o = offset_ray_origin(pt.p, pt.ng, ls.wi);
-    if (scene_occluded(o, ls.wi, ls.dist * (1.0 - kShadowEpsilon), g_time, l.info.z)) return vec3(0.0);
+    vec3 o = vertex_on_surface(pt) ? offset_ray_origin(pt.p, pt.ng, ls.wi) : pt.p;
+    float t_max = isinf(ls.dist) ? kInfinity : ls.dist * (1.0 - kShadowEpsilon);
+    if (kMedia) {
+        L *= scene_transmittance_mis(o, ls.wi, t_max, g_time, l.info.z, vertex_exit_medium(pt, ls.wi),
+                                     g_connection_tr_mis);
+        if (max_component(L) <= 0.0) return vec3(0.0);
+    } else if (scene_occluded(o, ls.wi, t_max, g_time, l.info.z)) {
+        return vec3(0.0);
+    }
     vec3 n = vec3(0.0);
     if (light_is_area(l)) n = l.info.x == kLightSphere ? normalize(q - l.p.xyz) : l.n.xyz;
     Vertex light = vertex_point(infinite ? kVertexInfinite : kVertexLight, q, n, vec3(1.0));
     vertex_set_light(light, choice.index + 1u);
     light.pdf_fwd = vertex_pdf_light_origin(light, pt);
-    ConnectionPdfs cp = ConnectionPdfs(vertex_pdf_light(light, pt), solid_angle_to_area(pdf_back, pt, pt_minus),
-                                       solid_angle_to_area(pdf_light, pt, light), 0.0);
+    float tr = g_connection_tr_mis;
+    ConnectionPdfs cp = ConnectionPdfs(vertex_pdf_light(light, pt) * tr,
+                                       solid_angle_to_area(pdf_back, pt, pt_minus) * vertex_tr_mis(pt),
+                                       solid_angle_to_area(pdf_light, pt, light) * tr, 0.0);
     float w = LIGHT_SAMPLE_WEIGHT(t, cp, light, light_data_is_delta(l));
     strategy_record(1, t, L, w);
     return L * w;
@@ -281,9 +372,12 @@ void strategy_lens(int s, inout SamplerState smp) {
     float pdf_lens, pdf_back;
     vec3 L = qs.beta * vertex_f(qs, qs_minus.p, c.p, true, pdf_lens, pdf_back) * c.importance LENS_SCALE;
     Vertex lens = vertex_point(kVertexCamera, c.p, vec3(0.0), vec3(1.0));
-    if (max_component(L) <= 0.0 || !segment_visible(qs, lens, kNoPrimitive)) return;
-    ConnectionPdfs cp = ConnectionPdfs(solid_angle_to_area(pdf_lens, qs, lens), 0.0, vertex_pdf(lens, lens, qs),
-                                       solid_angle_to_area(pdf_back, qs, qs_minus));
+    if (max_component(L) <= 0.0) return;
+    L *= segment_transmittance(qs, lens, kNoPrimitive);
+    if (max_component(L) <= 0.0) return;
+    float tr = g_connection_tr_mis;
+    ConnectionPdfs cp = ConnectionPdfs(solid_angle_to_area(pdf_lens, qs, lens) * tr, 0.0, vertex_pdf(lens, lens, qs) * tr,
+                                       solid_angle_to_area(pdf_back, qs, qs_minus) * vertex_tr_mis(qs));
     float w = LENS_WEIGHT(s, cp, lens);
     strategy_splat(s, c.film, L, w);
     splat_film(c.film, L * w);
@@ -302,11 +396,14 @@ vec3 strategy_connect_as(int s, int s_path, int t, Vertex pt, VertexBsdf pt_bsdf
     float qs_to_pt, qs_to_minus, pt_to_qs, pt_to_minus;
     vec3 L = qs.beta * vertex_f(qs, qs_minus.p, pt.p, true, qs_to_pt, qs_to_minus) *
              vertex_f_bsdf(pt, pt_bsdf, pt_minus.p, qs.p, false, pt_to_qs, pt_to_minus) * pt.beta / dot(d, d);
-    if (max_component(L) <= 0.0 || !segment_visible(qs, pt, kNoPrimitive)) return vec3(0.0);
-    ConnectionPdfs cp = ConnectionPdfs(solid_angle_to_area(qs_to_pt, qs, pt),
-                                       solid_angle_to_area(pt_to_minus, pt, pt_minus),
-                                       solid_angle_to_area(pt_to_qs, pt, qs),
-                                       solid_angle_to_area(qs_to_minus, qs, qs_minus));
+    if (max_component(L) <= 0.0) return vec3(0.0);
+    L *= segment_transmittance(qs, pt, kNoPrimitive);
+    if (max_component(L) <= 0.0) return vec3(0.0);
+    float tr = g_connection_tr_mis;
+    ConnectionPdfs cp = ConnectionPdfs(solid_angle_to_area(qs_to_pt, qs, pt) * tr,
+                                       solid_angle_to_area(pt_to_minus, pt, pt_minus) * vertex_tr_mis(pt),
+                                       solid_angle_to_area(pt_to_qs, pt, qs) * tr,
+                                       solid_angle_to_area(qs_to_minus, qs, qs_minus) * vertex_tr_mis(qs));
     float w = STRATEGY_WEIGHT(s, t, cp);
     strategy_record(s_path, t, L, w);
     return L * w;
@@ -327,8 +424,10 @@ int camera_subpath(uvec2 pixel, inout SamplerState s, inout Aov aov) {
     g_camera[0] = vertex_point(kVertexCamera, lens, vec3(0.0), vec3(c.weight));
     // an orthographic camera's direction is a delta: no strategy ends on its vertex (t = 1)
     if (u_params.camera_projection == kCameraOrthographic) vertex_set_delta(g_camera[0], true);
+    int m = kMedia ? camera_medium() : kNoMedium;
+    if (kMedia) vertex_set_medium(g_camera[0], m);
     return random_walk(false, 1, c.o, c.d, c.t_max, vec3(c.weight), camera_pdf_dir(c.d, c.time),
-                       kBdptMaxSegments + 1, s, aov);
+                       kBdptMaxSegments + 1, m, s, aov);
 }
 
 // A light subpath at time g_time into g_light: returns its vertex count (0: no light).
@@ -342,14 +441,26 @@ int light_subpath(inout SamplerState s) {
         bool infinite = light_is_infinite(l);
         g_light[0].info = vertex_info(infinite ? kVertexInfinite : kVertexLight, st.light + 1u, false, true);
         g_light[0].pdf_fwd = st.pmf * st.e.pdf_pos;
+        int m = kMedia ? light_start_medium(st.o, st.e.d, g_time) : kNoMedium;
+        vec3 beta = st.beta;
+        if (kMedia) {
+            vertex_set_medium(g_light[0], m);
+            // light from infinity crosses an unbounded homogeneous medium only where it is clear
+            if (infinite && m != kNoMedium && !medium_is_grid(m))
+                beta *= vec3(equal(u_media.media[m].sigma_t.xyz, vec3(0.0)));
+        }
         Aov unused = kNoAov;
-        n_light = random_walk(true, 1, st.o, st.e.d, kInfinity, st.beta, st.e.pdf_dir,
-                              kBdptMaxSegments, s, unused);
+        n_light = random_walk(true, 1, st.o, st.e.d, kInfinity, beta, st.e.pdf_dir,
+                              kBdptMaxSegments, m, s, unused);
         if (infinite) {
             // densities of a light at infinity (pbrt-v3's BDPT): its direction per solid
             // angle, the first hit per unit area through the emission disk
             g_light[0].pdf_fwd = infinite_light_density(-st.e.d);
-            if (n_light > 1) g_light[1].pdf_fwd = st.e.pdf_pos * abs(dot(g_light[1].ng, st.e.d));
+            if (n_light > 1) {
+                vec3 ng1 = g_light[1].ng;   // 0 at a medium vertex: a density per unit volume
+                g_light[1].pdf_fwd = st.e.pdf_pos * (dot(ng1, ng1) > 0.0 ? abs(dot(ng1, st.e.d)) : 1.0) *
+                                     (kMedia ? vertex_tr_mis(g_light[1]) : 1.0);
+            }
         }
     }
     return n_light;

@@ -82,7 +82,7 @@ PathState path_start(vec3 o, vec3 d, float t_max, float time) {
     st.split_left = 0;
     st.shadow = kNoShadowRay;
     st.medium = kMedia ? camera_medium() : kNoMedium;
-    st.hero = 0;
+    st.hero = -1;   // drawn at the first segment, kept for the whole path
     st.chan = vec3(1.0);
     return st;
 }
@@ -167,7 +167,12 @@ bool path_segment(inout PathState st, inout SamplerState s) {
     if (kMedia) {
         vec2 u_medium = sampler_2d(s);
         g_medium_rng = pcg_hash(floatBitsToUint(u_medium.y) ^ uint(depth));
-        if (depth == 0) st.hero = min(int(medium_random() * 3.0), 2);
+        // the hero channel: once per path (segments after null crossings keep depth 0 and
+        // draw the number again, but keep the channel that st.chan weighs)
+        if (depth == 0) {
+            int hero = min(int(medium_random() * 3.0), 2);
+            if (st.hero < 0) st.hero = hero;
+        }
         if (st.medium != kNoMedium) {
             MediumEvent ev = medium_sample(st.medium, st.o, st.d, found ? hit.t : st.t_max,
                                            u_medium.x, st.hero);

@@ -21,7 +21,9 @@
 #include "photon/density.glsl"
 #include "photon/grid_buckets.glsl"
 
-const int kVcmVertexTexels = GLRENDER_NORMAL_SHADOWING != 0 ? 7 : 6;   // records per stored light vertex (96 or 112 bytes)
+// records per stored light vertex (96 or 112 bytes: the seventh keeps the unperturbed normal
+// of a normal map's shadowing term and the MIS transmittance of media)
+const int kVcmVertexTexels = GLRENDER_NORMAL_SHADOWING != 0 || GLRENDER_MEDIA != 0 ? 7 : 6;
 const int kVcmMergeTexels = 4;      // records per merge point (64 bytes, and 16 of its key)
 const uint kVcmMergeCandidates = 1024u;   // merge candidates visited per camera vertex at most
 const uint kVcmLightSeed = 0x2f6b8e13u;   // the light pass's sampler stream: the seed xor this
@@ -43,8 +45,8 @@ void vcm_store_vertex(uint slot, Vertex v, float mis, int i, bool delta_light) {
     vcm_vertices[k + 3u] = vec4(v.tangent, v.pdf_rev);
     vcm_vertices[k + 4u] = vec4(v.beta, mis);
     vcm_vertices[k + 5u] = vec4(v.uv, float(i), delta_light ? 1.0 : 0.0);
-#if GLRENDER_NORMAL_SHADOWING
-    vcm_vertices[k + 6u] = vec4(v.ns0, 0.0);
+#if GLRENDER_NORMAL_SHADOWING || GLRENDER_MEDIA
+    vcm_vertices[k + 6u] = vec4(vertex_ns0(v), vertex_tr_mis(v));
 #endif
 }
 
@@ -53,11 +55,11 @@ Vertex vcm_load_vertex(uint slot, out float mis) {
     vec4 a = vcm_vertices[k], b = vcm_vertices[k + 1u], c = vcm_vertices[k + 2u],
          d = vcm_vertices[k + 3u], e = vcm_vertices[k + 4u], f = vcm_vertices[k + 5u];
     mis = e.w;
-#if GLRENDER_NORMAL_SHADOWING
-    vec3 ns0 = vcm_vertices[k + 6u].xyz;
+#if GLRENDER_NORMAL_SHADOWING || GLRENDER_MEDIA
+    vec4 g = vcm_vertices[k + 6u];
 #endif
-    return Vertex(a.xyz, b.xyz, c.xyz, VERTEX_NS0(ns0) d.xyz, e.xyz, f.xy, floatBitsToUint(a.w),
-                  floatBitsToUint(b.w), c.w, d.w);
+    return Vertex(a.xyz, b.xyz, c.xyz, VERTEX_NS0(g.xyz) d.xyz, e.xyz, f.xy, floatBitsToUint(a.w),
+                  floatBitsToUint(b.w), c.w, d.w VERTEX_TR(g.w));
 }
 
 // What a merge with light vertex q needs of the subpath behind it, stored by the light
@@ -117,6 +119,7 @@ MergePoint vcm_merge_point(int q) {
         m.g = 1.0 / d2;
         if (vertex_on_surface(prev)) m.g *= abs(dot(prev.ng, m.wi));
     }
+    m.g *= vertex_tr_mis(x);   // the media's MIS transmittance of the segment (kMedia)
     // the light side beyond x_{q-1}: as bdpt_mis_weight_ends's for s = q, less the ratio of
     // x_{q-1}'s reverse density (the camera vertex's BSDF decides it); x_{q-1} is inside
     // the merged path, so the connection that ends the light subpath before it needs it
@@ -325,7 +328,8 @@ vec3 vcm_merge(int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus) {
             if (max_component(f) <= 0.0 || !(cos_i > 0.0)) continue;
             f /= cos_i;
             if (!vcm_merge_visible(pt, m)) continue;
-            float w = vcm_merge_weight(t, m, pdf_light, solid_angle_to_area(pdf_back, pt, pt_minus));
+            float w = vcm_merge_weight(t, m, pdf_light,
+                                       solid_angle_to_area(pdf_back, pt, pt_minus) * vertex_tr_mis(pt));
             vec3 L = pt.beta * f * m.beta * u_vcm.merge.w;
             strategy_merge(m.segments, t, L, w);
             sum += L * w;

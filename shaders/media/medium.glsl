@@ -308,14 +308,31 @@ float crossing_lead(vec3 from, SurfaceHit h, vec3 d) {
     return abs(dot(from - h.p, h.ng)) / max(abs(dot(d, h.ng)), 1.0 / 64.0);
 }
 
+// The transmittance that the MIS weights of bidirectional strategies give medium m along
+// o + t d over [0, t]: exp(-mu t) with mu the medium's mean extinction (MediumData.majorant.y;
+// a grid's counts inside its box only). The densities in those weights must be deterministic
+// functions of the path (a tracked transmittance is only an estimate), and any such function
+// that is positive where the true density is keeps them summing to 1 (Miller, Georgiev and
+// Jarosz 2019 use the majorant's; the mean ranks the strategies closer to their true
+// densities in smoke whose majorant is far above most of its voxels).
+float medium_mis_transmittance(int m, vec3 o, vec3 d, float t) {
+    float mu = u_media.media[m].majorant.y;
+    if (!(mu > 0.0)) return 1.0;
+    float t0 = 0.0, t1 = t;
+    if (medium_is_grid(m) && !medium_box(m, o, d, t, t0, t1)) return 1.0;
+    return exp(-mu * (t1 - t0));
+}
+
 // The transmittance of a shadow ray from o along d over t_max that starts in medium m:
 // the media's along its segments, through null surfaces (into the medium on their far
 // side), 0 at any other surface (`ignore`: the primitive it aims at, not a blocker). The
 // ray goes on from a point offset off each surface it passes, parallel to the first: a
 // segment's length counts from the surface's plane (the offset's lead along d) to the next
-// hit, so that the offsets do not shorten any medium's part.
-vec3 scene_transmittance(vec3 o, vec3 d, float t_max, float time, uint ignore, int m) {
+// hit, so that the offsets do not shorten any medium's part. tr_mis: the product of
+// medium_mis_transmittance over the same parts, up to where the ray is blocked.
+vec3 scene_transmittance_mis(vec3 o, vec3 d, float t_max, float time, uint ignore, int m, out float tr_mis) {
     vec3 tr = vec3(1.0);
+    tr_mis = 1.0;
     vec3 from = o;          // the ray continues from here (offset past the last surface)
     float s = 0.0;          // the length along d covered up to the last surface passed
     float lead = 0.0;       // from that surface's plane to `from`, along d
@@ -325,7 +342,10 @@ vec3 scene_transmittance(vec3 o, vec3 d, float t_max, float time, uint ignore, i
         RAY_TICK();
         bool found = scene_intersect(from, d, max(t_max - s - lead, 0.0), time, h) && h.prim != ignore;
         float length = found ? lead + h.t : max(t_max - s, 0.0);
-        if (m != kNoMedium) tr *= medium_segment_transmittance(m, from - lead * d, d, length);
+        if (m != kNoMedium) {
+            tr *= medium_segment_transmittance(m, from - lead * d, d, length);
+            tr_mis *= medium_mis_transmittance(m, from - lead * d, d, length);
+        }
         if (!found) return tr;
         if (!material_is_null(h.material) || k == kMaxNullCrossings || max_component(tr) <= 0.0)
             return vec3(0.0);
@@ -335,4 +355,37 @@ vec3 scene_transmittance(vec3 o, vec3 d, float t_max, float time, uint ignore, i
         lead = crossing_lead(from, h, d);
     }
     return vec3(0.0);
+}
+
+vec3 scene_transmittance(vec3 o, vec3 d, float t_max, float time, uint ignore, int m) {
+    float unused;
+    return scene_transmittance_mis(o, d, t_max, time, ignore, m, unused);
+}
+
+// Passes null surface `hit` (a boundary of media only) along d: the medium beyond it and the
+// ray's origin past it; false when the walk has passed kMaxNullCrossings of them since its
+// last vertex (it ends there).
+bool medium_cross_null(SurfaceHit hit, vec3 d, inout int medium, inout vec3 o, inout int crossings) {
+    if (++crossings > kMaxNullCrossings) return false;
+    medium = medium_after(hit.material, hit.ng, d, medium);
+    o = offset_ray_origin(hit.p, hit.ng, d);
+    return true;
+}
+
+// The medium that a ray from o along d starts in, where nothing says it (a light path's
+// first segment): the one on the near side of the first surface along the ray that bounds
+// media (surfaces that bound none are passed, as they leave a path's medium as it is), the
+// camera's where no such surface lies ahead.
+int light_start_medium(vec3 o, vec3 d, float time) {
+    vec3 from = o;
+    for (int k = 0; k < kMaxNullCrossings; ++k) {
+        LOOP_TICK();
+        SurfaceHit h;
+        if (!scene_intersect(from, d, kInfinity, time, h)) break;
+        uint bits = scene_material(h.material).info.y;
+        if ((bits & ((0xffu << kMaterialInteriorShift) | (0xffu << kMaterialExteriorShift))) != 0u)
+            return medium_after(h.material, h.ng, -d, kNoMedium);
+        from = offset_ray_origin(h.p, h.ng, d);
+    }
+    return camera_medium();
 }

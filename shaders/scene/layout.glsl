@@ -42,7 +42,9 @@ struct MediumData {
     mat4 grid_from_world;   // heterogeneous: world to the grids' unit cube
     uvec4 sigma_grid;       // heterogeneous: x the sigma_t grid's first texel in u_media_grids, yzw its voxels along x, y, z
     uvec4 albedo_grid;      // x: the albedo grid's first texel + 1 (0: constant albedo), yzw: its voxels
-    vec4 majorant;          // x: heterogeneous: a bound on sigma_t over the grid, every channel (scale applied)
+    vec4 majorant;          // x: heterogeneous: a bound on sigma_t over the grid, every channel (scale applied),
+                            // y: the mean extinction (over channels and voxels) that the MIS weights of
+                            // bidirectional strategies assume (media/medium.glsl medium_mis_transmittance)
     uvec4 majorant_grid;    // heterogeneous: x the first texel of its supervoxels' bounds (one texel each,
                             // in .r), yzw the supervoxels along x, y, z (kSupervoxel voxels a side)
 };

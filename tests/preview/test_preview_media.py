@@ -17,4 +17,4 @@ def test01_key_i_cycles_the_integrators_that_render_the_scene():
     scene.shapes[0].interior = scene.add_medium(m.Medium())
     order = PreviewApp._integrator_order(app)
     assert order and "path" in order and all(integrators.get(n).media for n in order)
-    assert "bdpt" not in order
+    assert "ao" not in order and "bdpt" in order

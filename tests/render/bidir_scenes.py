@@ -83,11 +83,11 @@ def caustic(size=32) -> m.Scene:
     return scene
 
 
-def non_specular_first_hit(scene: m.Scene) -> np.ndarray:
+def non_specular_first_hit(scene: m.Scene, kinds=("conductor", "dielectric", "thindielectric", "null")) -> np.ndarray:
     """(H, W) bool: pixels whose camera ray first meets a non-delta surface (or nothing).
-    A pixel is specular where removing the delta-BSDF shapes changes the first hit's depth."""
-    delta = {i for i, mat in enumerate(scene.materials)
-             if mat.kind in ("conductor", "dielectric", "thindielectric", "null")}
+    A pixel is specular where removing the delta-BSDF shapes (of the material ``kinds``)
+    changes the first hit's depth."""
+    delta = {i for i, mat in enumerate(scene.materials) if mat.kind in kinds}
     bare = replace(scene, shapes=[s for s in scene.shapes if s.material not in delta])
     depth = [glrender.render(sc, spp=4, integrator="path", max_depth=1, aovs=True, seed=1,
                              progress=False, sampler="independent").aov("depth")
@@ -150,3 +150,65 @@ def directional(size=32) -> m.Scene:
     _floor_and_spheres(scene)
     scene.lights.append(m.Light("directional", direction=(-0.5, 0.6, -0.7), irradiance=(3.0, 2.8, 2.5)))
     return scene
+
+
+# ---- participating media ------------------------------------------------------------------
+
+def _fog_ball(scene: m.Scene, center, radius, **medium) -> int:
+    """A ball of fog bounded by a null sphere; returns its medium."""
+    null = scene.add_material(m.Material("null"))
+    fog = scene.add_medium(m.Medium(**medium))
+    scene.shapes.append(m.Shape("sphere", material=null, center=center, radius=radius, interior=fog))
+    return fog
+
+
+def fog_glossy(size=32) -> m.Scene:
+    """glossy's Cornell box with a ball of chromatic, forward-scattering fog (Henyey-Greenstein
+    g = 0.6) floating left of the boxes."""
+    scene = glossy(size)
+    _fog_ball(scene, (-0.4, 0.3, -0.1), 0.4, sigma_t=(1.5, 3.0, 5.0), albedo=(0.9, 0.8, 0.95),
+              phase="hg", g=0.6)
+    return scene
+
+
+def fog_in_glass(size=32) -> m.Scene:
+    """The caustic scene with its glass sphere filled with backward-scattering fog (g = -0.4):
+    medium vertices behind specular ones."""
+    scene = caustic(size)
+    fog = scene.add_medium(m.Medium(sigma_t=(2.0, 2.0, 2.0), albedo=(0.95, 0.9, 0.8), phase="hg", g=-0.4))
+    glass = next(i for i, mat in enumerate(scene.materials) if mat.kind == "dielectric")
+    for shape in scene.shapes:
+        if shape.material == glass:
+            shape.interior = fog
+    return scene
+
+
+def fog_environment(size=32) -> m.Scene:
+    """environment's floor and spheres with a ball of isotropic fog over the floor (light
+    subpaths from the environment's disk scatter in it)."""
+    scene = environment(size)
+    _fog_ball(scene, (0.3, 0.6, 0.9), 0.6, sigma_t=(1.2, 1.2, 1.2), albedo=(0.8, 0.8, 0.8))
+    return scene
+
+
+def camera_haze(size=32) -> m.Scene:
+    """The Cornell box in haze that fills the scene (a medium around the camera), lit by its
+    ceiling light and a point light in the haze: the light subpaths start in it, found by
+    their first segment. Paths in unbounded haze never leave it: max depth 12, so that
+    Russian roulette ends most first."""
+    scene = cornell(size)
+    scene.integrator.max_depth = 12
+    haze = scene.add_medium(m.Medium(sigma_t=(0.15, 0.2, 0.3), albedo=(0.9, 0.9, 0.9), phase="hg", g=0.3))
+    scene.camera = replace(scene.camera, medium=haze)
+    scene.lights.append(m.Light("point", position=(-0.5, 0.5, 0.2), intensity=(0.6, 0.5, 0.3)))
+    return scene
+
+
+def smoke_grid(size=32) -> m.Scene:
+    """The parity suite's heterogeneous medium: a .vol grid of smoke over a floor."""
+    scene = glrender.load(ROOT / "tests" / "parity" / "scenes" / "medium-grid.xml")
+    scene.film = replace(scene.film, width=size, height=size)
+    return scene
+
+
+MEDIA = (fog_glossy, fog_in_glass, fog_environment, camera_haze, smoke_grid)

@@ -12,7 +12,8 @@ import pytest
 from glrender.render.renderer import Renderer, settings_from_scene
 from glrender.testing.images import compare_images
 
-from bidir_scenes import (caustic, closed_enclosure, cornell, directional, environment, glossy,
+from bidir_scenes import (camera_haze, caustic, closed_enclosure, cornell, directional, environment,
+                          fog_glossy, glossy, smoke_grid,
                           path_reference, point_light, renders, slab_enclosure, thin_lens,
                           use_generic_weights)
 
@@ -105,11 +106,12 @@ def test03_loop_counts_far_below_the_cap(gl_ctx, make):
 
 
 
-@pytest.mark.parametrize("make", [glossy, caustic, environment])
+@pytest.mark.parametrize("make", [glossy, caustic, environment, fog_glossy, smoke_grid, camera_haze])
 def test06_connection_densities_are_the_fresh_ones(gl_ctx, monkeypatch, make):
-    """The strategies take the MIS densities of the connection from their own BSDF
-    evaluations (no second material lookup): the image is bitwise the one whose weights
-    evaluate every density afresh (GLRENDER_BDPT_GENERIC_WEIGHTS)."""
+    """The strategies take the MIS densities of the connection from their own BSDF (and
+    phase function) evaluations (no second material lookup): the image is bitwise the one
+    whose weights evaluate every density afresh (GLRENDER_BDPT_GENERIC_WEIGHTS); with media,
+    the media's MIS transmittance is the connection's walk's in both."""
     scene = make(16)
     images = []
     for generic in (False, True):

@@ -24,7 +24,7 @@ from glrender.gpu.bindings import UBO_VCM_PARAMS
 from glrender.render.renderer import Renderer, settings_from_scene
 from glrender.vcm.layout import VCM_PARAMS
 
-from bidir_scenes import caustic, directional, environment, glossy, point_light
+from bidir_scenes import MEDIA, caustic, directional, environment, glossy, point_light
 
 KERNEL = """#version 450
 layout(local_size_x = 64) in;
@@ -36,6 +36,7 @@ layout(std430, binding = 8) buffer Results { vec4 results[]; };
 Vertex g_path[2 * kBdptVertices];
 float g_p_light[2 * kBdptVertices];   // density of x_i generated from x_{i-1} (light side)
 float g_p_camera[2 * kBdptVertices];  // density of x_i generated from x_{i+1} (camera side)
+float g_seg[2 * kBdptVertices];       // the MIS transmittance of the segment x_i x_{i+1} (media)
 
 // The path's first sl vertices as the light subpath, its last t as the camera subpath,
 // with the densities each would have stored.
@@ -44,12 +45,15 @@ void split_path(int k, int sl, int t) {
         g_light[j] = g_path[j];
         g_light[j].pdf_fwd = g_p_light[j];
         g_light[j].pdf_rev = g_p_camera[j];
+        vertex_set_tr_mis(g_light[j], j > 0 ? g_seg[j - 1] : 1.0);
     }
     for (int j = 0; j < t; ++j) {
         g_camera[j] = g_path[k - 1 - j];
         g_camera[j].pdf_fwd = g_p_camera[k - 1 - j];
         g_camera[j].pdf_rev = g_p_light[k - 1 - j];
+        vertex_set_tr_mis(g_camera[j], j > 0 ? g_seg[k - 1 - j] : 1.0);
     }
+    g_connection_tr_mis = sl >= 1 && t >= 1 ? g_seg[sl - 1] : 1.0;
 }
 
 void main() {
@@ -61,9 +65,11 @@ void main() {
     vec3 axis = normalize(world_from_camera_at(c.time)[2].xyz);
     vec3 lens = c.o - (u_params.camera_clip.x / max(dot(c.d, axis), 1e-6)) * c.d;
     g_camera[0] = vertex_point(kVertexCamera, lens, vec3(0.0), vec3(1.0));
+    int m = kMedia ? camera_medium() : kNoMedium;
+    if (kMedia) vertex_set_medium(g_camera[0], m);
     Aov aov = kNoAov;
     int n_camera = random_walk(false, 1, c.o, c.d, c.t_max, vec3(1.0), camera_pdf_dir(c.d, c.time),
-                               kBdptMaxSegments + 1, s, aov);
+                               kBdptMaxSegments + 1, m, s, aov);
     if (vertex_kind(g_camera[n_camera - 1]) == kVertexInfinite) n_camera -= 1;   // join its last surface vertex
     LightPathStart st = light_path_start(s);
     results[i] = vec4(0.0);
@@ -71,8 +77,10 @@ void main() {
     LightData l = scene_light(st.light);
     g_light[0] = vertex_point(kVertexLight, st.e.p, light_is_area(l) ? st.e.n : vec3(0.0), vec3(1.0));
     g_light[0].info = vertex_info(light_is_infinite(l) ? kVertexInfinite : kVertexLight, st.light + 1u, false, true);
+    m = kMedia ? light_start_medium(st.o, st.e.d, g_time) : kNoMedium;
+    if (kMedia) vertex_set_medium(g_light[0], m);
     int n_light = random_walk(true, 1, st.o, st.e.d, kInfinity, st.beta, st.e.pdf_dir,
-                              kBdptMaxSegments, s, aov);
+                              kBdptMaxSegments, m, s, aov);
     // the whole path, if its two ends can be joined and it is not too long
     int k = n_light + n_camera;
     if (k - 1 > kBdptMaxSegments || k < 3) return;
@@ -80,15 +88,26 @@ void main() {
     for (int j = 0; j < k; ++j) g_path[j] = j < n_light ? g_light[j] : g_camera[k - 1 - j];
     vertex_set_delta(g_path[n_light - 1], false);   // the joined ends were not scattered toward each other
     vertex_set_delta(g_path[n_light], false);
+    // the segments' MIS transmittances: each subpath's from its walk, the join's walked now
+    for (int j = 0; j + 1 < k; ++j) {
+        if (j + 1 < n_light) g_seg[j] = vertex_tr_mis(g_light[j + 1]);
+        else if (j >= n_light) g_seg[j] = vertex_tr_mis(g_camera[k - 1 - j]);
+    }
+    segment_transmittance(g_path[n_light - 1], g_path[n_light], kNoPrimitive);
+    g_seg[n_light - 1] = g_connection_tr_mis;
     bool any_delta = false;
+    bool any_medium = false;
     for (int j = 0; j < k; ++j) {
         any_delta = any_delta || vertex_delta(g_path[j]) || !vertex_connectible(g_path[j]);
+        any_medium = any_medium || vertex_kind(g_path[j]) == kVertexMedium;
         if (j == 0) g_p_light[j] = vertex_pdf_light_origin(g_path[0], g_path[1]);
         else if (j == 1) g_p_light[j] = vertex_pdf_light(g_path[0], g_path[1]);
         else g_p_light[j] = vertex_delta(g_path[j - 1]) ? 0.0 : vertex_pdf(g_path[j - 1], g_path[j - 2], g_path[j]);
+        if (j >= 1) g_p_light[j] *= g_seg[j - 1];
         if (j == k - 1) g_p_camera[j] = 0.0;
         else if (j == k - 2) g_p_camera[j] = vertex_pdf(g_path[k - 1], g_path[k - 1], g_path[j]);
         else g_p_camera[j] = vertex_delta(g_path[j + 1]) ? 0.0 : vertex_pdf(g_path[j + 1], g_path[j + 2], g_path[j]);
+        if (j <= k - 2) g_p_camera[j] *= g_seg[j];
     }
 #if GLRENDER_VCM_MODE != 0
     // a merge evaluates the BSDF at its vertex: a path whose integrand is 0 there (a
@@ -131,11 +150,11 @@ void main() {
         Vertex pt = g_camera[t - 1], pt_minus = g_camera[t - 2];
         float pdf_light, pdf_back;
         vertex_f(pt, pt_minus.p, pt.p + mp.wi, false, pdf_light, pdf_back);
-        sum += vcm_merge_weight(t, mp, pdf_light, solid_angle_to_area(pdf_back, pt, pt_minus));
+        sum += vcm_merge_weight(t, mp, pdf_light, solid_angle_to_area(pdf_back, pt, pt_minus) * vertex_tr_mis(pt));
         strategies += 1;
     }
 #endif
-    results[i] = vec4(sum, float(strategies), float(k), any_delta ? 1.0 : 0.0);
+    results[i] = vec4(sum, float(strategies), float(k), (any_delta ? 1.0 : 0.0) + (any_medium ? 2.0 : 0.0));
 }
 """
 
@@ -175,19 +194,21 @@ def weight_sums(gl_ctx, scene, heuristic, n=1 << 14, vcm_mode=0, eta=0.0, lens=1
 
 @pytest.mark.slow
 @pytest.mark.parametrize("heuristic", ["mis-power", "mis-balance"])
-@pytest.mark.parametrize("make", [glossy, caustic, point_light, environment, directional])
+@pytest.mark.parametrize("make", [glossy, caustic, point_light, environment, directional, *MEDIA])
 def test01_weights_sum_to_one(gl_ctx, make, heuristic):
     res = weight_sums(gl_ctx, make(16), heuristic)
     made = res[:, 1] > 0
     assert made.sum() > 1000, made.sum()
     np.testing.assert_allclose(res[made, 0], 1.0, atol=2e-4)
     if make is caustic:   # paths through the glass: specular vertices among them
-        assert (res[made, 3] > 0).sum() > 50
+        assert (res[made, 3] % 2 > 0).sum() > 50
+    if make in MEDIA:     # paths with medium vertices among them
+        assert (res[made, 3] >= 2).sum() > 200
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("mode", [1, 2])
-@pytest.mark.parametrize("make", [glossy, caustic, point_light, environment, directional])
+@pytest.mark.parametrize("make", [glossy, caustic, point_light, environment, directional, *MEDIA])
 def test02_vcm_weights_sum_to_one(gl_ctx, make, mode):
     """The same paths under vertex connection and merging's weights: every connection
     strategy and a merge at every inner vertex where the path scatters by a non-delta lobe
