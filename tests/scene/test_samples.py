@@ -29,7 +29,9 @@ OPTIONS = {
 # compares them (bdpt where it can; media render only by the path tracer)
 TWINS = [("door/scene.toml", "door/scene.xml", "bdpt"),
          ("cornell-fog/scene.toml", "cornell-fog/scene.xml", "path"),
-         ("smoke/scene.toml", "smoke/scene.xml", "path")]
+         ("smoke/scene.toml", "smoke/scene.xml", "path"),
+         ("volumetric-caustic/scene.toml", "volumetric-caustic/scene.xml", "path"),
+         ("window-fog/scene.toml", "window-fog/scene.xml", "path")]
 
 
 def _files() -> tuple[list[Path], list[Path]]:
