@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""Golden hashes: every integrator's image on four scenes, and every output format decoded back
-to floats, hashed so that a change meant to leave images alone can prove it did.
+"""Golden hashes: every integrator's image on four scenes, the images of the integrators that
+render media (path, direct) on the two media scenes, and every output format decoded back to
+floats, hashed so that a change meant to leave images alone can prove it did.
 
 Each case is rendered through the command line (``glrender render``), the interface that stays
 put when the code behind it moves, in one child process per tree. A case's hash is the SHA-256
@@ -45,6 +46,10 @@ SCENES = {"cornell": "scenes/cornell-box/scene.toml",
           "caustic": "scenes/caustic/scene.toml",
           "door": "scenes/door/scene.toml"}
 INTEGRATORS = ("path", "direct", "ao", "lighttrace", "bdpt", "photon", "sppm", "vcm")
+# scenes with participating media, and the integrators that render them
+MEDIA_SCENES = {"cornell-fog": "scenes/cornell-fog/scene.toml",
+                "smoke": "scenes/smoke/scene.toml"}
+MEDIA_INTEGRATORS = ("path", "direct")
 SIZE = ("--width", "24", "--height", "24")
 # photon: a small map; sppm: 4 iterations of a small photon count
 PHOTON_ARGS = {"photon": ("--photons", "20000"), "sppm": ("--photons", "5000")}
@@ -62,6 +67,10 @@ def cases() -> dict[str, tuple[list[str], list[str]]]:
             if integrator == "sppm":
                 args += ["--aov", "radius,photons"]
             out[f"{scene_name}-{integrator}"] = (args, [".npy"])
+    for scene_name, scene in MEDIA_SCENES.items():
+        for integrator in MEDIA_INTEGRATORS:
+            out[f"{scene_name}-{integrator}"] = ([scene, *SIZE, "--spp", "8", "--seed", "7",
+                                                  "--integrator", integrator], [".npy"])
     out["cornell-formats"] = ([SCENES["cornell"], *SIZE, "--spp", "8", "--seed", "3",
                                "--integrator", "path"], list(FORMATS))
     return out

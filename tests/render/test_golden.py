@@ -1,5 +1,6 @@
 """Golden hashes (tools/golden.py): every integrator on the Cornell box, bunny, caustic and door
-scenes, and every output format decoded back to floats, bitwise the same as recorded.
+scenes, path and direct on the media scenes (cornell-fog, smoke), and every output format
+decoded back to floats, bitwise the same as recorded.
 
 On a device tests/data/golden.json does not know, the recorded base commit is rendered now in
 a temporary git worktree and compared instead: the check never skips."""
