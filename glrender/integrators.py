@@ -118,9 +118,10 @@ register(IntegratorSpec("bdpt", "integrators/bdpt.glsl", splatting=True, strateg
                         summary="bidirectional path tracing, every strategy weighted by MIS"))
 register(IntegratorSpec("sppm", None, driver="sppm",
                         emission_aov=False, distributed=False, open_ended=False,
-                        uses_strategy=False,
+                        uses_strategy=False, media=True,
                         summary="stochastic progressive photon mapping (iterations as spp)"))
 register(IntegratorSpec("photon", "integrators/photon.glsl", driver="photon", uses_strategy=False,
+                        media=True,
                         summary="photon mapping: global and caustic maps, then camera paths"))
 register(IntegratorSpec("vcm", "integrators/vcm.glsl", driver="vcm", splatting=True,
                         strategies=True, depth_cap=16, counts_truncation=True, media=True,

@@ -125,11 +125,13 @@ def build_point_grid(positions: np.ndarray, radius: float) -> PointGrid:
     return PointGrid(order, offsets, size.astype(np.uint32), n, lo, cell)
 
 
-def typical_radius(positions: np.ndarray, k: int, queries: int = 128, subset: int = 1 << 15) -> float:
+def typical_radius(positions: np.ndarray, k: int, queries: int = 128, subset: int = 1 << 15,
+                   dims: int = 2) -> float:
     """The radius of a disk around a typical point of ``positions`` (N, 3) that holds ``k``
     of them: the median over ``queries`` points (a fixed pseudo-random choice) of the
     distance to the k-th nearest, found among ``subset`` of the points and scaled to all
-    of them (a surface density: the count grows with r^2). 0 for fewer than 2 points."""
+    of them (a surface density: the count grows with r^2; ``dims`` 3: a ball's in a volume,
+    r^3). 0 for fewer than 2 points."""
     n = len(positions)
     if n < 2:
         return 0.0
@@ -142,4 +144,5 @@ def typical_radius(positions: np.ndarray, k: int, queries: int = 128, subset: in
     d2 = ((q[:, None, :] - s[None, :, :]) ** 2).sum(axis=-1)
     # the query itself may be in the subset at distance 0: take the kk-th after it
     dk = np.sqrt(np.partition(d2, kk, axis=1)[:, kk].astype(np.float64))
-    return float(np.median(dk) * math.sqrt(k * scale / kk))
+    ratio = k * scale / kk
+    return float(np.median(dk) * (math.sqrt(ratio) if dims == 2 else ratio ** (1.0 / dims)))

@@ -38,5 +38,12 @@ PHOTON_MAP_PARAMS = np.dtype([
     ("caustic_lo", "<f4", 4),
     ("radius", "<f4", 4),        # lookup radius global, caustic; 1 / photons global, caustic
     ("mode", "<u4", 4),          # kernel, k nearest (0: fixed radius), final gather, direct by photons
+    ("global_volume_size", "<u4", 4),    # the volume photons' grids, the same way
+    ("global_volume_lo", "<f4", 4),
+    ("caustic_volume_size", "<u4", 4),
+    ("caustic_volume_lo", "<f4", 4),
+    ("volume_radius", "<f4", 4),  # lookup radius of the global and caustic maps' volume photons; -, -
+    ("volume_table", "<u4", 4),   # their grids' first hash-table entry in the cells textures; -, -
 ])
-assert PHOTON_MAP_PARAMS.itemsize == 128
+assert PHOTON_MAP_PARAMS.itemsize == 224
+PHOTON_VOLUME = 3            # kPhotonVolume: added to a volume photon's type (map_layout.glsl)

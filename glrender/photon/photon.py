@@ -64,6 +64,7 @@ class PhotonSettings:
     kernel: str = "uniform"
     final_gather: bool = False
     photon_view: bool = False        # also splat the global map's photons (the "photons" AOV)
+    volume_radius: float | None = None   # the volume photons' lookup radius (None: as ``radius``)
     direct: str = "nee"              # direct light by next-event estimation, or "photons" (tests)
 
     def __post_init__(self) -> None:
@@ -74,8 +75,12 @@ class PhotonSettings:
             if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or not 1 <= v < 1 << 31:
                 raise UsageError(f"{name.replace('_', ' ')}: expected a positive integer, got {v!r}")
         r = self.radius
-        if r is not None and not (isinstance(r, (int, float)) and math.isfinite(r) and r > 0):
-            raise UsageError(f"radius: expected a positive number of scene units, got {r!r}")
+        for name in ("radius", "volume_radius"):
+            r = getattr(self, name)
+            if r is not None and not (isinstance(r, (int, float)) and math.isfinite(r) and r > 0):
+                raise UsageError(f"{name.replace('_', ' ')}: expected a positive number of scene "
+                                 f"units, got {r!r}")
+        r = self.radius
         k = self.knn
         if k is not None and (not isinstance(k, (int, np.integer)) or not 1 <= k <= MAX_KNN):
             raise UsageError(f"knn: expected an integer in [1, {MAX_KNN}], got {k!r}")
@@ -173,11 +178,16 @@ class PhotonRenderer(Renderer):
             return float(self.photon.radius)
         return self._radii[which]
 
-    def _estimate_radius(self, positions: np.ndarray) -> float:
+    def _estimate_radius(self, positions: np.ndarray, dims: int = 2) -> float:
+        """The lookup radius of photons at ``positions``: on surfaces (``dims`` 2), or in
+        media (3: volume photons, whose count grows with r^3); a fixed ``volume_radius``
+        for those, else the fixed ``radius``, else from their spread."""
+        if dims == 3 and self.photon.volume_radius is not None:
+            return float(self.photon.volume_radius)
         if self.photon.radius is not None:
             return float(self.photon.radius)
         k = self.photon.knn or DEFAULT_PHOTONS_PER_DISK
-        r = typical_radius(positions, k)
+        r = typical_radius(positions, k, dims=dims)
         if not r > 0:      # an empty map: any radius finds nothing
             r = 1e-3 * float(self.packed.sphere_bounds[1])
         return r * (KNN_REACH if self.photon.knn else 1.0)
@@ -280,23 +290,45 @@ class PhotonRenderer(Renderer):
 
     def _trace_maps(self) -> None:
         self._radii = [0.0, 0.0]
+        self._volume_radii = [0.0, 0.0]
+        self.volume_grids: list[PointGrid] = []
+        self.counters["volume"] = [0, 0]
         for which in (0, 1):
             records = self._trace(which)
             stored = len(records)
             self.counters["stored"][which] = stored
             if stored:
                 records = records[canonical_order(records)]
+            # volume photons (scenes with media) after the surface photons, each in its grid
+            volume = records[:, 3].view(np.uint32) >= pl.PHOTON_VOLUME
+            if volume.any():
+                records, volumes = records[~volume], records[volume]
+            else:
+                volumes = records[:0]
+            self.counters["volume"][which] = len(volumes)
             self._radii[which] = self._estimate_radius(records[:, :3])
             grid = build_point_grid(records[:, :3], self._radii[which])
             self.grids.append(grid)
-            self._upload_map(which, records[grid.order],
-                             grid.offsets if grid.table_size else np.zeros(1, np.uint32))
+            cells = grid.offsets if grid.table_size else np.zeros(1, np.uint32)
+            ordered = records[grid.order]
+            if len(volumes):
+                self._volume_radii[which] = self._estimate_radius(volumes[:, :3], dims=3)
+                vgrid = build_point_grid(volumes[:, :3], self._volume_radii[which])
+                self._block["volume_table"][which] = len(cells)
+                cells = np.concatenate([cells, vgrid.offsets + np.uint32(len(records))])
+                ordered = np.concatenate([ordered, volumes[vgrid.order]])
+                self.volume_grids.append(vgrid)
+                name = ("global", "caustic")[which]
+                self._block[f"{name}_volume_size"] = (*vgrid.size, vgrid.table_size)
+                self._block[f"{name}_volume_lo"] = (*vgrid.lo, vgrid.cell)
+            self._upload_map(which, ordered, cells)
             size = "global_size" if which == 0 else "caustic_size"
             lo = "global_lo" if which == 0 else "caustic_lo"
             self._block[size] = (*grid.size, grid.table_size)
             self._block[lo] = (*grid.lo, grid.cell)
         self._block["radius"] = (self.lookup_radius(0), self.lookup_radius(1),
                                  1.0 / self.photons[0], 1.0 / self.photons[1])
+        self._block["volume_radius"][:2] = self._volume_radii
         self._block["mode"] = (pl.KERNELS[self.photon.kernel], self.photon.knn or 0,
                                int(self.photon.final_gather), int(self.photon.direct == "photons"))
         self._block["trace"] = 0
@@ -326,8 +358,10 @@ class PhotonRenderer(Renderer):
 
     def _photon_inputs(self) -> list[tuple[str, bytes]]:
         p = self.photon
-        return [("photon map settings", repr(("photon", self.photons, p.radius, p.knn, p.kernel,
-                                              p.final_gather, p.direct)).encode()),
+        settings = ("photon", self.photons, p.radius, p.knn, p.kernel, p.final_gather, p.direct)
+        if p.volume_radius is not None:
+            settings += (p.volume_radius,)
+        return [("photon map settings", repr(settings).encode()),
                 ("photon store kernel", self._store_hash.encode())]
 
     # -- outputs -----------------------------------------------------------------------------
@@ -370,6 +404,7 @@ class PhotonRenderer(Renderer):
         p = self.photon
         return {"photons_emitted": list(self.photons), "photons_stored": list(self.counters["stored"]),
                 "radius": [self.lookup_radius(0), self.lookup_radius(1)], "knn": p.knn,
+                "volume_photons": list(self.counters["volume"]), "volume_radius": list(self._volume_radii),
                 "kernel": p.kernel, "final_gather": p.final_gather,
                 "largest_cell": [g.max_cell_entries for g in self.grids],
                 "lookups": self.lookup_counters(), "memory": self.memory(),

@@ -14,6 +14,18 @@ and the image is L = Ld / n + tau / (n P pi r^2) after n iterations of P photons
 (pbrt-v3's SPPMIntegrator). The radius shrinks like n^((alpha - 1) / 2), so the bias
 (proportional to r^2) and the noise both vanish: the estimate is consistent.
 
+In participating media a camera path may scatter in a medium before it reaches a surface:
+its visible point is then a point of the medium, which photons reach at their scattering
+events (volume photons, shaders/photon/sppm_deposit.glsl) inside a sphere of radius r_v.
+A pixel keeps a second state for those (r_v, N_v, tau_v), updated by the same rule in
+three dimensions (the sphere's volume in place of the disk's area),
+
+    r_v' = r_v (N_v' / (N_v + M))^(1/3),   tau_v' = (tau_v + Phi) (r_v' / r_v)^3,
+
+so that tau_v / r_v^3 is the sum over iterations of each one's flux over its own r_v^3,
+and the image adds tau_v / (n P (4/3) pi r_v^3). An iteration's visible point is of one
+kind: the other kind's state is left as it is.
+
 An image whose visible points exceed one storage-block binding runs each iteration in
 slices of pixel rows (a camera pass and the same photons per slice), and a slice whose
 grid exceeds a binding is traced grid by grid: the deposits are the one-slice image's.
@@ -76,6 +88,7 @@ class SppmSettings:
     direct: str = "nee"    # direct light by next-event estimation, or "photons" (density estimation)
     photon_view: bool = False   # also render the photon-map view (the "photons" AOV)
     kernel: str = "uniform"     # density estimation kernel: uniform, cone or epanechnikov
+    volume_radius: float | None = None   # initial radius of visible points in media (None: initial_radius)
 
     def __post_init__(self) -> None:
         if self.kernel not in pl.KERNELS:
@@ -85,9 +98,11 @@ class SppmSettings:
         p = self.photons_per_iteration
         if p is not None and (not isinstance(p, (int, np.integer)) or p < 1):
             raise UsageError(f"photons per iteration: expected a positive integer, got {p!r}")
-        r = self.initial_radius
-        if r is not None and not (isinstance(r, (int, float)) and math.isfinite(r) and r > 0):
-            raise UsageError(f"initial radius: expected a positive number of scene units, got {r!r}")
+        for name in ("initial_radius", "volume_radius"):
+            r = getattr(self, name)
+            if r is not None and not (isinstance(r, (int, float)) and math.isfinite(r) and r > 0):
+                raise UsageError(f"{name.replace('_', ' ')}: expected a positive number of scene "
+                                 f"units, got {r!r}")
         a = self.alpha
         if not (isinstance(a, (int, float)) and 0 < a < 1):
             raise UsageError(f"alpha: expected a number in (0, 1), got {a!r}")
@@ -103,6 +118,8 @@ class _Iteration:
     radiance: np.ndarray            # (N, 3): the camera passes' radiance
     phi: np.ndarray                 # (N, 3): flux deposited
     m: np.ndarray                   # (N,): photons counted
+    volume: np.ndarray              # (N,): the visible point lies in a medium
+    vp_radius: np.ndarray           # (N,): its search radius (r, or r_v in a medium)
     slice: int = 0                  # the slice in progress
     grids: list[Any] = field(default_factory=list)   # its grids still to trace
     prm: Any = None                 # the photon block of the grid in progress (None: none)
@@ -127,7 +144,8 @@ class SppmRenderer:
         # here, is ambient occlusion's: the quickest to compile)
         inner = replace(settings, integrator=replace(settings.integrator, kind="ao"))
         t0 = time.perf_counter()
-        self.base = Renderer(scene, inner, ctx=ctx, device=device, share=share)
+        self.base = Renderer(scene, inner, ctx=ctx, device=device, share=share, media_for="sppm")
+        self.media = bool(self.base.packed.has_media)
         self.scene, self.settings = scene, settings
         self.ctx, self.gl = self.base.ctx, self.base.gl
         self.width, self.height = self.base.width, self.base.height
@@ -140,6 +158,7 @@ class SppmRenderer:
         if record_emission and self.photons_per_iteration > MAX_RECORDS:
             raise UsageError(f"photons per iteration: at most {MAX_RECORDS} when recording emission")
         self.initial_radius = float(self.sppm.initial_radius or self._default_radius())
+        self.initial_volume_radius = float(self.sppm.volume_radius or self.initial_radius)
         self._compile()
         self._allocate()
         self.reset()
@@ -244,6 +263,10 @@ class SppmRenderer:
         self.n_photons = np.zeros(n, np.float64)
         self.tau = np.zeros((n, 3), np.float64)
         self.ld_sum = np.zeros((n, 3), np.float64)
+        # visible points in media (scenes with media): their radius, count and flux
+        self.volume_radius = np.full(n, self.initial_volume_radius, np.float64)
+        self.n_volume = np.zeros(n, np.float64)
+        self.tau_volume = np.zeros((n, 3), np.float64)
         self.counters = {"skipped": 0, "visited": 0, "max_visited": 0, "max_cell": 0}
         self._work: _Iteration | None = None
         if getattr(self, "_view", None) is not None:
@@ -278,7 +301,8 @@ class SppmRenderer:
         return [("SPPM kernels", self._kernel_hash.encode()),
                 ("SPPM settings", repr(
                     ("sppm", self.photons_per_iteration, self.initial_radius,
-                     float(self.sppm.alpha), self.sppm.direct, self.sppm.kernel)).encode())]
+                     float(self.sppm.alpha), self.sppm.direct, self.sppm.kernel)
+                    + ((self.initial_volume_radius,) if self.media else ())).encode())]
 
     # -- rendering ---------------------------------------------------------------------------
     def _bind(self) -> None:
@@ -318,15 +342,15 @@ class SppmRenderer:
         radiance = np.frombuffer(self._vp_radiance.read(16 * n), np.float32).reshape(-1, 4)[:, :3]
         return position, radiance
 
-    def _grids(self, position: np.ndarray, first: int) -> list[Any]:
-        """Hash grids over a slice's visible points (``first``: the slice's first pixel),
+    def _grids(self, position: np.ndarray, radius: np.ndarray) -> list[Any]:
+        """Hash grids over a slice's visible points (``radius``: their search radii),
         each within one storage-block binding: the points split in halves (in pixel
         order) until each half's grid fits. Always at least one grid (it may be empty:
         the photons still draw the photon-map view)."""
         limit = self.binding_limit()
 
         def split(points: np.ndarray) -> list[Any]:
-            grid = build_grid(position[points, :3], self.radius[first + points], points.astype(np.uint32))
+            grid = build_grid(position[points, :3], radius[points], points.astype(np.uint32))
             if grid.cells.nbytes <= limit:
                 return [grid]
             if len(points) < 2:
@@ -335,7 +359,7 @@ class SppmRenderer:
             half = len(points) // 2
             return split(points[:half]) + split(points[half:])
 
-        grids = split(np.nonzero(position[:, 3] > 0)[0])
+        grids = split(np.nonzero(position[:, 3] != 0)[0])
         for grid in grids:
             self.counters["max_cell"] = max(self.counters["max_cell"], grid.max_cell_entries)
         return grids
@@ -360,9 +384,12 @@ class SppmRenderer:
         position, radiance = self.camera_pass(work.index, (first_row, rows))
         lo, n = (first_row - TILE * self.rows[0]) * self.width, rows * self.width
         work.radiance[lo:lo + n] = radiance
-        self._radius2.write((self.radius[lo:lo + n] ** 2).astype(np.float32).tobytes())
+        volume = position[:, 3] < 0        # visible points in media
+        radius = np.where(volume, self.volume_radius[lo:lo + n], self.radius[lo:lo + n])
+        work.volume[lo:lo + n], work.vp_radius[lo:lo + n] = volume, radius
+        self._radius2.write((radius ** 2).astype(np.float32).tobytes())
         self._deposits.clear()
-        work.grids = self._grids(position, lo)
+        work.grids = self._grids(position, radius)
         self._begin_group(work)
 
     def _dispatch_photons(self, work: "_Iteration") -> None:
@@ -409,7 +436,7 @@ class SppmRenderer:
         if work is None:
             n = self.width * self.band_height
             work = self._work = _Iteration(self.iterations, self.slices(), np.zeros((n, 3)),
-                                           np.zeros((n, 3)), np.zeros(n))
+                                           np.zeros((n, 3)), np.zeros(n), np.zeros(n, bool), np.zeros(n))
         if work.prm is None:
             self._begin_slice(work)
             return False
@@ -418,7 +445,7 @@ class SppmRenderer:
             return False
         self._work = None
         self.ld_sum += work.radiance
-        self._update(work.phi, work.m)
+        self._update(work.phi, work.m, work.volume)
         self.iterations += 1
         return True
 
@@ -427,9 +454,13 @@ class SppmRenderer:
         """Drops the iteration in progress (the state stays as it was before it)."""
         self._work = None
 
-    def _update(self, phi: np.ndarray, m_new: np.ndarray) -> None:
-        """Hachisuka & Jensen's progressive radius and flux update (pbrt-v3's form)."""
-        hit = m_new > 0
+    def _update(self, phi: np.ndarray, m_new: np.ndarray, volume: np.ndarray) -> None:
+        """Hachisuka & Jensen's progressive radius and flux update (pbrt-v3's form); for
+        the pixels whose visible point lies in a medium (``volume``) its form in three
+        dimensions on their volume state."""
+        if volume.any():
+            self._update_volume(phi, m_new, volume)
+        hit = (m_new > 0) & ~volume
         alpha = float(self.sppm.alpha)
         n_old = self.n_photons[hit]
         n_new = n_old + alpha * m_new[hit]
@@ -438,6 +469,17 @@ class SppmRenderer:
         self.tau[hit] = (self.tau[hit] + phi[hit]) * ((r_new / r_old) ** 2)[:, None]
         self.n_photons[hit] = n_new
         self.radius[hit] = r_new
+
+    def _update_volume(self, phi: np.ndarray, m_new: np.ndarray, volume: np.ndarray) -> None:
+        hit = (m_new > 0) & volume
+        alpha = float(self.sppm.alpha)
+        n_old = self.n_volume[hit]
+        n_new = n_old + alpha * m_new[hit]
+        r_old = self.volume_radius[hit]
+        r_new = r_old * np.cbrt(n_new / (n_old + m_new[hit]))
+        self.tau_volume[hit] = (self.tau_volume[hit] + phi[hit]) * ((r_new / r_old) ** 3)[:, None]
+        self.n_volume[hit] = n_new
+        self.volume_radius[hit] = r_new
 
     @current
     def iterate(self, should_stop: Callable[[], bool] | None = None) -> bool:
@@ -485,6 +527,8 @@ class SppmRenderer:
         n = max(self.iterations, 1)
         photons = float(n) * self.photons_per_iteration
         L = self.ld_sum / n + self.tau / (photons * math.pi * self.radius ** 2)[:, None]
+        if self.media:
+            L = L + self.tau_volume / (photons * (4.0 / 3.0) * math.pi * self.volume_radius ** 3)[:, None]
         return L.reshape(self.band_height, self.width, 3)
 
     def image(self) -> Film:
@@ -502,8 +546,15 @@ class SppmRenderer:
                     aovs=self.aovs(),
                     sampler=self.settings.sampler.kind)
 
-    # the per-pixel state in float64, in this order (8 numbers per pixel)
+    # the per-pixel state in float64, in this order (8 numbers per pixel; 13 with media)
     _STATE = (("radius", 1), ("n_photons", 1), ("tau", 3), ("ld_sum", 3))
+    _VOLUME_STATE = (("volume_radius", 1), ("n_volume", 1), ("tau_volume", 3))
+
+    @property
+    def state_fields(self) -> tuple[tuple[str, int], ...]:
+        """The per-pixel state's arrays and their numbers per pixel: the volume state too in
+        a scene with media."""
+        return self._STATE + (self._VOLUME_STATE if self.media else ())
 
     @current
     def aovs(self) -> dict[str, np.ndarray]:
@@ -529,7 +580,7 @@ class SppmRenderer:
         so a resumed render continues exactly where it stopped."""
         n = self.width * self.band_height
         packed = np.concatenate([np.asarray(getattr(self, name), np.float64).reshape(n, k)
-                                 for name, k in self._STATE], axis=1)
+                                 for name, k in self.state_fields], axis=1)
         return {"fingerprint": self.fingerprint(), "spp_done": self.iterations,
                 "sums": np.ascontiguousarray(packed).view(np.uint32).reshape(-1),
                 "squares": np.zeros(4, np.uint32), "aov": np.zeros(4, np.uint32),
@@ -547,13 +598,13 @@ class SppmRenderer:
             raise UsageError(f"the saved SPPM state holds tile rows {rows}, this renderer "
                              f"{self.rows} (reset(rows=...) first)")
         n = self.width * self.band_height
-        width = sum(k for _, k in self._STATE)
+        width = sum(k for _, k in self.state_fields)
         bits = np.ascontiguousarray(state["sums"], np.uint32)
         if bits.size != 2 * width * n:
             raise UsageError(f"the saved SPPM state has {bits.size // 2} numbers, expected {width * n}")
         packed = bits.view(np.float64).reshape(n, width)
         column = 0
-        for name, k in self._STATE:
+        for name, k in self.state_fields:
             part = packed[:, column:column + k].copy()
             setattr(self, name, part[:, 0] if k == 1 else part)
             column += k

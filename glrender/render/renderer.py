@@ -178,7 +178,11 @@ class Renderer:
 
     def __init__(self, scene: m.Scene, settings: RenderSettings | None = None, *,
                  ctx: Context | None = None, device: str | int | None = None,
-                 share: Renderer | None = None, **overrides: Any) -> None:
+                 share: Renderer | None = None, media_for: str | None = None,
+                 **overrides: Any) -> None:
+        # the integrator whose support for participating media the kernels answer for (None:
+        # the settings' own; SPPM's inner renderer compiles ao's kernel for its own kernels)
+        self._media_for = media_for
         if settings is not None and overrides:
             raise UsageError(f"Renderer: give either settings or overrides "
                              f"({', '.join(sorted(overrides))}), not both")
@@ -295,11 +299,13 @@ class Renderer:
             self.defines["GLRENDER_EMISSION_TEXTURES"] = 1   # lights/light.glsl area_light_radiance
         if p.has_media:
             takers = [n for n in integrators.names() if integrators.get(n).media]
-            if not spec.media or s.executor != "megakernel" or integ.light_samples != 1 \
-                    or integ.split != 1:
+            kind = self._media_for or integ.kind
+            if not integrators.get(kind).media or s.executor != "megakernel" \
+                    or integ.light_samples != 1 or integ.split != 1:
                 raise UsageError(f"{self.scene.source}: participating media are rendered by "
-                                 f"--integrator {' or '.join(takers)} (the megakernel, one light "
-                                 f"sample and one branch a vertex) so far, not {integ.kind}")
+                                 f"--integrator {', '.join(takers[:-1])} or {takers[-1]} (the "
+                                 f"megakernel, one light sample and one branch a vertex) so far, "
+                                 f"not {kind}")
             self.defines["GLRENDER_MEDIA"] = 1   # media/medium.glsl, integrators/path.glsl
         if s.strategy_depth:
             self._check_strategy_images()

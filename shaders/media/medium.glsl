@@ -381,6 +381,7 @@ int light_start_medium(vec3 o, vec3 d, float time) {
     for (int k = 0; k < kMaxNullCrossings; ++k) {
         LOOP_TICK();
         SurfaceHit h;
+        RAY_TICK();
         if (!scene_intersect(from, d, kInfinity, time, h)) break;
         uint bits = scene_material(h.material).info.y;
         if ((bits & ((0xffu << kMaterialInteriorShift) | (0xffu << kMaterialExteriorShift))) != 0u)

@@ -14,6 +14,15 @@ float density_kernel(uint kernel, float q2) {
     if (kernel == kKernelEpanechnikov) return 2.0 * (1.0 - q2);
     return 1.0;
 }
+// The same kernels over the ball of radius r (volume photons), normalized to a mean of 1
+// over the ball (the estimate stays Phi / ((4/3) pi r^3)): uniform 1; cone 4 (1 - q);
+// Epanechnikov 5/2 (1 - q^2).
+float density_kernel_3d(uint kernel, float q2) {
+    if (kernel == kKernelCone) return 4.0 * (1.0 - sqrt(q2));
+    if (kernel == kKernelEpanechnikov) return 2.5 * (1.0 - q2);
+    return 1.0;
+}
+
 // Surface density estimation: a photon counts at a point only where the two geometric
 // normals agree (a photon on the far side of a thin wall, or on the other wall of a
 // corner, belongs to another surface).

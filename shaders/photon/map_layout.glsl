@@ -18,6 +18,14 @@ layout(std140, binding = UBO_PHOTON_MAP_PARAMS) uniform PhotonMapParams {
                           // largest), z, w: 1 / photons emitted for each map
     uvec4 mode;           // x: density kernel, y: k nearest neighbours (0: fixed radius),
                           // z: final gather (1), w: direct light from the photons (1) or NEE (0)
+    // volume photons (kMedia): each map's own grid over them, the same way
+    uvec4 global_volume_size;
+    vec4 global_volume_lo;
+    uvec4 caustic_volume_size;
+    vec4 caustic_volume_lo;
+    vec4 volume_radius;   // x, y: lookup radius of the global and caustic maps' volume photons
+    uvec4 volume_table;   // x, y: the first entry of the global and caustic maps' volume grids'
+                          // hash tables in their cells textures (after the surface grid's)
 } u_map;
 
 // The global and caustic maps' photons in their grid's order, 3 texels each, in buffer
@@ -28,6 +36,11 @@ layout(std140, binding = UBO_PHOTON_MAP_PARAMS) uniform PhotonMapParams {
 //   as packSnorm4x8 bits), [3 k + 2] = (power rgb, path segments from the light)
 // and their grids' hash tables: cells[h] .. cells[h + 1] are the photons under hash h
 // (glrender/photon/grid.py build_point_grid). Texture units 10-13.
+// Volume photons (kMedia: photons at scattering events in media) follow a map's surface
+// photons in the same texture, types kPhotonVolume + (0 direct, 1 caustic, 2 indirect),
+// their medium's index (int bits) in place of the normal and their power over sigma_s
+// (photon/photon_tracer.glsl volume_photon_power); their grid's hash table follows the
+// surface grid's (u_map.volume_table) and its entries count from the first photon.
 layout(binding = TEX_GLOBAL_MAP) uniform samplerBuffer u_global_map;
 layout(binding = TEX_CAUSTIC_MAP) uniform samplerBuffer u_caustic_map;
 layout(binding = TEX_GLOBAL_CELLS) uniform usamplerBuffer u_global_cells;
@@ -54,3 +67,4 @@ layout(std430, binding = SSBO_MAP_COUNTERS) buffer PhotonMapCounters { uint map_
 const uint kPhotonDirect = 0u;     // the first surface a photon reaches (NEE's light)
 const uint kPhotonCaustic = 1u;    // reached through delta surfaces only: L S+ D
 const uint kPhotonIndirect = 2u;   // after at least one non-delta surface
+const uint kPhotonVolume = 3u;     // added to the type of a photon at a scattering event in a medium

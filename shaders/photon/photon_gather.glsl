@@ -16,10 +16,21 @@
 // Surface density estimation: photons count only within a disk, |n . (x_p - x)| below
 // kDiscThickness r, with geometric normals that agree (kNormalAgreement), so a photon
 // across a thin wall or on the other wall of a corner does not leak in.
+//
+// Volume density estimation (kMedia, at a camera path's scattering event x in medium m):
+// the in-scattered radiance toward wo from the volume photons of the same medium in the
+// ball of radius r around x (their own grid and radius),
+//     L_s = 1 / ((4/3) pi r^3) sum_p K3(d_p / r) p(wo, wi_p) Phi_p / sigma_s(x_p),
+// Phi_p / sigma_s as stored (photon/photon_tracer.glsl volume_photon_power): the photons
+// are stored at scattering events only, whose density weighted by their power is
+// sigma_s L_i, hence the division by sigma_s (not sigma_t). The camera path's throughput at
+// its own event carries sigma_s T over the density it sampled x with, so beta L_s is that
+// event's share of the pixel, as the path tracer's estimate (Jensen & Christensen 1998).
 #include "photon/map_layout.glsl"
 #include "photon/density.glsl"
 #include "photon/grid_buckets.glsl"
 #include "integrators/integrator_common.glsl"
+#include "media/medium.glsl"
 
 const uint kRadiusCandidates = 4096u;
 const uint kKnnCandidates = 2048u;
@@ -29,13 +40,15 @@ const uint kGlobalMap = 0u;
 const uint kCausticMap = 1u;
 
 // What the lookup needs of a surface point: position, geometric normal, BSDF and the
-// outgoing direction in its shading frame.
+// outgoing direction in its shading frame; of a point in a medium (kMedia): position, its
+// medium and wo_l the world direction toward the camera (ng 0).
 struct GatherPoint {
     vec3 p;
     vec3 ng;
     Bsdf b;
     Frame frame;
     vec3 wo_l;
+    int medium;      // kNoMedium: a surface point
 };
 
 // Whether photon k of `map` counts at point g within squared radius r2 (disk, normal,
@@ -48,6 +61,8 @@ bool photon_candidate(uint map, uint k, GatherPoint g, float r2, uint types, flo
     vec3 dp = a.xyz - g.p;
     d2 = dot(dp, dp);
     if (d2 > r2) return false;
+    if (kMedia && g.medium != kNoMedium)    // a volume photon (by its type) of the same medium
+        return floatBitsToInt(map_record(map, k + 1u).w) == g.medium && map_record(map, k + 2u).w <= segments;
     float h = dot(dp, g.ng);
     if (h * h > kDiscThickness * kDiscThickness * r2) return false;
     vec4 b = map_record(map, k + 1u);
@@ -57,18 +72,36 @@ bool photon_candidate(uint map, uint k, GatherPoint g, float r2, uint types, flo
 
 // The photon's contribution (kernel weight w) at g: f Phi w.
 vec3 photon_term(uint map, uint k, GatherPoint g, float w) {
+    if (kMedia && g.medium != kNoMedium)
+        return medium_phase(g.medium, -g.wo_l, map_record(map, k + 1u).xyz) * map_record(map, k + 2u).rgb * w;
     vec3 f;
     if (!photon_bsdf(g.b, g.frame, g.wo_l, g.ng, map_record(map, k + 1u).xyz, f)) return vec3(0.0);
     return f * map_record(map, k + 2u).rgb * w;
 }
 
+// The kernel weight at squared distance q2 of the radius (a ball's for volume photons).
+float gather_kernel(bool volume, float q2) {
+    return volume ? density_kernel_3d(u_map.mode.x, q2) : density_kernel(u_map.mode.x, q2);
+}
+
 // The estimate from photons of `map` of the types in `types` that took at most
-// `segments` segments from their light.
+// `segments` segments from their light (at a point in a medium: its volume photons of
+// those types).
 vec3 photon_estimate(uint map, GatherPoint g, uint types, int segments) {
     uint buckets[8];
-    grid_buckets(g.p, map == kGlobalMap ? u_map.global_lo : u_map.caustic_lo,
-                 map == kGlobalMap ? u_map.global_size : u_map.caustic_size, buckets);
+    bool volume = kMedia && g.medium != kNoMedium;
+    uint table = 0u;   // the first entry of the grid's hash table in the cells texture
     float r_max = map == kGlobalMap ? u_map.radius.x : u_map.radius.y;
+    if (volume) {
+        types <<= kPhotonVolume;
+        grid_buckets(g.p, map == kGlobalMap ? u_map.global_volume_lo : u_map.caustic_volume_lo,
+                     map == kGlobalMap ? u_map.global_volume_size : u_map.caustic_volume_size, buckets);
+        table = map == kGlobalMap ? u_map.volume_table.x : u_map.volume_table.y;
+        r_max = map == kGlobalMap ? u_map.volume_radius.x : u_map.volume_radius.y;
+    } else {
+        grid_buckets(g.p, map == kGlobalMap ? u_map.global_lo : u_map.caustic_lo,
+                     map == kGlobalMap ? u_map.global_size : u_map.caustic_size, buckets);
+    }
     float inv_photons = map == kGlobalMap ? u_map.radius.z : u_map.radius.w;
     float r2 = r_max * r_max, seg = float(segments);
     uint knn = u_map.mode.y;
@@ -79,7 +112,7 @@ vec3 photon_estimate(uint map, GatherPoint g, uint types, int segments) {
     uint found = 0u;
     for (int i = 0; i < 8; ++i) {
         if (buckets[i] == kNoBucket) continue;
-        uint begin = map_cell(map, buckets[i]), end = map_cell(map, buckets[i] + 1u);
+        uint begin = map_cell(map, table + buckets[i]), end = map_cell(map, table + buckets[i] + 1u);
         uint visit = min(end - begin, budget - visited);
         skipped += end - begin - visit;
         for (uint e = begin; e < begin + visit; ++e) {
@@ -88,7 +121,7 @@ vec3 photon_estimate(uint map, GatherPoint g, uint types, int segments) {
             float d2;
             if (!photon_candidate(map, k, g, r2, types, seg, d2)) continue;
             if (knn == 0u) {
-                sum += photon_term(map, k, g, density_kernel(u_map.mode.x, d2 / r2));
+                sum += photon_term(map, k, g, gather_kernel(volume, d2 / r2));
                 continue;
             }
             // a max-heap of the knn nearest by squared distance
@@ -130,7 +163,7 @@ vec3 photon_estimate(uint map, GatherPoint g, uint types, int segments) {
         }
         for (uint i = first; i < found; ++i) {
             LOOP_TICK();
-            sum += photon_term(map, heap_k[i], g, density_kernel(u_map.mode.x, heap_d2[i] / r2));
+            sum += photon_term(map, heap_k[i], g, gather_kernel(volume, heap_d2[i] / r2));
         }
     }
     if (skipped > 0u) atomicAdd(map_counters[1], skipped);
@@ -139,6 +172,6 @@ vec3 photon_estimate(uint map, GatherPoint g, uint types, int segments) {
         atomicMax(map_counters[3], visited);
     }
     if (!(r2 > 0.0)) return vec3(0.0);
-    vec3 L = sum * inv_photons / (kPi * r2);
+    vec3 L = sum * inv_photons / (volume ? (4.0 / 3.0) * kPi * r2 * sqrt(r2) : kPi * r2);
     return is_finite(L) ? L : vec3(0.0);
 }

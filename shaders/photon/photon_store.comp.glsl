@@ -6,7 +6,9 @@
 // direction it came from, its power and type (direct: the first surface; caustic:
 // reached through delta surfaces only, L S+ D; indirect: the rest) and the segments it
 // took. The caustic map's pass (trace.w = 1) keeps caustic photons only and ends each
-// photon at its first non-delta surface. Photons beyond the buffer's capacity are
+// photon at its first non-delta surface. In media (kMedia) a photon is stored at each
+// scattering event too, as a volume photon of the same types (a caustic one: reached
+// through delta surfaces only, light focused into fog; the caustic pass ends there too). Photons beyond the buffer's capacity are
 // counted and not stored (the host keeps what earlier dispatches stored and traces the
 // dispatch again into an emptied buffer, splatting none of its photons twice).
 // Photon j draws its numbers as sample j of a sequence scrambled by (seed, map).
@@ -27,6 +29,15 @@ void store_photon(SurfaceHit hit, Photon ph, uint type, int segments) {
     traced_photons[3u * k + 2u] = vec4(ph.beta, float(segments));
 }
 
+// A volume photon (kMedia): at its scattering event at p in its medium, before it scatters.
+void store_volume_photon(vec3 p, Photon ph, uint type, int segments) {
+    uint k = atomicAdd(map_counters[0], 1u);
+    if (k >= u_map.store.x) return;
+    traced_photons[3u * k] = vec4(p, uintBitsToFloat(kPhotonVolume + type));
+    traced_photons[3u * k + 1u] = vec4(-ph.d, intBitsToFloat(ph.medium));
+    traced_photons[3u * k + 2u] = vec4(volume_photon_power(ph.medium, p, ph.beta), float(segments));
+}
+
 void main() {
     if (gl_GlobalInvocationID.x >= u_map.trace.y) return;
     uint j = u_map.trace.x + gl_GlobalInvocationID.x;
@@ -40,7 +51,18 @@ void main() {
     for (int segments = 1; segments <= max_segments && ph.alive; ++segments) {
         LOOP_TICK();
         PhotonHit h;
-        if (!photon_next_hit(ph, s, h)) break;
+        int event = photon_next_event(ph, s, h);
+        if (event == kPhotonEscaped) break;
+        if (kMedia && event == kPhotonMedium) {
+            // a scattering event in a medium: a volume photon, typed as a surface photon
+            uint type = segments == 1 ? kPhotonDirect : (delta_only ? kPhotonCaustic : kPhotonIndirect);
+            if (!caustic_map || type == kPhotonCaustic) store_volume_photon(h.hit.p, ph, type, segments);
+            if (caustic_map) break;
+            delta_only = false;
+            if (segments + 1 > max_segments) break;
+            photon_scatter_medium(ph, h, h.u_bsdf, h.u_rr);
+            continue;
+        }
         if (!bsdf_is_delta(h.b)) {
             uint type = segments == 1 ? kPhotonDirect : (delta_only ? kPhotonCaustic : kPhotonIndirect);
             if (!caustic_map || type == kPhotonCaustic) {

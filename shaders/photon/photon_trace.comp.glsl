@@ -3,7 +3,8 @@
 // The photon pass: one photon per invocation, photons [first, first + count) of this
 // iteration. Each photon is traced from a light (photon/photon_tracer.glsl) and, at
 // every non-delta surface it reaches from its options.x-th segment on, deposited into
-// the visible points around it (photon/sppm_deposit.glsl). Photon j of iteration t
+// the visible points around it (photon/sppm_deposit.glsl); in media (kMedia) also at every
+// scattering event, into the visible points in media around it. Photon j of iteration t
 // draws its numbers as sample j of a sequence scrambled by (seed, t), so an iteration's
 // photons are one randomization of the sampler (stratified across the pass with
 // Owen-scrambled Sobol'). Deposits are float atomics: their sums are independent of the
@@ -37,9 +38,19 @@ void main() {
     for (int segments = 1; segments <= max_segments && ph.alive; ++segments) {
         LOOP_TICK();
         PhotonHit h;
-        if (!photon_next_hit(ph, s, h)) break;
+        int event = photon_next_event(ph, s, h);
+        if (event == kPhotonEscaped) break;
+        if (kMedia && event == kPhotonMedium) {
+            // a volume photon: into the visible points in media around it
+            if (segments >= int(u_photon.options.x))
+                sppm_deposit(h.hit.p, vec3(0.0), ph.medium, -ph.d,
+                             volume_photon_power(ph.medium, h.hit.p, ph.beta), segments, budget, visited);
+            if (segments + 1 > max_segments) break;
+            photon_scatter_medium(ph, h, h.u_bsdf, h.u_rr);
+            continue;
+        }
         if (!bsdf_is_delta(h.b) && segments >= int(u_photon.options.x)) {
-            sppm_deposit(h.hit.p, h.hit.ng, -ph.d, ph.beta, segments, budget, visited);
+            sppm_deposit(h.hit.p, h.hit.ng, kNoMedium, -ph.d, ph.beta, segments, budget, visited);
             if (u_photon.options.w != 0u) splat_photon_view(h.hit, ph, h.u_lens);
         }
         if (segments + 1 > max_segments) break;

@@ -9,6 +9,14 @@
 // q = min(max(weight), 1) of the scattering weight, dividing by q: a photon's power
 // stays about the same while absorption thins the photons out (pbrt-v3 uses the
 // luminance ratio the same way).
+//
+// Participating media (kMedia, media/medium.glsl): a photon knows the medium it travels in
+// (light_start_medium at its light, then the one across each surface that bounds media),
+// samples a free flight in it before each surface with its own hero channel and weighs the
+// events by spectral MIS over the channels as the path tracer does (medium_event_weight),
+// passes null surfaces without counting them, and at a scattering event goes on by sampling
+// the phase function (weight 1) after Russian roulette by the event's weight (the albedo in
+// a grey homogeneous medium).
 #include "integrators/light_path.glsl"
 
 struct Photon {
@@ -18,13 +26,20 @@ struct Photon {
     float time;      // normalized shutter time
     uint light;      // the light it left
     bool alive;
+    int medium;      // kMedia: the medium the next segment runs in (kNoMedium: none)
+    int hero;        // kMedia: the channel whose coefficients sample free flights
+    vec3 chan;       // kMedia: the product of the medium events' densities per channel
 };
 
 // Starts a photon on a light; consumes light_path_start's sampler dimensions.
 Photon photon_start(inout SamplerState s) {
     LightPathStart st = light_path_start(s);
-    Photon ph = Photon(st.o, st.e.d, st.beta, st.time, st.light, st.valid);
+    Photon ph = Photon(st.o, st.e.d, st.beta, st.time, st.light, st.valid, kNoMedium, 0, vec3(1.0));
     if (!st.valid) ph.beta = vec3(0.0);
+    if (kMedia) {
+        ph.hero = min(int(sampler_1d(s) * 3.0), 2);
+        if (st.valid) ph.medium = light_start_medium(ph.o, ph.d, ph.time);
+    }
     return ph;
 }
 
@@ -49,6 +64,7 @@ void photon_scatter(inout Photon ph, SurfaceHit hit, Bsdf b, float u_lobe, vec2 
     ph.o = offset_ray_origin(hit.p, hit.ng, wi);
     ph.d = wi;
     ph.alive = true;
+    if (kMedia) ph.medium = medium_after(hit.material, hit.ng, wi, ph.medium);
 }
 
 // The next surface a photon reaches, its BSDF and the numbers scattering there takes
@@ -60,16 +76,98 @@ struct PhotonHit {
     vec2 u_bsdf;
     float u_rr;
     vec2 u_lens;     // the photon-map view's camera connection
+    vec3 beta_in;    // kMedia, a scattering event: the photon's power before the event's weight
 };
+
+// The numbers a photon's vertex takes (the same sampler dimensions in every photon kernel).
+void photon_vertex_numbers(inout SamplerState s, inout PhotonHit h) {
+    h.u_choice = sampler_2d(s);
+    h.u_bsdf = sampler_2d(s);
+    h.u_rr = sampler_1d(s);
+    h.u_lens = sampler_2d(s);
+}
 
 // Follows photon ph to its next surface: false when it leaves the scene.
 bool photon_next_hit(Photon ph, inout SamplerState s, out PhotonHit h) {
     g_light_path_rays = true;     // a normal map's flip is for camera paths
     if (!scene_intersect(ph.o, ph.d, kInfinity, ph.time, h.hit)) return false;
-    h.u_choice = sampler_2d(s);
-    h.u_bsdf = sampler_2d(s);
-    h.u_rr = sampler_1d(s);
-    h.u_lens = sampler_2d(s);
+    photon_vertex_numbers(s, h);
     h.b = bsdf_from_material(h.hit.material, h.hit.uv);
     return true;
+}
+
+const int kPhotonEscaped = 0;   // it left the scene (or was absorbed in a medium)
+const int kPhotonSurface = 1;   // it reached a surface (not a null one)
+const int kPhotonMedium = 2;    // it scatters in its medium (kMedia)
+
+// Follows photon ph to its next vertex (photon_next_hit without media): a surface, or
+// (kMedia) a scattering event in the medium it travels in, at h.hit.p (h.hit.ng 0), the
+// free flight's weight applied to ph.beta. Null surfaces are passed (up to
+// kMaxNullCrossings in a row), into the medium across them; each part of the way between
+// them samples its own free flight with two numbers, as the path tracer's segments do.
+int photon_next_event(inout Photon ph, inout SamplerState s, out PhotonHit h) {
+    if (!kMedia) return photon_next_hit(ph, s, h) ? kPhotonSurface : kPhotonEscaped;
+    g_light_path_rays = true;
+    for (int k = 0; k <= kMaxNullCrossings; ++k) {
+        LOOP_TICK();
+        vec2 u_medium = sampler_2d(s);
+        g_medium_rng = pcg_hash(floatBitsToUint(u_medium.y) ^ uint(k));
+        RAY_TICK();
+        bool found = scene_intersect(ph.o, ph.d, kInfinity, ph.time, h.hit);
+        if (ph.medium != kNoMedium) {
+            MediumEvent ev = medium_sample(ph.medium, ph.o, ph.d, found ? h.hit.t : kInfinity,
+                                           u_medium.x, ph.hero);
+            h.beta_in = ph.beta;
+            medium_event_weight(ph.beta, ph.chan, ev.f, ev.p);
+            if (!(max_component(ph.beta) > 0.0) || !is_finite(ph.beta)) return kPhotonEscaped;
+            if (ev.scatter) {
+                h.hit.p = ph.o + ev.t * ph.d;
+                h.hit.ng = vec3(0.0);
+                h.hit.t = ev.t;
+                photon_vertex_numbers(s, h);
+                return kPhotonMedium;
+            }
+        }
+        if (!found) return kPhotonEscaped;
+        if (!material_is_null(h.hit.material)) {
+            photon_vertex_numbers(s, h);
+            h.b = bsdf_from_material(h.hit.material, h.hit.uv);
+            return kPhotonSurface;
+        }
+        ph.medium = medium_after(h.hit.material, h.hit.ng, ph.d, ph.medium);
+        ph.o = offset_ray_origin(h.hit.p, h.hit.ng, ph.d);
+    }
+    return kPhotonEscaped;
+}
+
+// Continues photon ph from its scattering event h in its medium (kMedia): Russian roulette
+// survives with the event's weight q (the power after it over the power before, at most 1:
+// the albedo in a grey homogeneous medium), dividing by q, and the phase function gives
+// the new direction (u_dir; its weight is 1).
+void photon_scatter_medium(inout Photon ph, PhotonHit h, vec2 u_dir, float u_rr) {
+    float before = max_component(h.beta_in);
+    float q = before > 0.0 ? min(max_component(ph.beta) / before, 1.0) : 0.0;
+    ph.alive = false;
+    if (!(u_rr < q)) return;
+    ph.beta /= q;
+    if (!(max_component(ph.beta) > 0.0) || !is_finite(ph.beta)) return;
+    ph.o = h.hit.p;
+    ph.d = medium_sample_phase(ph.medium, ph.d, u_dir);
+    ph.alive = true;
+}
+
+// What a volume photon of power beta at its scattering event at p in medium m stores:
+// beta / sigma_s(p) per channel (0 where sigma_s is). The events' density, weighted by the
+// power after each event's weight (the free flight's sigma_s T over its density), is
+// sigma_s(x) L_i(x, w) per unit volume and solid angle, so these powers' density is the
+// incident radiance L_i itself: a camera point estimates its in-scattered radiance
+// int p(wo, wi) L_i(x, wi) dwi from them without dividing by any coefficient.
+vec3 volume_photon_power(int m, vec3 p, vec3 beta) {
+    vec3 ss = u_media.media[m].sigma_s.xyz;
+    if (medium_is_grid(m)) {
+        vec3 st;
+        medium_coefficients(m, p, st, ss);
+    }
+    return vec3(ss.x > 0.0 ? beta.x / ss.x : 0.0, ss.y > 0.0 ? beta.y / ss.y : 0.0,
+                ss.z > 0.0 ? beta.z / ss.z : 0.0);
 }

@@ -18,16 +18,28 @@
 #include "bsdf/bsdf.glsl"
 #include "bsdf/material.glsl"
 #include "photon/density.glsl"
+#include "media/medium.glsl"
 
 const uint kMaxCellCandidates = 4096u;
 
 const uint kCandidateBudget = 16384u;
 
+// Volume photons (kMedia): a photon that scatters at p in medium m deposits into the
+// visible points in the same medium (vp_position w < 0, photon/layout.glsl) whose search
+// sphere holds it: Phi_i += K3(d / r_i) beta_i p(wo_i, wi) beta_photon, with beta_photon
+// its power over sigma_s (volume_photon_power: the density of those powers is the
+// incident radiance) and K3 a kernel of mean 1 over the ball; the host divides by
+// (4/3) pi r^3. A camera path's beta_i at its scattering event carries sigma_s T over
+// the free flight's density, so beta_i times the in-scattered radiance int p L_i is
+// that event's share of the pixel: unbiased in the limit r -> 0.
+
 // Deposits a photon of power beta that reached surface point p (geometric normal ng)
 // from the unit direction wi (pointing back toward where it came from), after
-// `segments` path segments from its light. `budget`: candidates this photon may
-// still visit.
-void sppm_deposit(vec3 p, vec3 ng, vec3 wi, vec3 beta, int segments, inout uint budget, inout uint visited) {
+// `segments` path segments from its light; a volume photon (kMedia) at a scattering
+// event in medium `medium` (ng 0; kNoMedium: a surface photon). `budget`: candidates
+// this photon may still visit.
+void sppm_deposit(vec3 p, vec3 ng, int medium, vec3 wi, vec3 beta, int segments, inout uint budget,
+                  inout uint visited) {
     uvec3 cell;
     if (!grid_cell_of(p, cell)) return;
     uvec2 range = grid_cell_range(cell);
@@ -42,6 +54,20 @@ void sppm_deposit(vec3 p, vec3 ng, vec3 wi, vec3 beta, int segments, inout uint 
         uint i = grid_cells[range.x + k];
         vec4 vp = vp_position[i];
         vec3 dp = p - vp.xyz;
+        if (kMedia && medium != kNoMedium) {
+            if (vp.w >= 0.0 || dot(dp, dp) > vp_radius2[i] || float(segments) - vp.w > max_segments)
+                continue;
+            vec4 wo = vp_shading[2u * i];
+            if (floatBitsToInt(wo.w) != medium) continue;
+            float w = density_kernel_3d(u_photon.estimate.x, dot(dp, dp) / vp_radius2[i]);
+            vec3 phi = vp_extra[2u * i + 1u].rgb * (w * medium_phase(medium, -wo.xyz, wi)) * beta;
+            if (!is_finite(phi)) continue;
+            atomicAdd(deposit_flux[4u * i], phi.r);
+            atomicAdd(deposit_flux[4u * i + 1u], phi.g);
+            atomicAdd(deposit_flux[4u * i + 2u], phi.b);
+            atomicAdd(deposit_flux[4u * i + 3u], 1.0);
+            continue;
+        }
         if (dot(dp, dp) > vp_radius2[i] || vp.w + float(segments) > max_segments) continue;
         vec4 extra = vp_extra[2u * i];
         if (dot(extra.xyz, ng) < kNormalAgreement) continue;
