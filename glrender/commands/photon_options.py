@@ -12,7 +12,7 @@ from ..vcm.vcm import DEFAULT_ALPHA, MAX_CACHE_CONNECTIONS, MAX_LIGHT_PATHS, MOD
 
 SPPM_OPTIONS = ("iterations", "initial_radius", "alpha")
 PHOTON_OPTIONS = ("caustic_photons", "radius", "knn", "final_gather")
-SHARED_OPTIONS = ("photons_per_iteration", "kernel")   # --photons: per iteration (sppm) or per map
+SHARED_OPTIONS = ("photons_per_iteration", "kernel", "volume_radius")   # --photons: per iteration (sppm) or per map
 VCM_OPTIONS = ("vcm_mode", "light_paths", "light_vertex_cache")   # vcm takes SPPM_OPTIONS too
 OPTIONS = SHARED_OPTIONS + SPPM_OPTIONS + PHOTON_OPTIONS + VCM_OPTIONS   # saved in checkpoints
 #: the options each of these integrators takes
@@ -30,6 +30,11 @@ def add_arguments(parser: Any) -> None:
                         "photon: photons traced for the global map (default 262144)")
     g.add_argument("--kernel", choices=("uniform", "cone", "epanechnikov"), default=None,
                    help="density estimation kernel over each search disk (default: uniform)")
+    g.add_argument("--volume-radius", type=float, default=None, metavar="R",
+                   help="sppm: initial search radius of points in participating media (default: 3 "
+                        "times --initial-radius's default); photon: lookup radius of the volume "
+                        "photons (default: --radius, or the radius holding 64 of them around a "
+                        "typical one)")
     g.add_argument("--iterations", type=int, default=None, metavar="N",
                    help="sppm, vcm: iterations (one camera sample per pixel and a photon or light "
                         "pass each; default: the scene's spp)")
@@ -84,6 +89,9 @@ def photon_options(args: Any, kind: str) -> tuple[int | None, SppmSettings | Pho
     iterations = getattr(args, "iterations", None)
     if iterations is not None and iterations < 1:
         raise UsageError(f"--iterations {iterations}: expected a positive number of iterations")
+    volume_radius = getattr(args, "volume_radius", None)
+    if volume_radius is not None and not volume_radius > 0:
+        raise UsageError(f"--volume-radius {volume_radius}: expected a positive number of scene units")
     if kind == "vcm":
         radius, alpha = getattr(args, "initial_radius", None), getattr(args, "alpha", None)
         if radius is not None and not radius > 0:
@@ -125,9 +133,10 @@ def photon_options(args: Any, kind: str) -> tuple[int | None, SppmSettings | Pho
         return None, PhotonSettings(caustic_photons=caustic, radius=radius, knn=knn,
                                     kernel=getattr(args, "kernel", None) or "uniform",
                                     final_gather=bool(getattr(args, "final_gather", None)),
-                                    photon_view="photons" in aovs, **kw)
+                                    photon_view="photons" in aovs, volume_radius=volume_radius, **kw)
     sppm = SppmSettings(photons_per_iteration=getattr(args, "photons_per_iteration", None),
                         initial_radius=getattr(args, "initial_radius", None),
                         alpha=0.7 if getattr(args, "alpha", None) is None else args.alpha,
-                        photon_view="photons" in aovs, kernel=getattr(args, "kernel", None) or "uniform")
+                        photon_view="photons" in aovs, kernel=getattr(args, "kernel", None) or "uniform",
+                        volume_radius=volume_radius)
     return iterations, sppm

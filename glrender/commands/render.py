@@ -89,7 +89,7 @@ def _saved_kinds() -> dict:
                                  "light_samples", "split", "strategy_depth",
                                  "photons_per_iteration", "iterations", "caustic_photons",
                                  "knn", "light_paths", "light_vertex_cache"), int)
-    kinds.update(dict.fromkeys(("clamp", "initial_radius", "alpha", "radius"), float))
+    kinds.update(dict.fromkeys(("clamp", "initial_radius", "alpha", "radius", "volume_radius"), float))
     kinds.update(rr=str, strategy_images=str, crop=str | list, final_gather=bool,
                  sampler=tuple(SAMPLER_KINDS), integrator=tuple(INTEGRATORS),
                  strategy=tuple(STRATEGIES), kernel=("uniform", "cone", "epanechnikov"),
