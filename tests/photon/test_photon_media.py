@@ -13,9 +13,10 @@ below that noise (a few percent of the blocks' means here: 1-2% in haze), and th
 mean within REGION_BIAS of the reference's. Mutations that these tests fail: the ball's
 (4/3) pi r^3 replaced by pi r^3 in SPPM or in the photon lookup, SPPM's volume deposits or
 the photon maps' volume photons dropped, photons' power divided by sigma_t for sigma_s,
-the phase function's directions reversed, and SPPM's flux rescaled by the area's ratio for
-the ball's. The photon integrator's default radius is too large beside the fog ball
-(test04: its error only has to fall). Separate tests check that volume photons are stored
+the phase function's directions reversed, SPPM's flux rescaled by the area's ratio for
+the ball's, a grid's constant albedo taken for its sigma_s, and a chromatic medium's
+events weighted channel by channel instead of by spectral MIS (test03). The photon integrator's default radius is too large beside the fog ball
+(test05: its error only has to fall). Separate tests check that volume photons are stored
 and deposited at all: an albedo-0 fog stores none and deposits nothing, and a point light
 inside fog with no surface at all renders the path tracer's glow.
 """
@@ -38,7 +39,7 @@ DEPTH = 6
 NOISE_RATIO = 2.0
 BLOCK = 4                # pixels along a block's side
 MIN_BLOCK_PIXELS = 4     # a block's masked pixels at least
-REGION_BIAS = 0.06       # SPPM in the fog ball at 64 iterations: -4% (its boundary, test04)
+REGION_BIAS = 0.06       # SPPM in the fog ball at 64 iterations: -4% (its boundary, test05)
 
 
 def fog_ball(albedo=0.95) -> m.Scene:
@@ -196,8 +197,35 @@ def test02_sppm_converges_to_the_path_tracer_in_haze(gl_ctx):
     check_converges(runs, ref, ref_var, unlit(ref), "sppm haze")
 
 
+def chromatic_grid_fog() -> m.Scene:
+    """tests/render's fog ball over a floor with a chromatic heterogeneous medium (a grid
+    with a bump, sigma_t differing per channel, albedo (0.9, 0.7, 0.5), g = 0.5) at SIZE x
+    SIZE pixels: delta tracking and spectral MIS over hero channels."""
+    import sys
+    sys.path.insert(0, str(ROOT / "tests" / "render"))
+    from test_media_path import fog_over_floor
+
+    scene = fog_over_floor(True)
+    scene.film = replace(scene.film, width=SIZE, height=SIZE)
+    return scene
+
+
+def test03_sppm_converges_in_a_chromatic_grid(gl_ctx):
+    """Each channel's photons weighted by spectral MIS and divided by the grid's sigma_s
+    where they scatter: SPPM converges to the path tracer per channel (the ratio and
+    bias over all three channels' block means)."""
+    scene = chromatic_grid_fog()
+    ref, ref_var = path_reference(scene)
+    runs, volume = sppm_runs(scene, [4, 16, 64], volume_radius=0.1)
+    assert volume.sum() > 20
+    check_converges(runs, ref, ref_var, volume, "sppm chromatic grid")
+    for c in range(3):
+        got = runs[-1].mean(axis=0)[volume][:, c].mean() / ref[volume][:, c].mean() - 1
+        assert abs(got) < REGION_BIAS, (c, got)
+
+
 @pytest.mark.slow
-def test03_photon_converges_to_the_path_tracer_in_haze(gl_ctx):
+def test04_photon_converges_to_the_path_tracer_in_haze(gl_ctx):
     """The photon integrator with 4x more photons each time (its default radii: 64 photons
     around a typical one, on surfaces and in the haze)."""
     scene = haze()
@@ -207,7 +235,7 @@ def test03_photon_converges_to_the_path_tracer_in_haze(gl_ctx):
 
 
 @pytest.mark.slow
-def test04_photon_error_falls_in_a_fog_ball(gl_ctx):
+def test05_photon_error_falls_in_a_fog_ball(gl_ctx):
     """In the fog ball the default radius (64 photons in a ball) is large beside the fog
     (0.35): the balls near its boundary reach out of it and find no photons there, a bias
     that falls with the radius as the photons grow (-12%, -7%, -6% in the fog's pixels at
@@ -232,11 +260,11 @@ def glass_over_fog() -> m.Scene:
 
 
 @pytest.mark.slow
-def test05_a_volumetric_caustic(gl_ctx):
+def test06_a_volumetric_caustic(gl_ctx):
     """Light focused by glass into fog: the caustic map holds volume photons, all of them
     caustic (through delta surfaces alone) and inside the fog ball, and the photon
     integrator's error in the fog's pixels falls with the photons toward the path tracer's
-    image (the fog ball's boundary bias as in test04: -19%, -12%, -8%; without the caustic
+    image (the fog ball's boundary bias as in test05: -19%, -12%, -8%; without the caustic
     map's volume photons -25%, -18%, -15%, above the bound)."""
     scene = glass_over_fog()
     r = PhotonRenderer(scene, photon=PhotonSettings(photons=1 << 15), seed=1, max_depth=DEPTH)
@@ -259,7 +287,7 @@ def test05_a_volumetric_caustic(gl_ctx):
     assert abs(bias[-1]) < 0.12, summary
 
 
-def test06_black_fog_stores_and_deposits_no_volume_photon(gl_ctx):
+def test07_black_fog_stores_and_deposits_no_volume_photon(gl_ctx):
     """Albedo 0: photons are absorbed where they would scatter, so the photon maps hold no
     volume photon and no SPPM visible point in the fog receives any flux; the fog still
     has visible points (camera rays scatter there, with zero weight)."""
@@ -285,7 +313,7 @@ def test06_black_fog_stores_and_deposits_no_volume_photon(gl_ctx):
         r.release()
 
 
-def test07_a_light_inside_fog_without_surfaces(gl_ctx):
+def test08_a_light_inside_fog_without_surfaces(gl_ctx):
     """A point light inside fog and no surface: everything the camera sees is volume
     photons (direct light by next-event estimation too): SPPM and photon mapping with
     direct light from the photons alone render the glow the path tracer does."""
@@ -303,7 +331,7 @@ def test07_a_light_inside_fog_without_surfaces(gl_ctx):
         assert abs(mean - ref.mean()) < 4 * sigma + 0.05 * ref.mean(), (label, mean, ref.mean(), sigma)
 
 
-def test08_what_the_photon_integrators_still_refuse(gl_ctx):
+def test09_what_the_photon_integrators_still_refuse(gl_ctx):
     """The photon integrators render media; the others that do not still refuse in one line."""
     scene = fog_ball()
     with pytest.raises(UsageError, match=r"participating media are rendered by --integrator path, direct, sppm or photon"):
