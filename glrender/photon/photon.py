@@ -358,7 +358,8 @@ class PhotonRenderer(Renderer):
 
     def _photon_inputs(self) -> list[tuple[str, bytes]]:
         p = self.photon
-        settings = ("photon", self.photons, p.radius, p.knn, p.kernel, p.final_gather, p.direct)
+        settings: tuple[Any, ...] = ("photon", self.photons, p.radius, p.knn, p.kernel,
+                                     p.final_gather, p.direct)
         if p.volume_radius is not None:
             settings += (p.volume_radius,)
         return [("photon map settings", repr(settings).encode()),

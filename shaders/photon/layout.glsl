@@ -17,7 +17,9 @@ layout(std140, binding = UBO_PHOTON_PARAMS) uniform PhotonParams {
 } u_photon;
 
 // ---- storage blocks (std430) ----------------------------------------------------------
-// 8: visible points' positions per pixel: xyz, w = camera segments to the point (0: none).
+// 8: visible points' positions per pixel: xyz, w = camera segments to the point (0: none;
+// kMedia: minus the camera segments for a point in a medium, whose records below hold
+// (wo, the medium as int bits), zeros, zeros and (beta, 0)).
 layout(std430, binding = SSBO_VP_POSITION) buffer VisiblePositions { vec4 vp_position[]; };
 
 // 9: what the gather needs of each visible point, two records per pixel:
