@@ -126,12 +126,13 @@ def build_point_grid(positions: np.ndarray, radius: float) -> PointGrid:
 
 
 def typical_radius(positions: np.ndarray, k: int, queries: int = 128, subset: int = 1 << 15,
-                   dims: int = 2) -> float:
+                   dims: int = 2, quantile: float = 0.5) -> float:
     """The radius of a disk around a typical point of ``positions`` (N, 3) that holds ``k``
     of them: the median over ``queries`` points (a fixed pseudo-random choice) of the
     distance to the k-th nearest, found among ``subset`` of the points and scaled to all
     of them (a surface density: the count grows with r^2; ``dims`` 3: a ball's in a volume,
-    r^3). 0 for fewer than 2 points."""
+    r^3); ``quantile``: that quantile of the distances instead of the median. 0 for fewer
+    than 2 points."""
     n = len(positions)
     if n < 2:
         return 0.0
@@ -145,4 +146,5 @@ def typical_radius(positions: np.ndarray, k: int, queries: int = 128, subset: in
     # the query itself may be in the subset at distance 0: take the kk-th after it
     dk = np.sqrt(np.partition(d2, kk, axis=1)[:, kk].astype(np.float64))
     ratio = k * scale / kk
-    return float(np.median(dk) * (math.sqrt(ratio) if dims == 2 else ratio ** (1.0 / dims)))
+    typical = np.median(dk) if quantile == 0.5 else np.quantile(dk, quantile)
+    return float(typical * (math.sqrt(ratio) if dims == 2 else ratio ** (1.0 / dims)))

@@ -16,7 +16,7 @@ the photon maps' volume photons dropped, photons' power divided by sigma_t for s
 the phase function's directions reversed, SPPM's flux rescaled by the area's ratio for
 the ball's, a grid's constant albedo taken for its sigma_s, and a chromatic medium's
 events weighted channel by channel instead of by spectral MIS (test03). The photon integrator's default radius is too large beside the fog ball
-(test05: its error only has to fall). Separate tests check that volume photons are stored
+(test06: its error only has to fall). Separate tests check that volume photons are stored
 and deposited at all: an albedo-0 fog stores none and deposits nothing, and a point light
 inside fog with no surface at all renders the path tracer's glow.
 """
@@ -39,7 +39,7 @@ DEPTH = 6
 NOISE_RATIO = 2.0
 BLOCK = 4                # pixels along a block's side
 MIN_BLOCK_PIXELS = 4     # a block's masked pixels at least
-REGION_BIAS = 0.06       # SPPM in the fog ball at 64 iterations: -4% (its boundary, test05)
+REGION_BIAS = 0.06       # SPPM in the fog ball at 64 iterations: -4% (its boundary, test06)
 
 
 def fog_ball(albedo=0.95) -> m.Scene:
@@ -235,10 +235,24 @@ def test04_photon_converges_to_the_path_tracer_in_haze(gl_ctx):
 
 
 @pytest.mark.slow
-def test05_photon_error_falls_in_a_fog_ball(gl_ctx):
+def test05_photon_converges_in_open_fog(gl_ctx):
+    """Fog around the camera in an open scene (tests/parity's medium-camera: a floor, a
+    sphere and an area light in fog of sigma_t 0.15): most volume photons wander far from
+    what the camera sees, and the default radius is taken where they are dense (at the
+    median it was 1.2, its lookups overran their candidate bound and the image was 23%
+    dark)."""
+    scene = glrender.load(ROOT / "tests" / "parity" / "scenes" / "medium-camera.xml")
+    scene.film = m.Film(width=SIZE, height=SIZE, filter="box")
+    ref, ref_var = path_reference(scene, spp=256)
+    runs = photon_runs(scene, [1 << 12, 1 << 14, 1 << 16], spp=16)
+    check_converges(runs, ref, ref_var, unlit(ref), "photon open fog")
+
+
+@pytest.mark.slow
+def test06_photon_error_falls_in_a_fog_ball(gl_ctx):
     """In the fog ball the default radius (64 photons in a ball) is large beside the fog
     (0.35): the balls near its boundary reach out of it and find no photons there, a bias
-    that falls with the radius as the photons grow (-12%, -7%, -6% in the fog's pixels at
+    that falls with the radius as the photons grow (-11%, -6%, -5% in the fog's pixels at
     2^14, 2^16, 2^18 photons; -2.5% with a radius of 0.02 and 2^20 photons), far above
     the noise of block means here. The MSE and the bias must fall at each step."""
     scene = fog_ball()
@@ -260,12 +274,12 @@ def glass_over_fog() -> m.Scene:
 
 
 @pytest.mark.slow
-def test06_a_volumetric_caustic(gl_ctx):
+def test07_a_volumetric_caustic(gl_ctx):
     """Light focused by glass into fog: the caustic map holds volume photons, all of them
     caustic (through delta surfaces alone) and inside the fog ball, and the photon
     integrator's error in the fog's pixels falls with the photons toward the path tracer's
-    image (the fog ball's boundary bias as in test05: -19%, -12%, -8%; without the caustic
-    map's volume photons -25%, -18%, -15%, above the bound)."""
+    image (the fog ball's boundary bias as in test06: -17%, -10%, -7%; without the caustic
+    map's volume photons -23%, -17%, -15%, above the bound)."""
     scene = glass_over_fog()
     r = PhotonRenderer(scene, photon=PhotonSettings(photons=1 << 15), seed=1, max_depth=DEPTH)
     try:
@@ -287,7 +301,7 @@ def test06_a_volumetric_caustic(gl_ctx):
     assert abs(bias[-1]) < 0.12, summary
 
 
-def test07_black_fog_stores_and_deposits_no_volume_photon(gl_ctx):
+def test08_black_fog_stores_and_deposits_no_volume_photon(gl_ctx):
     """Albedo 0: photons are absorbed where they would scatter, so the photon maps hold no
     volume photon and no SPPM visible point in the fog receives any flux; the fog still
     has visible points (camera rays scatter there, with zero weight)."""
@@ -313,7 +327,7 @@ def test07_black_fog_stores_and_deposits_no_volume_photon(gl_ctx):
         r.release()
 
 
-def test08_a_light_inside_fog_without_surfaces(gl_ctx):
+def test09_a_light_inside_fog_without_surfaces(gl_ctx):
     """A point light inside fog and no surface: everything the camera sees is volume
     photons (direct light by next-event estimation too): SPPM and photon mapping with
     direct light from the photons alone render the glow the path tracer does."""
@@ -331,7 +345,7 @@ def test08_a_light_inside_fog_without_surfaces(gl_ctx):
         assert abs(mean - ref.mean()) < 4 * sigma + 0.05 * ref.mean(), (label, mean, ref.mean(), sigma)
 
 
-def test09_what_the_photon_integrators_still_refuse(gl_ctx):
+def test10_what_the_photon_integrators_still_refuse(gl_ctx):
     """The photon integrators render media; the others that do not still refuse in one line."""
     scene = fog_ball()
     with pytest.raises(UsageError, match=r"participating media are rendered by --integrator path, direct, sppm or photon"):
