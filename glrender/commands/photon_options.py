@@ -32,9 +32,9 @@ def add_arguments(parser: Any) -> None:
                    help="density estimation kernel over each search disk (default: uniform)")
     g.add_argument("--volume-radius", type=float, default=None, metavar="R",
                    help="sppm: initial search radius of points in participating media (default: 3 "
-                        "times --initial-radius's default); photon: lookup radius of the volume "
-                        "photons (default: --radius, or the radius holding 64 of them around "
-                        "those in their denser part)")
+                        "times --initial-radius, at most 3%% of the scene's radius); photon: lookup "
+                        "radius of the volume photons (default: --radius, or the radius holding 64 "
+                        "of them around those in their denser part)")
     g.add_argument("--iterations", type=int, default=None, metavar="N",
                    help="sppm, vcm: iterations (one camera sample per pixel and a photon or light "
                         "pass each; default: the scene's spp)")

@@ -62,8 +62,13 @@ MAX_RECORDS = (128 << 20) // pl.BYTES_PER_RECORD - 1   # emission records fit on
 DEFAULT_RADIUS_PIXELS = 2.0      # default initial radius, in pixel footprints at the scene's centre
 # default initial radius of visible points in media over the surfaces' initial radius: a ball
 # holds far fewer photons than a disk of the same radius (on scenes/cornell-fog, 256x256,
-# 3x makes the fog as smooth at 64 iterations as the walls; 1x leaves it grainy)
+# 3x makes the fog as smooth at 64 iterations as the walls; 1x leaves it grainy) ...
 VOLUME_RADIUS_FACTOR = 3.0
+# ... and at most this fraction of the scene's bounding sphere's radius: on a small image the
+# pixel footprint is large, and a ball's radius shrinks slowly (iterations^((alpha - 1) / 3));
+# cornell-fog at 24x24 pixels: 0.70 beside its fog ball's 0.35, the fog 36% dark after 256
+# iterations; capped (0.052), 7%
+VOLUME_RADIUS_SCENE = 0.03
 
 
 def footprint_radius(scene: m.Scene, sphere_bounds: Any, width: int, height: int,
@@ -92,7 +97,7 @@ class SppmSettings:
     direct: str = "nee"    # direct light by next-event estimation, or "photons" (density estimation)
     photon_view: bool = False   # also render the photon-map view (the "photons" AOV)
     kernel: str = "uniform"     # density estimation kernel: uniform, cone or epanechnikov
-    volume_radius: float | None = None   # initial radius of visible points in media (None: 3x initial_radius)
+    volume_radius: float | None = None   # initial radius of visible points in media (None: VOLUME_RADIUS_*)
 
     def __post_init__(self) -> None:
         if self.kernel not in pl.KERNELS:
@@ -162,8 +167,10 @@ class SppmRenderer:
         if record_emission and self.photons_per_iteration > MAX_RECORDS:
             raise UsageError(f"photons per iteration: at most {MAX_RECORDS} when recording emission")
         self.initial_radius = float(self.sppm.initial_radius or self._default_radius())
+        # (a scene without shapes has no size to bound it by: its fog fills all space)
+        cap = VOLUME_RADIUS_SCENE * float(self.base.packed.sphere_bounds[1]) if scene.shapes else math.inf
         self.initial_volume_radius = float(self.sppm.volume_radius
-                                           or VOLUME_RADIUS_FACTOR * self.initial_radius)
+                                           or min(VOLUME_RADIUS_FACTOR * self.initial_radius, cap))
         self._compile()
         self._allocate()
         self.reset()
