@@ -140,7 +140,7 @@ def test06_what_media_refuse(gl_ctx):
     """Integrators and settings that do not render media yet, and an albedo grid that is not
     the sigma_t grid's, say so in one line."""
     scene = fog_sphere()
-    for options in ({"integrator": "vcm"}, {"light_samples": 2}):
+    for options in ({"integrator": "ao"}, {"light_samples": 2}):
         with pytest.raises(UsageError, match=r"participating media are rendered by --integrator path"):
             glrender.render(scene, spp=1, progress=False, **options)
     odd = fog_sphere()
