@@ -113,10 +113,12 @@ def equal_time(tmp: Path, args, integrators, extra=None, table=None):
     eff_window and what ``extra(info)`` adds from the config's JSON output. An integrator
     "name:key=value,..." renders with those of its own settings (integers), labelled
     "glrender name (key value, ...)". ``table``: name -> (TOML, XML or None, reference,
-    reference variance or None), by default this module's scenes."""
+    reference variance or None[, the window of mse_window: by default CAUSTIC_WINDOW]), by
+    default this module's scenes."""
     table = scenes(tmp) if table is None else table
     for name in args.scenes.split(","):
-        toml, xml, ref_path, ref_var = table[name]
+        toml, xml, ref_path, ref_var, *rest = table[name]
+        window = rest[0] if rest else CAUSTIC_WINDOW
         ref = np.load(ref_path).astype(np.float64)[..., :3]
         configs = [(label_of(k), "glrender", k) for k in integrators]
         if xml is not None:
@@ -137,7 +139,7 @@ def equal_time(tmp: Path, args, integrators, extra=None, table=None):
                     device = info["device"]
                 img = np.load(out).astype(np.float64)[..., :3]
                 mse = mse_of(img, ref, ref_var)
-                mse_w = mse_of(img, ref, ref_var, CAUSTIC_WINDOW)
+                mse_w = mse_of(img, ref, ref_var, window)
                 results.setdefault(label, []).append({
                     "seconds": info["seconds"], "spp": info["spp"], "mse": mse, "mse_window": mse_w,
                     "spp_s": info["spp"] / info["seconds"], "mean": float(img.mean() / ref.mean() - 1),

@@ -1,6 +1,7 @@
 """The media scenes' reference images, k independent seeds rendered for a fixed time each;
 their mean is the reference and the spread between them its per-pixel standard error.
-cornell-fog: Mitsuba 3's volpath (llvm_ad_rgb, independent sampler) on its Mitsuba XML.
+cornell-fog, volumetric-caustic and window-fog: Mitsuba 3's volpath (llvm_ad_rgb,
+independent sampler; volpathmis where the scene's XML names it) on its Mitsuba XML.
 smoke: glrender's path tracer (Sobol'), checked against Mitsuba's volpath by the parity
 suite's grid case: Mitsuba takes about 1 s per sample per pixel on the smoke at 256x256 on
 2 cores, so a reference of many times the benchmark's samples would take hours. Writes
@@ -23,8 +24,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from cornell_vs_mitsuba import GLRENDER_SCRIPT, LLVM, MITSUBA_SCRIPT, ROOT, run  # noqa: E402
 
 OUT = ROOT / "benchmarks" / "refs"
-SCENES = {"cornell-fog": ROOT / "scenes/cornell-fog/scene.xml", "smoke": ROOT / "scenes/smoke/scene.xml"}
-MITSUBA_REFERENCE = {"cornell-fog"}     # the others: glrender's path tracer
+SCENES = {name: ROOT / "scenes" / name / "scene.xml"
+          for name in ("cornell-fog", "smoke", "volumetric-caustic", "window-fog")}
+MITSUBA_REFERENCE = {"cornell-fog", "volumetric-caustic", "window-fog"}   # smoke: glrender's path tracer
 
 
 def main() -> None:

@@ -24,7 +24,8 @@ from glrender.gpu.bindings import UBO_VCM_PARAMS
 from glrender.render.renderer import Renderer, settings_from_scene
 from glrender.vcm.layout import VCM_PARAMS
 
-from bidir_scenes import MEDIA, caustic, directional, environment, glossy, point_light
+from bidir_scenes import (MEDIA, caustic, directional, environment, fog_glossy, fog_in_glass, glossy,
+                          point_light, smoke_grid)
 
 KERNEL = """#version 450
 layout(local_size_x = 64) in;
@@ -192,9 +193,13 @@ def weight_sums(gl_ctx, scene, heuristic, n=1 << 14, vcm_mode=0, eta=0.0, lens=1
     return res
 
 
+# medium vertices under the power heuristic (the balance one differs only in the exponent)
+CASES01 = [(make, h) for make in (glossy, caustic, point_light, environment, directional)
+           for h in ("mis-power", "mis-balance")] + [(make, "mis-power") for make in MEDIA]
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("heuristic", ["mis-power", "mis-balance"])
-@pytest.mark.parametrize("make", [glossy, caustic, point_light, environment, directional, *MEDIA])
+@pytest.mark.parametrize("make, heuristic", CASES01, ids=lambda x: getattr(x, "__name__", x))
 def test01_weights_sum_to_one(gl_ctx, make, heuristic):
     res = weight_sums(gl_ctx, make(16), heuristic)
     made = res[:, 1] > 0
@@ -206,9 +211,13 @@ def test01_weights_sum_to_one(gl_ctx, make, heuristic):
         assert (res[made, 3] >= 2).sum() > 200
 
 
+# media: vcm (its merges at surfaces beside connections at medium vertices) on three scenes
+CASES02 = [(make, mode) for make in (glossy, caustic, point_light, environment, directional)
+           for mode in (1, 2)] + [(make, 1) for make in (fog_glossy, fog_in_glass, smoke_grid)]
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("mode", [1, 2])
-@pytest.mark.parametrize("make", [glossy, caustic, point_light, environment, directional, *MEDIA])
+@pytest.mark.parametrize("make, mode", CASES02, ids=lambda x: getattr(x, "__name__", str(x)))
 def test02_vcm_weights_sum_to_one(gl_ctx, make, mode):
     """The same paths under vertex connection and merging's weights: every connection
     strategy and a merge at every inner vertex where the path scatters by a non-delta lobe
