@@ -71,8 +71,8 @@ def main() -> None:
 
 def write_results(runs, args, load_start, load_end) -> None:
     device = runs[-1][2]
-    lines = [f"{MARKER}: the path tracer vs Mitsuba 3's volpath (equal time)", "",
-             conditions(commit(), device, args, (load_start[0], load_end[0]), known="both scenes",
+    lines = [f"{MARKER}: the path tracer, bdpt, vcm and sppm vs Mitsuba 3's volpath (equal time)", "",
+             conditions(commit(), device, args, (load_start[0], load_end[0]), known="every scene",
                         window=False) +
              ". The 'Mitsuba' rows are its volpath integrator (the scenes' XML). Rerun: `.venv/bin/python benchmarks/media.py` "
              "(references: `benchmarks/media_reference.py`).", "",
