@@ -300,10 +300,8 @@ vec3 segment_transmittance(Vertex a, Vertex b, uint ignore) {
     float dist = length(w);
     if (!(dist > 0.0)) return vec3(0.0);
     w /= dist;
-    if (kMedia)
-        return scene_transmittance_mis(o, w, dist * (1.0 - kShadowEpsilon), g_time, ignore,
-                                       vertex_exit_medium(a, w), g_connection_tr_mis);
-    return scene_occluded(o, w, dist * (1.0 - kShadowEpsilon), g_time, ignore) ? vec3(0.0) : vec3(1.0);
+    return ray_transmittance(o, w, dist * (1.0 - kShadowEpsilon), g_time, ignore, vertex_exit_medium(a, w),
+                             g_connection_tr_mis);
 }
 
 // s = 0: the camera subpath's vertex t - 1 lies on an area light or at infinity.
@@ -340,13 +338,8 @@ vec3 strategy_light_sample(int t, inout SamplerState smp) {
     if (max_component(L) <= 0.0) return vec3(0.0);
     vec3 o = vertex_on_surface(pt) ? offset_ray_origin(pt.p, pt.ng, ls.wi) : pt.p;
     float t_max = isinf(ls.dist) ? kInfinity : ls.dist * (1.0 - kShadowEpsilon);
-    if (kMedia) {
-        L *= scene_transmittance_mis(o, ls.wi, t_max, g_time, l.info.z, vertex_exit_medium(pt, ls.wi),
-                                     g_connection_tr_mis);
-        if (max_component(L) <= 0.0) return vec3(0.0);
-    } else if (scene_occluded(o, ls.wi, t_max, g_time, l.info.z)) {
-        return vec3(0.0);
-    }
+    L *= ray_transmittance(o, ls.wi, t_max, g_time, l.info.z, vertex_exit_medium(pt, ls.wi), g_connection_tr_mis);
+    if (max_component(L) <= 0.0) return vec3(0.0);
     vec3 n = vec3(0.0);
     if (light_is_area(l)) n = l.info.x == kLightSphere ? normalize(q - l.p.xyz) : l.n.xyz;
     Vertex light = vertex_point(infinite ? kVertexInfinite : kVertexLight, q, n, vec3(1.0));

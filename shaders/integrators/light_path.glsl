@@ -70,7 +70,7 @@ bool camera_visible(vec3 x, vec3 ng, CameraConnection c, float time, uint ignore
 // The transmittance of that segment: 1 or 0 without media, with media (kMedia) theirs
 // along it through null surfaces, starting in medium m.
 vec3 camera_transmittance(vec3 x, vec3 ng, CameraConnection c, float time, uint ignore, int m) {
-    if (!kMedia) return camera_visible(x, ng, c, time, ignore) ? vec3(1.0) : vec3(0.0);
     vec3 o = dot(ng, ng) > 0.0 ? offset_ray_origin(x, ng, c.wi) : x;
-    return scene_transmittance(o, c.wi, c.dist * (1.0 - kShadowEpsilon), time, ignore, m);
+    float unused;
+    return ray_transmittance(o, c.wi, c.dist * (1.0 - kShadowEpsilon), time, ignore, m, unused);
 }

@@ -357,6 +357,14 @@ vec3 scene_transmittance_mis(vec3 o, vec3 d, float t_max, float time, uint ignor
     return vec3(0.0);
 }
 
+// The transmittance along o + t d over [0, t_max]: with media (kMedia) scene_transmittance_mis
+// from medium m, without them 1 or 0 by a visibility ray (tr_mis 1).
+vec3 ray_transmittance(vec3 o, vec3 d, float t_max, float time, uint ignore, int m, out float tr_mis) {
+    if (kMedia) return scene_transmittance_mis(o, d, t_max, time, ignore, m, tr_mis);
+    tr_mis = 1.0;
+    return scene_occluded(o, d, t_max, time, ignore) ? vec3(0.0) : vec3(1.0);
+}
+
 vec3 scene_transmittance(vec3 o, vec3 d, float t_max, float time, uint ignore, int m) {
     float unused;
     return scene_transmittance_mis(o, d, t_max, time, ignore, m, unused);
