@@ -6,7 +6,7 @@ import numpy as np
 
 VCM_PARAMS = np.dtype([
     ("paths", "<u4", 4),       # light paths, vertex capacity, merge point capacity, splat (1)
-    ("grid_size", "<u4", 4),   # cells xyz, hash table size
+    ("grid_size", "<u4", 4),   # 0, 0, 0 (unbounded cells), hash table size
     ("grid_lo", "<f4", 4),     # corner xyz, cell edge
     ("merge", "<f4", 4),       # radius, radius^2, eta = pi r^2 N, 1 / eta
     ("lens", "<f4", 4),        # N / (W H), W H / N (the lens connections' density, splat weight)
@@ -23,7 +23,8 @@ def vertex_bytes(normal_shadowing: bool, media: bool = False) -> int:
 
 MERGE_KEY_BYTES = 16       # position and (light path * 32 + vertex index)
 MERGE_DATA_BYTES = 64      # kVcmMergeTexels records: direction and density, throughput and
-                           # area factor, normal and light-side sum, strategy flag and segments
+                           # area factor, normal and light-side sum, strategy flag, segments
+                           # and the vertex's info word (kind and medium)
 MERGE_SORT_BYTES = 8       # its key and its grid cell's hash, for the host's two sorts
 MERGE_BYTES = MERGE_KEY_BYTES + MERGE_DATA_BYTES + MERGE_SORT_BYTES
 PATH_BYTES = 8             # per light path: first vertex slot, vertex count

@@ -322,13 +322,13 @@ class VcmRenderer(Renderer):
     def _grid_geometry(self, r: float) -> None:
         """The merge grid of radius r into the parameter block, before the light pass hashes
         its merge points into it: cells of edge 2r (with the slack of the photon grids, so a
-        float32 lookup near a cell boundary finds what it should) over a box around the
-        scene's bounding sphere, a hash table of one entry per merge point of capacity."""
+        float32 lookup near a cell boundary finds what it should) counted from a corner
+        outside the scene's bounding sphere and unbounded (merge points in a medium around
+        the scene lie anywhere), a hash table of one entry per merge point of capacity."""
         center, radius = self.packed.sphere_bounds
         cell = 2.0 * r * (1.0 + GRID_SLACK)
         lo = np.asarray(center, np.float64) - radius - cell
-        size = min(int((2.0 * radius + 2.0 * cell) // cell) + 1, 1 << 30)
-        self._block["grid_size"] = (size, size, size, self.merge_capacity)
+        self._block["grid_size"] = (0, 0, 0, self.merge_capacity)
         self._block["grid_lo"] = (*lo, cell)
 
     def _build_grid(self, merges: int) -> None:

@@ -254,16 +254,23 @@ float mis_ratio(float pdf_rev, float pdf_fwd) {
 }
 
 // Vertex connection and merging (kVcmMode 1 and 2, integrators/vcm.glsl) adds a merge
-// strategy at every vertex x_j that both subpaths can reach (a non-delta surface point,
-// not on the light): its density is the connection strategy's that ends the camera
-// subpath at x_j times p_light(x_j) eta, eta = pi r^2 (light paths) (Georgiev et al. 2012,
-// eq. 10-12), so the recurrence adds (p_fwd(x_j) eta)^e beside each connection's term
-// (VM_TERM), and the merges-only mode (2) keeps of the connections only s = 0, the camera
-// subpath reaching a light (VC_ON, VC_AT). In bdpt (mode 0) the terms are not there at all.
+// strategy at every vertex x_j that both subpaths can reach (a non-delta surface point or a
+// scattering event in a medium, not on the light): its density is the connection
+// strategy's that ends the camera subpath at x_j times p_light(x_j) eta, eta = pi r^2 (light
+// paths) on surfaces (Georgiev et al. 2012, eq. 10-12), so the recurrence adds
+// (p_fwd(x_j) eta)^e beside each connection's term (VM_TERM, given x_j's info word), and the
+// merges-only mode (2) keeps of the connections only s = 0, the camera subpath reaching a
+// light (VC_ON, VC_AT). In bdpt (mode 0) the terms are not there at all.
+// In a medium the merge is over a ball, eta = (4/3) pi r^3 (light paths), and the light
+// subpath's volume density of x_j has a factor sigma_t(x_j) that its stored densities leave
+// out (it cancels in their ratios, not here): the weights take the medium's mean extinction
+// (MediumData.majorant.y), as its MIS transmittance does (media/medium.glsl
+// medium_mis_transmittance), a deterministic function of the path, so that they still sum
+// to 1.
 #if GLRENDER_VCM_MODE != 0
-#define VM_TERM(mergeable, pdf_fwd) + ((mergeable) ? vcm_merge_ratio(pdf_fwd) : 0.0)
+#define VM_TERM(mergeable, info, pdf_fwd) + ((mergeable) ? vcm_merge_ratio(info, pdf_fwd) : 0.0)
 #else
-#define VM_TERM(mergeable, pdf_fwd)
+#define VM_TERM(mergeable, info, pdf_fwd)
 #endif
 #if GLRENDER_VCM_MODE == 2
 #define VC_ON 0.0
@@ -289,11 +296,13 @@ float mis_ratio(float pdf_rev, float pdf_fwd) {
 #endif
 
 // Whether a vertex of this info word can be merged at: a surface point with a non-delta
-// BSDF (a light subpath's first vertex, on the light, is never one: callers check). At a
-// subpath's end that is all (the merge evaluates the BSDF there); a vertex inside a path
-// (info_merge_inside) must also have scattered it by a non-delta lobe.
+// BSDF or a scattering event in a medium (a light subpath's first vertex, on the light, is
+// never one: callers check). At a subpath's end that is all (the merge evaluates the BSDF
+// or phase function there); a vertex inside a path (info_merge_inside) must also have
+// scattered it by a non-delta lobe.
 bool info_mergeable(uint info) {
-    return info_kind(info) == kVertexSurface && info_connectible(info);
+    uint kind = info_kind(info);
+    return (kind == kVertexSurface || (kMedia && kind == kVertexMedium)) && info_connectible(info);
 }
 
 bool info_merge_inside(uint info) {
@@ -301,10 +310,16 @@ bool info_merge_inside(uint info) {
 }
 
 #if GLRENDER_VCM_MODE != 0
-// (p eta)^e for the merge at a vertex of forward density p (a delta density counts as 1,
-// as in mis_ratio).
-float vcm_merge_ratio(float pdf_fwd) {
-    float r = u_vcm.merge.z * (pdf_fwd != 0.0 ? pdf_fwd : 1.0);
+// (p eta)^e for the merge at a vertex of info word `info` and forward density p (a delta
+// density counts as 1, as in mis_ratio; at a medium vertex eta is the ball's times the
+// medium's mean extinction, see VM_TERM).
+float vcm_merge_ratio(uint info, float pdf_fwd) {
+    float eta = u_vcm.merge.z;
+#if GLRENDER_MEDIA
+    if (info_kind(info) == kVertexMedium)
+        eta *= (4.0 / 3.0) * u_vcm.merge.x * u_media.media[info_medium(info)].majorant.y;
+#endif
+    float r = eta * (pdf_fwd != 0.0 ? pdf_fwd : 1.0);
     return kStrategy == kStrategyMisBalance ? r : r * r;
 }
 
@@ -349,7 +364,7 @@ void bdpt_mis_prepare_camera(int n_camera) {
         LOOP_TICK();
         bool valid = !info_delta(g_camera[i].info) && !info_delta(g_camera[i - 1].info);
         c = mis_step(mis_ratio(g_camera[i].pdf_rev, g_camera[i].pdf_fwd),
-                     c + (valid ? VC_CAM(i) : 0.0) VM_TERM(info_merge_inside(g_camera[i].info), g_camera[i].pdf_fwd));
+                     c + (valid ? VC_CAM(i) : 0.0) VM_TERM(info_merge_inside(g_camera[i].info), g_camera[i].info, g_camera[i].pdf_fwd));
         STORE_AT(g_camera_mis, i, c);
     }
 }
@@ -364,7 +379,7 @@ void bdpt_mis_prepare_light(int n_light) {
         LOOP_TICK();
         bool delta_i = info_delta(g_light[i].info);
         l = mis_step(mis_ratio(g_light[i].pdf_rev, g_light[i].pdf_fwd),
-                     l + (!delta_i && !before ? VC_AT(i) : 0.0) VM_TERM(i >= 1 && info_merge_inside(g_light[i].info), g_light[i].pdf_fwd));
+                     l + (!delta_i && !before ? VC_AT(i) : 0.0) VM_TERM(i >= 1 && info_merge_inside(g_light[i].info), g_light[i].info, g_light[i].pdf_fwd));
         STORE_AT(g_light_mis, i, l);
         before = delta_i;
     }
@@ -388,10 +403,10 @@ float camera_side_sum(int t, float pt_rev, float pt_minus_rev, bool merge_pt) {
         float tail = g_camera_mis[max(t - 3, 0)];
         bool valid = !delta_minus && !info_delta(g_camera[t - 3].info);
         inner = mis_step(mis_ratio(pt_minus_rev, g_camera[t - 2].pdf_fwd),
-                         (valid ? VC_CAM(t - 2) : 0.0) VM_TERM(info_merge_inside(g_camera[t - 2].info), g_camera[t - 2].pdf_fwd) + tail);
+                         (valid ? VC_CAM(t - 2) : 0.0) VM_TERM(info_merge_inside(g_camera[t - 2].info), g_camera[t - 2].info, g_camera[t - 2].pdf_fwd) + tail);
     }
     return mis_step(mis_ratio(pt_rev, g_camera[t - 1].pdf_fwd),
-                    (!delta_minus ? VC_CAM(t - 1) : 0.0) VM_TERM(merge_pt && info_mergeable(g_camera[t - 1].info), g_camera[t - 1].pdf_fwd) + inner);
+                    (!delta_minus ? VC_CAM(t - 1) : 0.0) VM_TERM(merge_pt && info_mergeable(g_camera[t - 1].info), g_camera[t - 1].info, g_camera[t - 1].pdf_fwd) + inner);
 }
 
 // MIS weight of strategy (s, t) given the densities its connection changes, the forward
@@ -415,10 +430,10 @@ float bdpt_mis_weight_ends(int s, int t, ConnectionPdfs c, float qs_fwd, bool de
             bool before = s >= 3 ? info_delta(g_light[max(s - 3, 0)].info) : delta_light;
             bool valid = !delta_minus && !before;
             inner = mis_step(mis_ratio(c.qs_minus_rev, g_light[s - 2].pdf_fwd),
-                             (valid ? VC_AT(s - 2) : 0.0) VM_TERM(s >= 3 && info_merge_inside(g_light[max(s - 2, 0)].info), g_light[s - 2].pdf_fwd) + tail);
+                             (valid ? VC_AT(s - 2) : 0.0) VM_TERM(s >= 3 && info_merge_inside(g_light[max(s - 2, 0)].info), g_light[max(s - 2, 0)].info, g_light[s - 2].pdf_fwd) + tail);
         }
         light = mis_step(mis_ratio(c.qs_rev, qs_fwd),
-                         (!delta_minus ? VC_AT(s - 1) : 0.0) VM_TERM(s >= 2 && info_mergeable(g_light[max(s - 1, 0)].info), qs_fwd) + inner);
+                         (!delta_minus ? VC_AT(s - 1) : 0.0) VM_TERM(s >= 2 && info_mergeable(g_light[max(s - 1, 0)].info), g_light[max(s - 1, 0)].info, qs_fwd) + inner);
     }
     return 1.0 / (1.0 + VC_SELF_DIV(t, cam + light));
 }

@@ -8,9 +8,13 @@
 // subpath of the same index) and merges at each of its non-delta surface vertices with
 // the light vertices within the iteration's radius r:
 //     L_merge = beta_camera f(wo, wi_light) beta_light / (pi r^2 N),
-// N the iteration's light paths. Connections and merges share one MIS weight
+// N the iteration's light paths, and at each of its scattering events in a medium with the
+// light subpaths' scattering events in the same medium within the ball of radius r:
+//     L_merge = beta_camera p(wo, wi_light) beta_light / (sigma_s(x_light) (4/3) pi r^3 N)
+// (both subpaths' throughputs carry a scattering coefficient at the merged vertex, the
+// path one). Connections and merges share one MIS weight
 // (integrators/bdpt_vertex.glsl VM_TERM: a merge's density is a connection's times
-// p eta, eta = pi r^2 N), each O(1) from the subpaths' suffix sums and the quantities the
+// p eta, eta = pi r^2 N on surfaces), each O(1) from the subpaths' suffix sums and the quantities the
 // light pass stored with each merge point (vcm_merge_weight). kVcmMode 2 keeps the merges
 // and s = 0 alone (progressive photon mapping under the same weights).
 //
@@ -69,7 +73,10 @@ Vertex vcm_load_vertex(uint slot, out float mis) {
 //   x_q toward x_{q-1} to an area density at x_{q-1} (|cos| / d^2; 1 / d^2 off surfaces,
 //   1 at infinity); a: the light side's sum of ratios beyond x_{q-1} over
 //   (p_fwd(x_{q-1}))^e; ref: 1 when the connection of x_{q-1} to the camera vertex is a
-//   strategy (x_{q-1} not delta, connections on), else 0; segments: q.
+//   strategy (x_{q-1} not delta, connections on), else 0; segments: q; info: x_q's info
+//   word (its kind, a surface or a medium vertex, and its medium).
+// A merge point in a medium (kMedia) has ng = 0 and its throughput over sigma_s(x_q)
+// (media/medium.glsl medium_over_sigma_s).
 struct MergePoint {
     vec3 p;
     vec3 wi;
@@ -80,6 +87,7 @@ struct MergePoint {
     float a;
     float ref;
     int segments;
+    uint info;
 };
 
 void vcm_store_merge(uint index, MergePoint m, uint key) {
@@ -88,7 +96,7 @@ void vcm_store_merge(uint index, MergePoint m, uint key) {
     vcm_merge_data[k] = vec4(m.wi, m.pdf_fwd);
     vcm_merge_data[k + 1u] = vec4(m.beta, m.g);
     vcm_merge_data[k + 2u] = vec4(m.ng, m.a);
-    vcm_merge_data[k + 3u] = vec4(m.ref, float(m.segments), 0.0, 0.0);
+    vcm_merge_data[k + 3u] = vec4(m.ref, float(m.segments), uintBitsToFloat(m.info), 0.0);
 }
 
 // Merge point `index` at position p (the camera pass reads positions in the grid's order).
@@ -96,7 +104,7 @@ MergePoint vcm_load_merge(uint index, vec3 p) {
     uint k = uint(kVcmMergeTexels) * index;
     vec4 a = vcm_merge_data[k], b = vcm_merge_data[k + 1u], c = vcm_merge_data[k + 2u],
          d = vcm_merge_data[k + 3u];
-    return MergePoint(p, a.xyz, a.w, b.xyz, b.w, c.xyz, c.w, d.x, int(d.y));
+    return MergePoint(p, a.xyz, a.w, b.xyz, b.w, c.xyz, c.w, d.x, int(d.y), floatBitsToUint(d.z));
 }
 
 // The merge point of light vertex q >= 1 (mergeable) of the subpath in g_light, after
@@ -110,6 +118,10 @@ MergePoint vcm_merge_point(int q) {
     m.beta = x.beta;
     m.pdf_fwd = x.pdf_fwd;
     m.segments = q;
+    m.info = x.info;
+#if GLRENDER_MEDIA
+    if (vertex_kind(x) == kVertexMedium) m.beta = medium_over_sigma_s(vertex_medium(x), x.p, x.beta);
+#endif
     vec3 w = prev.p - x.p;
     float d2 = dot(w, w);
     m.wi = w * inversesqrt(d2);
@@ -127,7 +139,7 @@ MergePoint vcm_merge_point(int q) {
     float fwd = g_light[q - 1].pdf_fwd;
     bool delta_prev = info_delta(g_light[q - 1].info);
     bool before = q >= 2 ? info_delta(g_light[max(q - 2, 0)].info) : g_light_delta;
-    float rest = (!before && !delta_prev ? VC_AT(q - 1) : 0.0) VM_TERM(q >= 2 && info_merge_inside(g_light[q - 1].info), fwd)
+    float rest = (!before && !delta_prev ? VC_AT(q - 1) : 0.0) VM_TERM(q >= 2 && info_merge_inside(g_light[q - 1].info), g_light[q - 1].info, fwd)
                + (q >= 2 ? g_light_mis[max(q - 2, 0)] : 0.0);
     m.a = rest > 0.0 ? rest / mis_ratio(fwd, 1.0) : 0.0;
     m.ref = !delta_prev ? VC_ON : 0.0;
@@ -250,7 +262,7 @@ vec3 vcm_connect_cache(int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus, in
 // that ends the light subpath at x_{q-1} and the camera subpath at x_{t-1} is the
 // reference (bdpt_mis_weight_ends), the merge's own term (pt_rev eta)^e over the sum.
 float vcm_merge_weight(int t, MergePoint m, float pdf_toward_light, float pt_minus_rev) {
-    float own = vcm_merge_ratio(m.pdf_fwd);
+    float own = vcm_merge_ratio(m.info, m.pdf_fwd);
     float cam = camera_side_sum(t, m.pdf_fwd, pt_minus_rev, false);
     float qs_rev = pdf_toward_light * m.g;
     float light = m.a > 0.0 ? mis_ratio(qs_rev, 1.0) * m.a : 0.0;
@@ -270,16 +282,32 @@ bool vcm_merge_visible(Vertex pt, MergePoint m) {
     return !scene_occluded(o, w / dist, dist * (1.0 - kShadowEpsilon), g_time, kNoPrimitive);
 }
 
-// The merges at camera vertex t - 1 (a mergeable surface vertex): every merge point
-// within the radius in the 2 x 2 x 2 grid cells around it, at most kVcmMergeCandidates
-// visited (the rest counted, vcm_counters[2]). The candidates of the 8 buckets are one
-// loop: a lane that ends a bucket moves on to its next one, so the lanes of a vector
-// wait for the longest total of candidates, not for the longest list of each bucket in
-// turn (the buckets' ranges sit at constant indices, read by unrolled scans).
+// Whether merge point m may merge with camera vertex pt, both within the radius: at a
+// surface, a merge point on it (within a disk, as photon mapping's, photon/photon_gather.glsl:
+// light vertices off it or on a surface facing another way, the other wall of a corner, are
+// not of this surface's density) arriving from its light side; in a medium (kMedia), a
+// scattering event in the same medium.
+bool vcm_merge_matches(Vertex pt, MergePoint m, vec3 d, float r2) {
+    if (kMedia && vertex_kind(pt) == kVertexMedium)
+        return info_kind(m.info) == kVertexMedium && info_medium(m.info) == vertex_medium(pt);
+    float h = dot(d, pt.ng);
+    return info_kind(m.info) == kVertexSurface && h * h <= kDiscThickness * kDiscThickness * r2 &&
+           abs(dot(m.ng, pt.ng)) >= kNormalAgreement && vertex_light_side_valid(pt, m.wi);
+}
+
+// The merges at camera vertex t - 1 (a mergeable vertex): every merge point within the
+// radius in the 2 x 2 x 2 grid cells around it, at most kVcmMergeCandidates visited (the
+// rest counted, vcm_counters[2]). The candidates of the 8 buckets are one loop: a lane that
+// ends a bucket moves on to its next one, so the lanes of a vector wait for the longest
+// total of candidates, not for the longest list of each bucket in turn (the buckets'
+// ranges sit at constant indices, read by unrolled scans).
 vec3 vcm_merge(int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus) {
     uvec4 size = u_vcm.grid_size;
     if (size.w == 0u) return vec3(0.0);
     float r2 = u_vcm.merge.y;
+    // the kernel's normalisation: 1 / (pi r^2 N) over a disk, 1 / ((4/3) pi r^3 N) over a ball
+    bool volume = kMedia && vertex_kind(pt) == kVertexMedium;
+    float kernel = volume ? u_vcm.merge.w * 0.75 / u_vcm.merge.x : u_vcm.merge.w;
     uint buckets[8], begins[8], ends[8];
     grid_buckets(pt.p, u_vcm.grid_lo, size, buckets);
     uint total = 0u;
@@ -311,26 +339,20 @@ vec3 vcm_merge(int t, Vertex pt, VertexBsdf pt_bsdf, Vertex pt_minus) {
             vec4 key = vcm_merge_keys[e];
             vec3 d = key.xyz - pt.p;
             if (dot(d, d) > r2) continue;
-            // a disk on pt's surface, as photon mapping's (photon/photon_gather.glsl): light
-            // vertices off it or on a surface facing another way (the other wall of a
-            // corner) are not of this surface's density
-            float h = dot(d, pt.ng);
-            if (h * h > kDiscThickness * kDiscThickness * r2) continue;
             MergePoint m = vcm_load_merge(floatBitsToUint(key.w), key.xyz);
-            if (abs(dot(m.ng, pt.ng)) < kNormalAgreement || m.segments > max_light_segments ||
-                !vertex_light_side_valid(pt, m.wi)) continue;
+            if (m.segments > max_light_segments || !vcm_merge_matches(pt, m, d, r2)) continue;
             float pdf_light, pdf_back;
-            // f |cos| toward the light vertex over |cos| at the geometric normal: light
-            // vertices land on the geometric surface, their density is per unit of its area
-            // (photon/density.glsl photon_bsdf)
-            float cos_i = abs(dot(m.wi, pt.ng));
+            // at a surface f |cos| toward the light vertex over |cos| at the geometric
+            // normal: light vertices land on the geometric surface, their density is per unit
+            // of its area (photon/density.glsl photon_bsdf); in a medium the phase function
+            float cos_i = volume ? 1.0 : abs(dot(m.wi, pt.ng));
             vec3 f = vertex_f_bsdf(pt, pt_bsdf, pt_minus.p, pt.p + m.wi, false, pdf_light, pdf_back);
             if (max_component(f) <= 0.0 || !(cos_i > 0.0)) continue;
             f /= cos_i;
             if (!vcm_merge_visible(pt, m)) continue;
             float w = vcm_merge_weight(t, m, pdf_light,
                                        solid_angle_to_area(pdf_back, pt, pt_minus) * vertex_tr_mis(pt));
-            vec3 L = pt.beta * f * m.beta * u_vcm.merge.w;
+            vec3 L = pt.beta * f * m.beta * kernel;
             strategy_merge(m.segments, t, L, w);
             sum += L * w;
         }

@@ -12,8 +12,8 @@ layout(std140, binding = UBO_VCM_PARAMS) uniform VcmParams {
     uvec4 paths;       // x: light paths of the iteration, y: vertex capacity, z: merge point
                        // capacity, w: splat the lens connections (1; 0 when an iteration whose
                        // buffers overflowed is traced again)
-    uvec4 grid_size;   // the merge points' grid: xyz cells along each axis, w: hash table size
-                       // (the merge point capacity; 0 in the camera pass: no merge points)
+    uvec4 grid_size;   // the merge points' grid: xyz 0 (unbounded: grid_buckets), w: hash table
+                       // size (the merge point capacity; 0 in the camera pass: no merge points)
     vec4 grid_lo;      // xyz: corner of cell (0, 0, 0), w: cell edge (twice the radius at least)
     vec4 merge;        // x: radius, y: radius^2, z: eta = pi r^2 (light paths), the merges' density
                        // factor in the MIS weights, w: 1 / eta, the merge's kernel normalisation
@@ -64,11 +64,11 @@ uint vcm_cache_entry(uint e) {
     return vcm_merge_sort[e >> 1u][e & 1u];
 }
 
-// The grid cell of world point p (the merge grid of u_vcm: fixed before the light pass, a
-// box around the scene's bounding sphere with cells of edge grid_lo.w), clamped to it.
+// The grid cell of world point p (the merge grid of u_vcm: fixed before the light pass,
+// cells of edge grid_lo.w from the corner grid_lo.xyz of a box around the scene's bounding
+// sphere, unbounded: merge points in a medium around the scene lie beyond that box).
 ivec3 vcm_grid_cell(vec3 p) {
-    return clamp(ivec3(floor((p - u_vcm.grid_lo.xyz) / u_vcm.grid_lo.w)), ivec3(0),
-                 ivec3(u_vcm.grid_size.xyz) - 1);
+    return ivec3(floor((p - u_vcm.grid_lo.xyz) / u_vcm.grid_lo.w));
 }
 
 // A grid cell's bucket in the table of grid_size.w entries.

@@ -128,6 +128,23 @@ void medium_coefficients(int m, vec3 p, out vec3 sigma_t, out vec3 sigma_s) {
     sigma_s = albedo * sigma_t;
 }
 
+// v / sigma_s(p) per channel for a point p in medium m (0 where sigma_s is): what a volume
+// photon of power v at its scattering event at p stores (photon/photon_trace.comp.glsl), and
+// a vcm merge point's throughput (integrators/vcm.glsl). The events' density, weighted by the
+// power after each event's weight (the free flight's sigma_s T over its density), is
+// sigma_s(x) L_i(x, w) per unit volume and solid angle, so these powers' density is the
+// incident radiance L_i itself: a camera point estimates its in-scattered radiance
+// int p(wo, wi) L_i(x, wi) dwi from them without dividing by any coefficient.
+vec3 medium_over_sigma_s(int m, vec3 p, vec3 v) {
+    vec3 ss = u_media.media[m].sigma_s.xyz;
+    if (medium_is_grid(m)) {
+        vec3 st;
+        medium_coefficients(m, p, st, ss);
+    }
+    return vec3(ss.x > 0.0 ? v.x / ss.x : 0.0, ss.y > 0.0 ? v.y / ss.y : 0.0,
+                ss.z > 0.0 ? v.z / ss.z : 0.0);
+}
+
 // The part [t0, t1] of the ray o + t d, t in [0, t_max], inside heterogeneous medium m's
 // grid box; false when it misses the box.
 bool medium_box(int m, vec3 o, vec3 d, float t_max, out float t0, out float t1) {

@@ -7,14 +7,16 @@
 const uint kNoBucket = 0xffffffffu;
 
 // The buckets around p in the grid with corner lo.xyz, cell edge lo.w, size.xyz cells
-// and a table of size.w hashes (kNoBucket: a cell outside the grid, a bucket seen
-// already, or no grid).
+// (0: unbounded, cells on every side of lo) and a table of size.w hashes (kNoBucket: a cell
+// outside the grid, a bucket seen already, or no grid).
 void grid_buckets(vec3 p, vec4 lo, uvec4 size, out uint buckets[8]) {
     ivec3 base = ivec3(floor((p - lo.xyz) / lo.w - 0.5));
+    bool bounded = size.x != 0u;
     for (int i = 0; i < 8; ++i) {
         ivec3 c = base + ivec3(i & 1, (i >> 1) & 1, i >> 2);
         buckets[i] = kNoBucket;
-        if (size.w == 0u || any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(size.xyz))))
+        if (size.w == 0u ||
+            (bounded && (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(size.xyz))))))
             continue;
         uint h = grid_hash(uvec3(c)) % size.w;
         for (int j = 0; j < i; ++j)

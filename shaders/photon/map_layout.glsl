@@ -39,7 +39,7 @@ layout(std140, binding = UBO_PHOTON_MAP_PARAMS) uniform PhotonMapParams {
 // Volume photons (kMedia: photons at scattering events in media) follow a map's surface
 // photons in the same texture, types kPhotonVolume + (0 direct, 1 caustic, 2 indirect),
 // their medium's index (int bits) in place of the normal and their power over sigma_s
-// (photon/photon_tracer.glsl volume_photon_power); their grid's hash table follows the
+// (media/medium.glsl medium_over_sigma_s); their grid's hash table follows the
 // surface grid's (u_map.volume_table) and its entries count from the first photon.
 layout(binding = TEX_GLOBAL_MAP) uniform samplerBuffer u_global_map;
 layout(binding = TEX_CAUSTIC_MAP) uniform samplerBuffer u_caustic_map;

@@ -21,7 +21,7 @@
 // the in-scattered radiance toward wo from the volume photons of the same medium in the
 // ball of radius r around x (their own grid and radius),
 //     L_s = 1 / ((4/3) pi r^3) sum_p K3(d_p / r) p(wo, wi_p) Phi_p / sigma_s(x_p),
-// Phi_p / sigma_s as stored (photon/photon_tracer.glsl volume_photon_power): the photons
+// Phi_p / sigma_s as stored (media/medium.glsl medium_over_sigma_s): the photons
 // are stored at scattering events only, whose density weighted by their power is
 // sigma_s L_i, hence the division by sigma_s (not sigma_t). The camera path's throughput at
 // its own event carries sigma_s T over the density it sampled x with, so beta L_s is that

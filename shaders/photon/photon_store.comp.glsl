@@ -35,7 +35,7 @@ void store_volume_photon(vec3 p, Photon ph, uint type, int segments) {
     if (k >= u_map.store.x) return;
     traced_photons[3u * k] = vec4(p, uintBitsToFloat(kPhotonVolume + type));
     traced_photons[3u * k + 1u] = vec4(-ph.d, intBitsToFloat(ph.medium));
-    traced_photons[3u * k + 2u] = vec4(volume_photon_power(ph.medium, p, ph.beta), float(segments));
+    traced_photons[3u * k + 2u] = vec4(medium_over_sigma_s(ph.medium, p, ph.beta), float(segments));
 }
 
 void main() {

@@ -44,7 +44,7 @@ void main() {
             // a volume photon: into the visible points in media around it
             if (segments >= int(u_photon.options.x))
                 sppm_deposit(h.hit.p, vec3(0.0), ph.medium, -ph.d,
-                             volume_photon_power(ph.medium, h.hit.p, ph.beta), segments, budget, visited);
+                             medium_over_sigma_s(ph.medium, h.hit.p, ph.beta), segments, budget, visited);
             if (segments + 1 > max_segments) break;
             photon_scatter_medium(ph, h, h.u_bsdf, h.u_rr);
             continue;

@@ -155,19 +155,3 @@ void photon_scatter_medium(inout Photon ph, PhotonHit h, vec2 u_dir, float u_rr)
     ph.d = medium_sample_phase(ph.medium, ph.d, u_dir);
     ph.alive = true;
 }
-
-// What a volume photon of power beta at its scattering event at p in medium m stores:
-// beta / sigma_s(p) per channel (0 where sigma_s is). The events' density, weighted by the
-// power after each event's weight (the free flight's sigma_s T over its density), is
-// sigma_s(x) L_i(x, w) per unit volume and solid angle, so these powers' density is the
-// incident radiance L_i itself: a camera point estimates its in-scattered radiance
-// int p(wo, wi) L_i(x, wi) dwi from them without dividing by any coefficient.
-vec3 volume_photon_power(int m, vec3 p, vec3 beta) {
-    vec3 ss = u_media.media[m].sigma_s.xyz;
-    if (medium_is_grid(m)) {
-        vec3 st;
-        medium_coefficients(m, p, st, ss);
-    }
-    return vec3(ss.x > 0.0 ? beta.x / ss.x : 0.0, ss.y > 0.0 ? beta.y / ss.y : 0.0,
-                ss.z > 0.0 ? beta.z / ss.z : 0.0);
-}

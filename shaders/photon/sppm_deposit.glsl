@@ -27,8 +27,8 @@ const uint kCandidateBudget = 16384u;
 // Volume photons (kMedia): a photon that scatters at p in medium m deposits into the
 // visible points in the same medium (vp_position w < 0, photon/layout.glsl) whose search
 // sphere holds it: Phi_i += K3(d / r_i) beta_i p(wo_i, wi) beta_photon, with beta_photon
-// its power over sigma_s (volume_photon_power: the density of those powers is the
-// incident radiance) and K3 a kernel of mean 1 over the ball; the host divides by
+// its power over sigma_s (media/medium.glsl medium_over_sigma_s: the density of those
+// powers is the incident radiance) and K3 a kernel of mean 1 over the ball; the host divides by
 // (4/3) pi r^3. A camera path's beta_i at its scattering event carries sigma_s T over
 // the free flight's density, so beta_i times the in-scattered radiance int p L_i is
 // that event's share of the pixel: unbiased in the limit r -> 0.

@@ -211,4 +211,17 @@ def smoke_grid(size=32) -> m.Scene:
     return scene
 
 
+def open_haze(size=32) -> m.Scene:
+    """Chromatic forward-scattering haze around the camera, lit by a point light out of
+    view 3.4 ahead, and nothing else within reach (a black ball far behind the camera): no
+    surface or medium boundary near what the camera sees. Max depth 3."""
+    scene = base(size, size, max_depth=3)
+    haze = scene.add_medium(m.Medium(sigma_t=(0.3, 0.5, 0.8), albedo=(0.9, 0.8, 0.7), phase="hg", g=0.4))
+    scene.camera = m.Camera(world_from_camera=m.look_at((0, 0, 0), (0, 1, 0), (0, 0, 1)), fov=40, medium=haze)
+    black = scene.add_material(m.Material("diffuse", reflectance=(0, 0, 0)))
+    scene.shapes.append(m.Shape("sphere", material=black, center=(0, -60, 0), radius=1.0))
+    scene.lights.append(m.Light("point", position=(0.0, 3.0, 1.6), intensity=(3.0, 3.0, 3.0)))
+    return scene
+
+
 MEDIA = (fog_glossy, fog_in_glass, fog_environment, camera_haze, smoke_grid)

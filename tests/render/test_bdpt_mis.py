@@ -121,6 +121,7 @@ void main() {
     }
 #endif
     bool delta_light = light_is_delta(g_path[0]);
+    bool volume_merge = false;   // a merge in a medium with a weight of 1% or more
     float sum = 0.0;
     int strategies = 0;
     for (int sl = 0; sl < k; ++sl) {
@@ -151,20 +152,24 @@ void main() {
         Vertex pt = g_camera[t - 1], pt_minus = g_camera[t - 2];
         float pdf_light, pdf_back;
         vertex_f(pt, pt_minus.p, pt.p + mp.wi, false, pdf_light, pdf_back);
-        sum += vcm_merge_weight(t, mp, pdf_light, solid_angle_to_area(pdf_back, pt, pt_minus) * vertex_tr_mis(pt));
+        float w = vcm_merge_weight(t, mp, pdf_light, solid_angle_to_area(pdf_back, pt, pt_minus) * vertex_tr_mis(pt));
+        sum += w;
         strategies += 1;
+        if (vertex_kind(pt) == kVertexMedium && w > 0.01) volume_merge = true;
     }
 #endif
-    results[i] = vec4(sum, float(strategies), float(k), (any_delta ? 1.0 : 0.0) + (any_medium ? 2.0 : 0.0));
+    results[i] = vec4(sum, float(strategies), float(k),
+                      (any_delta ? 1.0 : 0.0) + (any_medium ? 2.0 : 0.0) + (volume_merge ? 4.0 : 0.0));
 }
 """
 
 
-def weight_sums(gl_ctx, scene, heuristic, n=1 << 14, vcm_mode=0, eta=0.0, lens=1.0):
-    """Per path: the sum of the weights, the strategies counted, the vertices, whether it
-    has delta vertices. vcm_mode 1 or 2: vcm's weights (merge density factor eta, lens
-    connections' density factor ``lens``: light paths per camera sample), with its merges
-    among the strategies."""
+def weight_sums(gl_ctx, scene, heuristic, n=1 << 14, vcm_mode=0, eta=0.0, lens=1.0, radius=0.0):
+    """Per path: the sum of the weights, the strategies counted, the vertices, and flags:
+    1 delta vertices, 2 medium vertices, 4 a merge in a medium of weight 1% or more. vcm_mode 1 or 2: vcm's weights (merge density factor eta, lens
+    connections' density factor ``lens``: light paths per camera sample, merge radius
+    ``radius``, which sets the factor of merges in media), with its merges among the
+    strategies."""
     # the scene on the device as the renderer binds it (its own kernel: the cheap path tracer)
     r = Renderer(scene, settings_from_scene(scene, integrator="path", spp=1, seed=1), ctx=gl_ctx)
     library = shaders.ShaderLibrary().with_generated(
@@ -178,7 +183,7 @@ def weight_sums(gl_ctx, scene, heuristic, n=1 << 14, vcm_mode=0, eta=0.0, lens=1
                                      library=library)
     out = gl_ctx.gl.buffer(reserve=16 * n)
     block = np.zeros(1, VCM_PARAMS)[0]
-    block["merge"] = (0.0, 0.0, eta, 0.0)
+    block["merge"] = (radius, radius * radius, eta, 0.0)
     block["lens"] = (lens, 1.0 / lens, 0.0, 0.0)
     params = gl_ctx.gl.buffer(block.tobytes())
     r.bind()
@@ -211,9 +216,10 @@ def test01_weights_sum_to_one(gl_ctx, make, heuristic):
         assert (res[made, 3] >= 2).sum() > 200
 
 
-# media: vcm (its merges at surfaces beside connections at medium vertices) on three scenes
+# media: vcm (merges in media beside merges at surfaces and connections) on three scenes,
+# and the merges alone on one
 CASES02 = [(make, mode) for make in (glossy, caustic, point_light, environment, directional)
-           for mode in (1, 2)] + [(make, 1) for make in (fog_glossy, fog_in_glass, smoke_grid)]
+           for mode in (1, 2)] + [(make, 1) for make in (fog_glossy, fog_in_glass, smoke_grid)] + [(fog_glossy, 2)]
 
 
 @pytest.mark.slow
@@ -223,9 +229,12 @@ def test02_vcm_weights_sum_to_one(gl_ctx, make, mode):
     strategy and a merge at every inner vertex where the path scatters by a non-delta lobe
     (vcm, mode 1), or s = 0 and the merges alone (vm, mode 2); the merges' density factor
     eta = pi r^2 N at a value where merges and connections weigh alike (area densities of
-    order 1 in these scenes), and 0.6 light paths per camera sample (the lens connections'
-    density factor), under the power heuristic."""
-    res = weight_sums(gl_ctx, make(16), "mis-power", vcm_mode=mode, eta=0.7, lens=0.6)
+    order 1 in these scenes), radius 4 (merges in media: eta (4/3) r times the medium's
+    mean extinction), and 0.6 light paths per camera sample (the lens connections' density
+    factor), under the power heuristic."""
+    res = weight_sums(gl_ctx, make(16), "mis-power", vcm_mode=mode, eta=0.7, lens=0.6, radius=4.0)
     made = res[:, 1] > 0
     assert made.sum() > 1000, made.sum()
     np.testing.assert_allclose(res[made, 0], 1.0, atol=2e-4)
+    if make in MEDIA:     # merges in media that weigh among the strategies
+        assert (res[made, 3].astype(int) & 4 > 0).sum() > 100
