@@ -190,7 +190,7 @@ def _add_render(sub) -> None:
     from ..film.tonemap import TONE_CURVES
     from .options import AOV_NAMES, add_search_path
     from ..render.params import STRATEGIES
-    from ..scene.model import INTEGRATORS, SAMPLER_KINDS
+    from ..scene.model import INTEGRATORS, LIGHT_SELECTIONS, SAMPLER_KINDS
 
     p = sub.add_parser("render", help="render a scene file to an image",
                        description=RENDER_DESCRIPTION, epilog=RENDER_EPILOG,
@@ -221,6 +221,10 @@ def _add_render(sub) -> None:
     g.add_argument("--strategy", choices=tuple(STRATEGIES), default=None,
                    help="direct-lighting strategy: light or BSDF sampling alone, or both with "
                         "the balance or power heuristic")
+    g.add_argument("--light-selection", choices=LIGHT_SELECTIONS, default=None,
+                   help="how light samples choose a light: uniformly, by power, or by a light "
+                        "BVH at the shading point (path, direct, and the camera paths of sppm "
+                        "and photon; light paths choose by power; default: the scene's)")
     g.add_argument("--max-depth", type=int, default=None, metavar="N",
                    help="path segments: 1 = emitters seen directly, 2 = direct light, "
                         "-1 = unbounded, up to a cap: 256 segments, bdpt 16 (the summary line "

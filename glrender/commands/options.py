@@ -20,7 +20,7 @@ FIRST_HIT_AOVS = ("albedo", "normal", "depth", "emission")
 # the options a checkpoint remembers; --resume takes those not given again
 RESUMABLE = ("spp", "seed", "sampler", "integrator", "strategy", "max_depth", "width", "height",
              "clamp", "crop", "strategy_images", "strategy_depth", "rr", "rr_depth",
-             "light_samples", "split")
+             "light_samples", "split", "light_selection")
 
 
 def parse_defines(items: list[str]) -> dict[str, str]:

@@ -31,7 +31,7 @@ def add_preview_parser(sub) -> None:
     """Add the ``preview`` subcommand to the CLI's subparsers."""
     from ..film.tonemap import TONE_CURVES
     from ..render.params import STRATEGIES
-    from ..scene.model import INTEGRATORS, SAMPLER_KINDS
+    from ..scene.model import INTEGRATORS, LIGHT_SELECTIONS, SAMPLER_KINDS
     from ..preview.display import VIEWS
 
     p = sub.add_parser("preview", help="open a scene in a window and steer it while it renders",
@@ -47,6 +47,9 @@ def add_preview_parser(sub) -> None:
                    help="first integrator (default: the scene's; key I switches)")
     g.add_argument("--strategy", choices=tuple(STRATEGIES), default=None,
                    help="first direct-lighting strategy (default: the scene's; key M switches)")
+    g.add_argument("--light-selection", choices=LIGHT_SELECTIONS, default=None,
+                   help="how light samples choose a light: uniformly, by power, or by a light BVH "
+                        "(default: the scene's)")
     g.add_argument("--max-depth", type=int, default=None, metavar="N",
                    help="first max depth: path segments, -1 unbounded up to a cap of 256, bdpt 16 "
                         "(keys [ and ] change it)")
@@ -139,6 +142,7 @@ def run_preview(args) -> int:
         scene.film = scene.film.resized(args.width, args.height)
         options = PreviewOptions(
             scene_name=name, integrator=args.integrator, strategy=args.strategy,
+            light_selection=args.light_selection,
             max_depth=args.max_depth, sampler=args.sampler, seed=args.seed, spp=args.spp,
             display=DisplaySettings(view=args.view, exposure=args.exposure, curve=args.tonemap),
             frame_budget=args.frame_budget / 1000.0, screenshot_dir=screenshots, record_dir=record)

@@ -82,7 +82,7 @@ def _saved_kinds() -> dict:
     """What each option a checkpoint saves holds, as the command line parses it: a type,
     or a tuple of the choices."""
     from ..render.params import STRATEGIES
-    from ..scene.model import INTEGRATORS, SAMPLER_KINDS
+    from ..scene.model import INTEGRATORS, LIGHT_SELECTIONS, SAMPLER_KINDS
     from ..vcm.vcm import MODES
 
     kinds: dict = dict.fromkeys(("spp", "seed", "max_depth", "width", "height", "rr_depth",
@@ -93,6 +93,7 @@ def _saved_kinds() -> dict:
     kinds.update(rr=str, strategy_images=str, crop=str | list, final_gather=bool,
                  sampler=tuple(SAMPLER_KINDS), integrator=tuple(INTEGRATORS),
                  strategy=tuple(STRATEGIES), kernel=("uniform", "cone", "epanechnikov"),
+                 light_selection=tuple(LIGHT_SELECTIONS),
                  vcm_mode=tuple(MODES))
     return kinds
 
@@ -191,7 +192,8 @@ def _settings(args, options: dict, scene, first_hit: bool) -> dict:
     from .photon_options import photon_options
 
     settings = {k: options.get(k) for k in ("sampler", "max_depth", "rr", "rr_depth",
-                                            "light_samples", "split", "strategy", "clamp")}
+                                            "light_samples", "split", "strategy", "clamp",
+                                            "light_selection")}
     settings.update(aovs=first_hit, strategy_depth=_strategy_depth(options, scene))
     kind = options.get("integrator") or scene.integrator.kind
     iterations, photon = photon_options(args, kind)   # --integrator sppm: iterations as spp

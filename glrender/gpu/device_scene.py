@@ -105,9 +105,12 @@ class DeviceScene:
     def light_table(self, light_selection: str, area_sampling: str) -> LightTable:
         """The light records and distributions under the settings' light selection
         (``power``: proportional to ``packed.light_weights`` through an alias table, else
-        uniform) and area sampling (``solid-angle``: rectangles are sampled as spherical
-        rectangles, Urena et al. 2013: ``bindings.LIGHT_FLAG_RECTANGLE`` in ``info.y``)."""
+        uniform; ``bvh``: the alias table for the light subpaths and the light tree after
+        it, shaders/lights/light_selection.glsl) and area sampling (``solid-angle``:
+        rectangles are sampled as spherical rectangles, Urena et al. 2013:
+        ``bindings.LIGHT_FLAG_RECTANGLE`` in ``info.y``)."""
         from ..sampling.distributions import DistributionPacker
+        from ..sampling.light_tree import light_tree_table
 
         p = self.packed
         lights = p.lights.copy()
@@ -115,13 +118,15 @@ class DeviceScene:
         packer = DistributionPacker()
         weights = p.light_weights
         if n_lights:
-            if light_selection == "power" and weights.sum() > 0:
+            if light_selection in ("power", "bvh") and weights.sum() > 0:
                 pmf = weights / weights.sum()
-                if n_lights > 1:
-                    packer.add_alias_table(weights)
             else:
                 pmf = np.full(n_lights, 1.0 / n_lights)
+            if light_selection in ("power", "bvh") and n_lights > 1:
+                packer.add_alias_table(weights if weights.sum() > 0 else pmf)
             lights["selection_pmf"] = pmf
+            if light_selection == "bvh":
+                packer.add(light_tree_table(light_bounds(lights, weights, p.bounds)))
             if area_sampling == "solid-angle":
                 # rectangles (orthogonal edges) can use Urena et al.'s spherical rectangles
                 dots = np.einsum("ij,ij->i", lights["e1"][:, :3], lights["e2"][:, :3])
@@ -236,3 +241,57 @@ class DeviceScene:
             tex = BufferTexture(self.ctx, data, fmt, name)
             self._owned.append(tex)
             self._units.append((unit, tex.bind))
+
+
+def light_bounds(lights: np.ndarray, weights: np.ndarray, scene_bounds):
+    """The light tree's bounds of each packed light record (glrender.sampling.light_tree):
+    boxes, intensities (a planar light's power weight over pi, per side; a sphere's over
+    4 pi, its radiance times its cross-section; a point or spot light's intensity) and
+    emission cones (a surface's normal, theta_e = pi/2; a spot's beam, theta_e to its
+    cutoff; the whole sphere for points and spheres); for lights at infinity the
+    irradiance they deliver, from the power weights glrender.gpu.pack gives them over the
+    scene's bounding sphere (radius R): a directional light's pi R^2 E, an environment's
+    4 pi^2 R^2 times its mean radiance L, which delivers pi L."""
+    from ..sampling.light_tree import LightBounds
+
+    kinds = {v: k for k, v in layout.LIGHT_KINDS.items()}
+    n = len(lights)
+    b = LightBounds(lo=np.zeros((n, 3)), hi=np.zeros((n, 3)), phi=np.zeros(n), w=np.zeros((n, 3)),
+                    cos_o=np.full(n, -1.0), cos_e=np.zeros(n), two_sided=np.zeros(n, bool),
+                    infinite=np.zeros(n, bool))
+    b.w[:, 2] = 1.0
+    lo, hi = (np.asarray(v, np.float64) for v in scene_bounds)
+    radius = float(max(np.linalg.norm(hi - lo) / 2, 1e-3))
+    for i, rec in enumerate(lights):
+        kind = kinds[int(rec["info"][0])]
+        p, e1, e2 = (rec[f][:3].astype(np.float64) for f in ("p", "e1", "e2"))
+        two_sided = bool(int(rec["info"][1]) & bindings.LIGHT_FLAG_TWO_SIDED)
+        intensity = float(np.dot(rec["radiance"][:3], (0.2126, 0.7152, 0.0722)))
+        if kind in ("parallelogram", "triangle"):
+            corners = [p, p + e1, p + e2] + ([p + e1 + e2] if kind == "parallelogram" else [])
+            b.lo[i], b.hi[i] = np.min(corners, axis=0), np.max(corners, axis=0)
+            b.phi[i] = weights[i] / (np.pi * (2 if two_sided else 1))
+            b.w[i] = rec["n"][:3]
+            b.cos_o[i] = 1.0
+            b.two_sided[i] = two_sided
+        elif kind == "sphere":
+            r = float(rec["e1"][3])
+            b.lo[i], b.hi[i] = p - r, p + r
+            b.phi[i] = weights[i] / (4 * np.pi)
+        elif kind in ("point", "spot"):
+            b.lo[i] = b.hi[i] = p
+            b.phi[i] = intensity
+            if kind == "spot":
+                cos_cutoff, cos_beam = (float(c) for c in rec["params"][:2])
+                b.w[i] = rec["n"][:3]
+                b.cos_o[i] = cos_beam
+                b.cos_e[i] = np.cos(max(np.arccos(np.clip(cos_cutoff, -1, 1)) - np.arccos(np.clip(cos_beam, -1, 1)), 0.0))
+        else:
+            b.infinite[i] = True
+            if kind == "directional":
+                b.phi[i] = weights[i] / (np.pi * radius ** 2)
+                b.w[i] = rec["n"][:3]
+                b.cos_o[i] = 1.0
+            else:   # constant, envmap
+                b.phi[i] = weights[i] / (4 * np.pi * radius ** 2)
+    return b

@@ -59,6 +59,7 @@ class PreviewOptions:
     scene_name: str = "scene"
     integrator: str | None = None
     strategy: str | None = None
+    light_selection: str | None = None
     max_depth: int | None = None
     sampler: str | None = None
     seed: int | None = None
@@ -156,6 +157,7 @@ class PreviewApp:
         settings = job_settings(self.scene, JobOptions(
             integrator=self.integrator, seed=self.options.seed,
             settings=dict(strategy=self.strategy, max_depth=self.max_depth,
+                          light_selection=self.options.light_selection,
                           sampler=self.options.sampler, aovs=aovs,
                           time_target=self.options.frame_budget)))
         old = self.renderer

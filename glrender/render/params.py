@@ -10,7 +10,7 @@ from ..gpu import layout
 from ..sampling.sequences import SAMPLERS
 
 STRATEGIES = {"light": 0, "bsdf": 1, "mis-balance": 2, "mis-power": 3}
-LIGHT_SELECTION = {"uniform": 0, "power": 1}
+LIGHT_SELECTION = {"uniform": 0, "power": 1, "bvh": 2}
 AREA_SAMPLING = {"area": 0, "solid-angle": 1}
 FILTERS = {"box": 0, "tent": 1, "gaussian": 2, "mitchell": 3}
 RR_RULES = {"throughput": 0, "fixed": 1, "off": 2}

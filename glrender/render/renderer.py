@@ -71,7 +71,7 @@ class RenderSettings:
                              f"got {self.executor!r}")
         if self.executor == "wavefront":
             why = wavefront.supports(self.integrator.kind, self.integrator.split,
-                                     self.integrator.light_samples)
+                                     self.integrator.light_samples, self.integrator.light_selection)
             if why is not None:
                 raise UsageError(f"executor: {why}")
 

@@ -34,12 +34,15 @@ HIT_BYTES = 16        # the extend stage's hit per path: vec4
 LOCAL_SIZE = 256
 
 
-def supports(integrator: str, split: int, light_samples: int) -> str | None:
+def supports(integrator: str, split: int, light_samples: int, light_selection: str = "uniform") -> str | None:
     """None when the wavefront executor renders these settings, else why not (one line)."""
     if integrator != "path":
         return f"the wavefront executor runs the path integrator, not {integrator}"
     if split != 1 or light_samples != 1:
         return "the wavefront executor takes one light sample and no splitting (--split 1 --light-samples 1)"
+    if light_selection == "bvh":
+        # a queued path keeps its last vertex, not the normal its light sample chose for
+        return "the wavefront executor chooses lights uniformly or by power, not by the light BVH"
     return None
 
 

@@ -436,6 +436,9 @@ class Film:
 
 INTEGRATORS = integrator_names()   # glrender/integrators.py: the one table of integrators
 STRATEGIES = ("light", "bsdf", "mis-balance", "mis-power")
+# how next-event estimation chooses a light: uniformly, by power, or by a light BVH at the
+# shading point (glrender/sampling/light_tree.py)
+LIGHT_SELECTIONS = ("uniform", "power", "bvh")
 SPLIT_LIMIT = 16   # light samples per vertex and first-vertex branches of the path tracer
 # ... and their product: one invocation renders a whole sample with all its branches and
 # light samples, and llvmpipe stops an invocation silently after ~65,535 loop iterations of
@@ -482,7 +485,7 @@ class Integrator:
     strategy: str = "mis-power"        # direct lighting / NEE weighting
     emitter_samples: int = 1           # direct integrator only
     bsdf_samples: int = 1
-    light_selection: str = "uniform"   # uniform (as Mitsuba) | power (alias table)
+    light_selection: str = "uniform"   # uniform (as Mitsuba) | power (alias table) | bvh (light tree)
     area_sampling: str = "solid-angle"  # area | solid-angle (triangle/rectangle lights that look
                                         # large; small ones by area either way: lights/light.glsl)
     hide_emitters: bool = False
@@ -494,8 +497,8 @@ class Integrator:
         if self.strategy not in STRATEGIES:
             raise SceneError(f"integrator.strategy: expected one of {', '.join(STRATEGIES)}, "
                              f"got {self.strategy!r}")
-        if self.light_selection not in ("uniform", "power"):
-            raise SceneError(f"integrator.light_selection: expected uniform or power, "
+        if self.light_selection not in LIGHT_SELECTIONS:
+            raise SceneError(f"integrator.light_selection: expected uniform, power or bvh, "
                              f"got {self.light_selection!r}")
         if self.area_sampling not in ("area", "solid-angle"):
             raise SceneError(f"integrator.area_sampling: expected area or solid-angle, "

@@ -145,6 +145,7 @@ const int kBsdfSamples = GLRENDER_BSDF_SAMPLES;
 const bool kHideEmitters = GLRENDER_HIDE_EMITTERS != 0;
 const int kLightSelectionUniform = 0;
 const int kLightSelectionPower = 1;
+const int kLightSelectionBvh = 2;
 const int kLightSelection = GLRENDER_LIGHT_SELECTION;
 const int kAreaSamplingArea = 0;
 const int kAreaSamplingSolidAngle = 1;

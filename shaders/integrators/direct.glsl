@@ -46,14 +46,14 @@ vec3 direct_at_surface(SurfaceHit hit, vec3 d, float time, inout SamplerState s,
         float n_l = delta ? 0.0 : n_light;
         vec3 Le = vec3(0.0);
         if (kMedia) {
-            Le = emission_through(p, hit.ng, wi, time, medium_after(hit.material, hit.ng, wi, m), bs.pdf,
+            Le = emission_through(p, hit.ng, frame.z, wi, time, medium_after(hit.material, hit.ng, wi, m), bs.pdf,
                                   bs.delta || delta, n, n_l);
         } else {
             vec3 o2 = offset_ray_origin(p, hit.ng, wi);
             SurfaceHit h2;
             if (scene_intersect(o2, wi, kInfinity, time, h2)) {
                 if (h2.light != 0u)
-                    Le = emitter_hit_contribution_n(h2, wi, 1, p, bs.pdf, bs.delta || delta, n, n_l);
+                    Le = emitter_hit_contribution_n(h2, wi, 1, p, frame.z, bs.pdf, bs.delta || delta, n, n_l);
             } else {
                 Le = environment_contribution_n(wi, 1, p, bs.pdf, bs.delta || delta, n, n_l);
             }
@@ -107,7 +107,7 @@ vec3 direct_li_media(vec3 o, vec3 d, float t_max, float time, inout SamplerState
                     // without light samples here, the phase samples count whole
                     float n = use_phase ? n_phase : float(kBsdfSamples);
                     vec3 wi = medium_sample_phase(m, d, u_dir);
-                    L += beta * emission_through(p, vec3(0.0), wi, time, m, medium_phase(m, d, wi),
+                    L += beta * emission_through(p, vec3(0.0), vec3(0.0), wi, time, m, medium_phase(m, d, wi),
                                                  !nee, n, n_light) / n;
                 }
                 return L;
@@ -119,7 +119,7 @@ vec3 direct_li_media(vec3 o, vec3 d, float t_max, float time, inout SamplerState
             return L + Le;
         }
         if (k == 0) record_aov(aov, hit);
-        if (hit.light != 0u) L += beta * emitter_hit_contribution(hit, d, 0, o, 0.0, true);
+        if (hit.light != 0u) L += beta * emitter_hit_contribution(hit, d, 0, o, vec3(0.0), 0.0, true);
         if (kAovs) aov.emission = L;
         if (material_is_null(hit.material)) {   // a medium's boundary: on through it
             m = medium_after(hit.material, hit.ng, d, m);
@@ -143,7 +143,7 @@ vec3 integrator_li(vec3 o, vec3 d, float t_max, float time, inout SamplerState s
     }
     record_aov(aov, hit);
     vec3 L = vec3(0.0);
-    if (hit.light != 0u) L += emitter_hit_contribution(hit, d, 0, o, 0.0, true);
+    if (hit.light != 0u) L += emitter_hit_contribution(hit, d, 0, o, vec3(0.0), 0.0, true);
     if (kAovs) aov.emission = L;
     if (kMaxDepth == 1) return L;
     return direct_at_surface(hit, d, time, s, kNoMedium, L);

@@ -48,6 +48,7 @@ struct PathState {
     float prev_pdf;      // solid-angle pdf of the BSDF sample that made this segment
     bool prev_delta;     // that sample was specular (or this is the camera ray)
     vec3 prev_p;
+    vec3 prev_n;         // its shading normal, for which its light samples chose lights (0: in a medium)
     int depth;           // segments traced so far
     Aov aov;
     bool aov_open;       // the AOVs so far are a delta surface's: follow the path further
@@ -75,6 +76,7 @@ PathState path_start(vec3 o, vec3 d, float t_max, float time) {
     st.prev_pdf = 0.0;
     st.prev_delta = true;
     st.prev_p = o;
+    st.prev_n = vec3(0.0);
     st.depth = 0;
     st.aov = kNoAov;
     st.aov_open = true;
@@ -102,6 +104,7 @@ bool path_continue(inout PathState st, SurfaceHit hit, Bsdf b, Frame frame, vec3
     st.prev_pdf = bs.pdf;
     st.prev_delta = bs.delta;
     st.prev_p = hit.p;
+    st.prev_n = frame.z;
 
     // Possibly terminate the path with Russian roulette
     if (roulette_applies(depth + 1)) {
@@ -144,6 +147,7 @@ bool path_medium_vertex(inout PathState st, inout SamplerState s, vec3 p, int de
     st.prev_pdf = medium_phase(m, st.d, wi);
     st.prev_delta = !nee;    // without light samples here, emitters found count whole
     st.prev_p = p;
+    st.prev_n = vec3(0.0);
     if (roulette_applies(depth + 1)) {
         float q = roulette_survival(max_component(st.beta) * st.eta_product * st.eta_product);
         if (!(u_rr < q)) return false;
@@ -203,7 +207,7 @@ bool path_segment(inout PathState st, inout SamplerState s) {
         SurfaceHit at = hit;
         // weighed from the last vertex, across any null surfaces since (kMedia)
         if (kMedia) at.t = distance(st.prev_p, hit.p);
-        vec3 Le = emitter_hit_contribution_n(at, st.d, depth, st.prev_p, st.prev_pdf,
+        vec3 Le = emitter_hit_contribution_n(at, st.d, depth, st.prev_p, st.prev_n, st.prev_pdf,
                                              st.prev_delta, 1.0, float(kLightSamples));
         st.L += st.beta * Le;
         if (kAovs && seen) st.aov.emission += st.beta * Le;

@@ -120,7 +120,7 @@ vec3 integrator_li(vec3 o, vec3 d, float t_max, float time, inout SamplerState s
             }
             if (depth == 0) record_aov(aov, hit);
             if (hit.light != 0u) {
-                vec3 Le = emitter_hit_contribution(hit, d, depth, o, 1.0, true);
+                vec3 Le = emitter_hit_contribution(hit, d, depth, o, vec3(0.0), 1.0, true);
                 L += beta * Le;
                 if (kAovs && depth == 0) aov.emission = Le;
             }

@@ -48,8 +48,10 @@ bool record_aov_through(inout Aov aov, SurfaceHit hit, int depth, vec3 weight) {
 
 // Emission of the area light at `hit`, seen along d, by a segment of `depth`
 // previous segments whose BSDF sample had solid-angle pdf prev_pdf (n_bsdf samples
-// against n_light light samples for the direct integrator's counts).
-vec3 emitter_hit_contribution_n(SurfaceHit hit, vec3 d, int depth, vec3 prev_p, float prev_pdf,
+// against n_light light samples for the direct integrator's counts), from the vertex
+// prev_p whose light samples chose lights for the normal prev_n (select_light_at: its
+// shading normal, 0 in a medium).
+vec3 emitter_hit_contribution_n(SurfaceHit hit, vec3 d, int depth, vec3 prev_p, vec3 prev_n, float prev_pdf,
                                 bool prev_delta, float n_bsdf, float n_light) {
     uint index = hit.light - 1u;
     LightData l = scene_light(index);
@@ -57,13 +59,13 @@ vec3 emitter_hit_contribution_n(SurfaceHit hit, vec3 d, int depth, vec3 prev_p, 
     if (depth == 0) return kHideEmitters ? vec3(0.0) : Le;
     if (prev_delta || kStrategy == kStrategyBsdf) return Le;
     if (kStrategy == kStrategyLight) return vec3(0.0);
-    float pdf_light = light_selection_pmf(index) * light_pdf_area_hit(l, prev_p, d, hit.t, hit.ng);
+    float pdf_light = light_selection_pmf_at(prev_p, prev_n, index) * light_pdf_area_hit(l, prev_p, d, hit.t, hit.ng);
     return Le * mis_weight_n(n_bsdf, prev_pdf, n_light, pdf_light);
 }
 
-vec3 emitter_hit_contribution(SurfaceHit hit, vec3 d, int depth, vec3 prev_p, float prev_pdf,
+vec3 emitter_hit_contribution(SurfaceHit hit, vec3 d, int depth, vec3 prev_p, vec3 prev_n, float prev_pdf,
                               bool prev_delta) {
-    return emitter_hit_contribution_n(hit, d, depth, prev_p, prev_pdf, prev_delta, 1.0, 1.0);
+    return emitter_hit_contribution_n(hit, d, depth, prev_p, prev_n, prev_pdf, prev_delta, 1.0, 1.0);
 }
 
 // Radiance of the environment along d for a ray that escaped, weighted as above.
@@ -76,7 +78,8 @@ vec3 environment_contribution_n(vec3 d, int depth, vec3 prev_p, float prev_pdf, 
     if (depth == 0) return kHideEmitters ? vec3(0.0) : Le;
     if (prev_delta || kStrategy == kStrategyBsdf) return Le;
     if (kStrategy == kStrategyLight) return vec3(0.0);
-    return Le * mis_weight_n(n_bsdf, prev_pdf, n_light, light_selection_pmf(env - 1u) * pdf_env);
+    // (a light at infinity: its probability does not depend on the point)
+    return Le * mis_weight_n(n_bsdf, prev_pdf, n_light, light_selection_pmf_at(prev_p, vec3(0.0), env - 1u) * pdf_env);
 }
 
 vec3 environment_contribution(vec3 d, int depth, vec3 prev_p, float prev_pdf, bool prev_delta) {
@@ -97,11 +100,13 @@ struct ShadowRay {
 const ShadowRay kNoShadowRay = ShadowRay(vec3(0.0), vec3(0.0), 0.0, 0u, vec3(0.0), false);
 
 // One light sample at the vertex p (with n_light light and n_bsdf BSDF samples taken
-// there): choose a light with u_select, sample it with u_light; the shadow ray to trace.
+// there): choose a light with u_select (for the shading normal frame.z), sample it with
+// u_light; the shadow ray to trace.
 ShadowRay next_event_ray(vec3 p, SurfaceHit hit, Bsdf b, Frame frame, vec3 wo, float u_select,
                          vec2 u_light, bool use_mis, float n_light, float n_bsdf) {
     if (u_params.counts.x == 0u) return kNoShadowRay;
-    LightChoice choice = select_light(u_select);
+    LightChoice choice = select_light_at(p, frame.z, u_select);
+    if (!(choice.pmf > 0.0)) return kNoShadowRay;
     LightData light = scene_light(choice.index);
     LightSample ls = sample_light(light, p, u_light);
     if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return kNoShadowRay;
@@ -135,13 +140,13 @@ vec3 next_event_n(vec3 p, SurfaceHit hit, Bsdf b, Frame frame, vec3 wo, float ti
     return r.value;
 }
 
-// The emission that a ray from vertex p (a surface point whose geometric normal is ng, or
-// a point in a medium: ng 0) along w finds, through null surfaces and the media on the way
-// (their transmittance estimated, kMedia): an area light or the environment, weighed by
-// MIS against light sampling as emitter_hit_contribution_n weighs it (pdf: the density w
-// was sampled with, delta: a delta BSDF's; n_bsdf, n_light: the sample counts). m: the
-// medium the ray starts in.
-vec3 emission_through(vec3 p, vec3 ng, vec3 w, float time, int m, float pdf, bool delta,
+// The emission that a ray from vertex p (a surface point whose geometric normal is ng and
+// shading normal n, or a point in a medium: both 0) along w finds, through null surfaces and
+// the media on the way (their transmittance estimated, kMedia): an area light or the
+// environment, weighed by MIS against light sampling as emitter_hit_contribution_n weighs
+// it (pdf: the density w was sampled with, delta: a delta BSDF's; n_bsdf, n_light: the
+// sample counts). m: the medium the ray starts in.
+vec3 emission_through(vec3 p, vec3 ng, vec3 n, vec3 w, float time, int m, float pdf, bool delta,
                       float n_bsdf, float n_light) {
     vec3 tr = vec3(1.0);
     vec3 from = dot(ng, ng) > 0.0 ? offset_ray_origin(p, ng, w) : p;
@@ -159,7 +164,7 @@ vec3 emission_through(vec3 p, vec3 ng, vec3 w, float time, int m, float pdf, boo
         if (h.light != 0u) {
             SurfaceHit at = h;
             at.t = distance(p, h.p);   // the light's density from p, across null surfaces
-            Le = tr * emitter_hit_contribution_n(at, w, 1, p, pdf, delta, n_bsdf, n_light);
+            Le = tr * emitter_hit_contribution_n(at, w, 1, p, n, pdf, delta, n_bsdf, n_light);
         }
         if (!material_is_null(h.material) || k == kMaxNullCrossings) return Le;
         m = medium_after(h.material, h.ng, w, m);
@@ -177,7 +182,8 @@ vec3 emission_through(vec3 p, vec3 ng, vec3 w, float time, int m, float pdf, boo
 vec3 medium_next_event_n(vec3 p, vec3 d, int m, float time, float u_select, vec2 u_light, bool use_mis,
                          float n_light, float n_phase) {
     if (u_params.counts.x == 0u) return vec3(0.0);
-    LightChoice choice = select_light(u_select);
+    LightChoice choice = select_light_at(p, vec3(0.0), u_select);
+    if (!(choice.pmf > 0.0)) return vec3(0.0);
     LightData light = scene_light(choice.index);
     LightSample ls = sample_light(light, p, u_light);
     if (!(ls.pdf > 0.0) || max_component(ls.Le) <= 0.0) return vec3(0.0);

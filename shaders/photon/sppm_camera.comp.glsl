@@ -62,7 +62,7 @@ void main() {
             L += beta * environment_contribution(d, depth, o, 1.0, true);
             break;
         }
-        if (hit.light != 0u) L += beta * emitter_hit_contribution(hit, d, depth, o, 1.0, true);
+        if (hit.light != 0u) L += beta * emitter_hit_contribution(hit, d, depth, o, vec3(0.0), 1.0, true);
         if (kMedia && material_is_null(hit.material)) {   // passed: neither a vertex nor a bounce
             cm.medium = medium_after(hit.material, hit.ng, d, cm.medium);
             o = offset_ray_origin(hit.p, hit.ng, d);

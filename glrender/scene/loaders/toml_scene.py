@@ -240,7 +240,7 @@ def _integrator(ctx, t) -> m.Integrator:
     i.emitter_samples = ctx.number(t.get("emitter_samples", 1), "integrator.emitter_samples", 0, 64, integer=True)
     i.bsdf_samples = ctx.number(t.get("bsdf_samples", 1), "integrator.bsdf_samples", 0, 64, integer=True)
     i.light_selection = ctx.string(t.get("light_selection", i.light_selection),
-                                   "integrator.light_selection", ("uniform", "power"))
+                                   "integrator.light_selection", m.LIGHT_SELECTIONS)
     i.area_sampling = ctx.string(t.get("area_sampling", i.area_sampling), "integrator.area_sampling",
                                  ("area", "solid-angle"))
     i.hide_emitters = ctx.boolean(t.get("hide_emitters", False), "integrator.hide_emitters")

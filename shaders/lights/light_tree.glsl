@@ -1,0 +1,189 @@
+// The light BVH of light selection "bvh": choosing a light for a light sample at a point by
+// descending a tree over the lights, each step by the children's importance there (Conty
+// Estevez and Kulla 2018; pbrt-v4's BVHLightSampler). The tree, its packed layout and the
+// importance are documented in one place, glrender/sampling/light_tree.py, which builds
+// it; its functions named like these are their numpy twins.
+#include "common/constants.glsl"
+#include "sampling/distribution_data.glsl"
+#include "lights/light_choice.glsl"
+
+const uint kLightTreeHeader = 4u;
+const uint kLightTreeInfiniteFloats = 8u;
+const uint kLightTreeNodeFloats = 16u;
+const uint kLightTreeLeaf = 1u;
+const uint kLightTreeTwoSided = 2u;
+const float kLightTreeClamp = 0.25;           // d^2 >= (kLightTreeClamp |diagonal|)^2
+const float kLightTreeMinDistance2 = 1e-10;
+const int kLightTreeMaxDepth = 32;
+
+struct LightTreeNode {
+    vec3 lo;
+    float phi;
+    vec3 hi;
+    float cos_o;
+    vec3 w;
+    float cos_e;
+    uint child;   // the second child's node index, or a leaf's light index
+    uint flags;
+};
+
+// Node i of the tree whose block starts at `tree`.
+LightTreeNode light_tree_node(uint tree, uint i) {
+    uint at = tree + kLightTreeHeader + kLightTreeInfiniteFloats * distribution_fetch_uint(tree + 1u) +
+              kLightTreeNodeFloats * i;
+    LightTreeNode nd;
+    nd.lo = vec3(distribution_fetch(at), distribution_fetch(at + 1u), distribution_fetch(at + 2u));
+    nd.phi = distribution_fetch(at + 3u);
+    nd.hi = vec3(distribution_fetch(at + 4u), distribution_fetch(at + 5u), distribution_fetch(at + 6u));
+    nd.cos_o = distribution_fetch(at + 7u);
+    nd.w = vec3(distribution_fetch(at + 8u), distribution_fetch(at + 9u), distribution_fetch(at + 10u));
+    nd.cos_e = distribution_fetch(at + 11u);
+    nd.child = distribution_fetch_uint(at + 12u);
+    nd.flags = distribution_fetch_uint(at + 13u);
+    return nd;
+}
+
+// cos(max(0, a - b)) and sin(max(0, a - b)) from the sines and cosines of a and b.
+float cos_sub_clamped(float sin_a, float cos_a, float sin_b, float cos_b) {
+    return cos_a > cos_b ? 1.0 : cos_a * cos_b + sin_a * sin_b;
+}
+
+float sin_sub_clamped(float sin_a, float cos_a, float sin_b, float cos_b) {
+    return cos_a > cos_b ? 0.0 : sin_a * cos_b - cos_a * sin_b;
+}
+
+// A bound on what node nd's lights bring to point p with normal n (0: a point in a medium).
+float light_tree_importance(LightTreeNode nd, vec3 p, vec3 n) {
+    vec3 pc = 0.5 * (nd.lo + nd.hi);
+    float half_diag = 0.5 * length(nd.hi - nd.lo);
+    vec3 v = p - pc;
+    float dc2 = dot(v, v);
+    float floor_d = 2.0 * kLightTreeClamp * half_diag;
+    float d2 = max(max(dc2, floor_d * floor_d), kLightTreeMinDistance2);
+    bool inside = all(greaterThanEqual(p, nd.lo)) && all(lessThanEqual(p, nd.hi));
+    if (inside || dc2 <= half_diag * half_diag) return nd.phi / d2;
+    vec3 wi = v * inversesqrt(dc2);
+    float cos_w = dot(wi, nd.w);
+    if ((nd.flags & kLightTreeTwoSided) != 0u) cos_w = abs(cos_w);
+    float sin_w = sqrt(max(1.0 - cos_w * cos_w, 0.0));
+    // the cone of directions the box subtends from p
+    float cos_b = sqrt(max(1.0 - half_diag * half_diag / dc2, 0.0));
+    float sin_b = sqrt(max(1.0 - cos_b * cos_b, 0.0));
+    float sin_o = sqrt(max(1.0 - nd.cos_o * nd.cos_o, 0.0));
+    // the angle from the emission cone to p, less the box's: theta' = max(0, theta_w -
+    // theta_o - theta_b)
+    float cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, nd.cos_o);
+    float sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, nd.cos_o);
+    float cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
+    if (cos_p <= nd.cos_e) return 0.0;
+    float importance = nd.phi * cos_p / d2;
+    if (dot(n, n) > 0.0) {
+        float cos_i = abs(dot(wi, n));
+        float sin_i = sqrt(max(1.0 - cos_i * cos_i, 0.0));
+        importance *= cos_sub_clamped(sin_i, cos_i, sin_b, cos_b);
+    }
+    return max(importance, 0.0);
+}
+
+// The importance of light at infinity k (its irradiance, times |cos| to n for a
+// directional light).
+float light_tree_infinite_importance(uint tree, uint k, vec3 n) {
+    uint at = tree + kLightTreeHeader + kLightTreeInfiniteFloats * k;
+    float importance = distribution_fetch(at + 1u);
+    if (distribution_fetch_uint(at + 2u) != 0u) {
+        vec3 w = vec3(distribution_fetch(at + 4u), distribution_fetch(at + 5u), distribution_fetch(at + 6u));
+        importance *= abs(dot(w, n));
+    }
+    return importance;
+}
+
+// The first choice at p: the sum of the lights at infinity's importances and the root's.
+float light_tree_top(uint tree, vec3 p, vec3 n, out float root) {
+    uint n_inf = distribution_fetch_uint(tree + 1u);
+    float infinite = 0.0;
+    for (uint k = 0u; k < n_inf; ++k) infinite += light_tree_infinite_importance(tree, k, n);
+    root = distribution_fetch_uint(tree) > 0u ? light_tree_importance(light_tree_node(tree, 0u), p, n) : 0.0;
+    return infinite;
+}
+
+// The light chosen at p (normal n) for u in [0, 1) and its probability (0: none, no light
+// can reach p).
+LightChoice light_tree_sample(uint tree, vec3 p, vec3 n, float u) {
+    float root;
+    float infinite = light_tree_top(tree, p, n, root);
+    float total = infinite + root;
+    if (!(total > 0.0)) return LightChoice(0u, 0.0);
+    float u_scaled = u * total;
+    if (u_scaled < infinite) {
+        uint n_inf = distribution_fetch_uint(tree + 1u);
+        for (uint k = 0u; k < n_inf; ++k) {
+            float importance = light_tree_infinite_importance(tree, k, n);
+            if (u_scaled < importance || k + 1u == n_inf)
+                return LightChoice(distribution_fetch_uint(tree + kLightTreeHeader + kLightTreeInfiniteFloats * k),
+                                   importance / total);
+            u_scaled -= importance;
+        }
+    }
+    u = min((u_scaled - infinite) / root, kOneMinusEpsilon);
+    float pmf = root / total;
+    uint i = 0u;
+    LightTreeNode nd = light_tree_node(tree, 0u);
+    for (int depth = 0; depth <= kLightTreeMaxDepth; ++depth) {
+        if ((nd.flags & kLightTreeLeaf) != 0u) return LightChoice(nd.child, pmf);
+        LightTreeNode first = light_tree_node(tree, i + 1u);
+        LightTreeNode second = light_tree_node(tree, nd.child);
+        float i0 = light_tree_importance(first, p, n);
+        float i1 = light_tree_importance(second, p, n);
+        if (!(i0 + i1 > 0.0)) break;
+        float p0 = i0 / (i0 + i1);
+        if (u < p0) {
+            i += 1u;
+            nd = first;
+            u = min(u / p0, kOneMinusEpsilon);
+            pmf *= p0;
+        } else {
+            i = nd.child;
+            nd = second;
+            u = min((u - p0) / (1.0 - p0), kOneMinusEpsilon);
+            pmf *= 1.0 - p0;
+        }
+    }
+    return LightChoice(0u, 0.0);
+}
+
+// The probability that light_tree_sample chooses light `light` at p (normal n); `infinite`:
+// the light is at infinity (outside the tree).
+float light_tree_pmf(uint tree, vec3 p, vec3 n, uint light, bool infinite) {
+    float root;
+    float total = light_tree_top(tree, p, n, root);
+    total += root;
+    if (!(total > 0.0)) return 0.0;
+    if (infinite) {
+        uint n_inf = distribution_fetch_uint(tree + 1u);
+        for (uint k = 0u; k < n_inf; ++k)
+            if (distribution_fetch_uint(tree + kLightTreeHeader + kLightTreeInfiniteFloats * k) == light)
+                return light_tree_infinite_importance(tree, k, n) / total;
+        return 0.0;
+    }
+    uint at = distribution_fetch_uint(tree + 3u) + 2u * light;
+    uint leaf = distribution_fetch_uint(tree + at);
+    uint trail = distribution_fetch_uint(tree + at + 1u);
+    if (leaf == 0u || !(root > 0.0)) return 0.0;
+    leaf -= 1u;
+    float pmf = root / total;
+    uint i = 0u;
+    LightTreeNode nd = light_tree_node(tree, 0u);
+    for (int depth = 0; depth < kLightTreeMaxDepth && i != leaf; ++depth) {
+        LightTreeNode first = light_tree_node(tree, i + 1u);
+        LightTreeNode second = light_tree_node(tree, nd.child);
+        float i0 = light_tree_importance(first, p, n);
+        float i1 = light_tree_importance(second, p, n);
+        if (!(i0 + i1 > 0.0)) return 0.0;
+        bool take_second = (trail & 1u) != 0u;
+        pmf *= (take_second ? i1 : i0) / (i0 + i1);
+        i = take_second ? nd.child : i + 1u;
+        nd = take_second ? second : first;
+        trail >>= 1u;
+    }
+    return pmf;
+}

@@ -1,0 +1,199 @@
+"""The light BVH (glrender/sampling/light_tree.py, shaders/lights/light_tree.glsl) over a
+random set of lights: one-sided and two-sided planar lights facing every way, spheres,
+point lights and spot lights whose intensities span three decades, a directional light
+and an environment.
+
+At random shading points (with normals, and without: points in a medium):
+- the probabilities of all lights sum to at most 1, and to 1 less the chance that the
+  descent meets a node whose children both have importance 0 (no light chosen: a node's
+  bound is looser than its children's), which stays small;
+- the sampler's frequencies, "none" among the outcomes, match the pmf (chi-square, one
+  Šidák family, CHI2_FAMILY): the pmf's descent along each light's bit trail is the
+  sampler's;
+- a sample's own probability is the pmf of the light it chose, and GLSL agrees with the
+  numpy twins;
+- a light the tree never chooses at a point brings it nothing: a one-sided light whose
+  plane has the point behind it, a spot whose cutoff cone misses it (the importance is a
+  bound, so this is what keeps light selection unbiased).
+"""
+import numpy as np
+import pytest
+
+from glrender.sampling import light_tree as lt
+from glrender.testing.harness import run_glsl
+from glrender.testing.stats import chi2_sf, sidak_alpha
+
+PREAMBLE = "float distribution_fetch(uint i) { return table[i]; }"
+CHI2_FAMILY = 6   # test03's shading points
+N_PLANAR, N_SPHERE, N_POINT, N_SPOT, N_INF = 120, 20, 30, 30, 2
+
+
+def random_lights(seed=7):
+    """LightBounds of a random light set in a 20-unit box, and per light its kind, the
+    planar lights' corner points and the spots' cutoff cosines (for test04)."""
+    rng = np.random.default_rng(seed)
+    n = N_PLANAR + N_SPHERE + N_POINT + N_SPOT + N_INF
+    kind = np.array(["planar"] * N_PLANAR + ["sphere"] * N_SPHERE + ["point"] * N_POINT +
+                    ["spot"] * N_SPOT + ["infinite"] * N_INF)
+    centre = rng.uniform(-10, 10, (n, 3))
+    normal = rng.normal(size=(n, 3))
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    b = lt.LightBounds(lo=centre.copy(), hi=centre.copy(), phi=10 ** rng.uniform(-2, 1, n),
+                       w=np.tile([0.0, 0.0, 1.0], (n, 1)), cos_o=np.full(n, -1.0),
+                       cos_e=np.zeros(n), two_sided=np.zeros(n, bool), infinite=kind == "infinite")
+    corners = np.zeros((n, 4, 3))
+    cos_cutoff = np.full(n, -1.0)
+    for i in range(n):
+        if kind[i] == "planar":
+            t = np.cross(normal[i], [0.3, 0.5, 0.8])
+            t /= np.linalg.norm(t)
+            s = np.cross(normal[i], t)
+            half = rng.uniform(0.05, 1.0, 2)
+            corners[i] = [centre[i] + a * half[0] * t + c * half[1] * s
+                          for a, c in ((-1, -1), (1, -1), (-1, 1), (1, 1))]
+            b.lo[i], b.hi[i] = corners[i].min(axis=0), corners[i].max(axis=0)
+            b.w[i], b.cos_o[i] = normal[i], 1.0
+            b.two_sided[i] = i % 4 == 0
+        elif kind[i] == "sphere":
+            r = rng.uniform(0.1, 1.0)
+            b.lo[i], b.hi[i] = centre[i] - r, centre[i] + r
+        elif kind[i] == "spot":
+            beam, cutoff = np.sort(rng.uniform(0.1, 1.2, 2))
+            b.w[i], b.cos_o[i] = normal[i], np.cos(beam)
+            b.cos_e[i] = np.cos(cutoff - beam)
+            cos_cutoff[i] = np.cos(cutoff)
+        elif kind[i] == "infinite" and i == n - N_INF:   # a directional light, then an environment
+            b.w[i], b.cos_o[i] = normal[i], 1.0
+    return b, kind, corners, cos_cutoff
+
+
+def shading_points(count, seed):
+    """Points in the lights' box (some inside light boxes' neighbourhoods), normals, and
+    every fourth point without a normal (a point in a medium)."""
+    rng = np.random.default_rng(seed)
+    p = rng.uniform(-11, 11, (count, 3))
+    n = rng.normal(size=(count, 3))
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    n[::4] = 0.0
+    return p.astype(np.float32), n.astype(np.float32)
+
+
+@pytest.fixture(scope="module")
+def tree():
+    b, kind, corners, cos_cutoff = random_lights()
+    return lt.light_tree_table(b), b, kind, corners, cos_cutoff
+
+
+def glsl_pmf_all(block, p, n, infinite):
+    """GLSL light_tree_pmf of every light at each of the points: (points, lights)."""
+    lights = len(infinite)
+    pp = np.repeat(p, lights, axis=0)
+    nn = np.repeat(n, lights, axis=0)
+    light = np.tile(np.arange(lights, dtype=np.uint32), len(p))
+    inf = np.tile(infinite.astype(np.uint32), len(p))
+    out = run_glsl("float pmf = light_tree_pmf(0u, p, n, light, inf != 0u);",
+                   {"p": pp, "n": nn, "light": light, "inf": inf}, {"pmf": "float"},
+                   includes=["lights/light_tree.glsl"], buffers={"table": block}, preamble=PREAMBLE)
+    return out["pmf"].reshape(len(p), lights).astype(np.float64)
+
+
+def glsl_sample(block, p, n, u):
+    out = run_glsl("LightChoice c = light_tree_sample(0u, p, n, u); uint index = c.index; float pmf = c.pmf;",
+                   {"p": p, "n": n, "u": u}, {"index": "uint", "pmf": "float"},
+                   includes=["lights/light_tree.glsl"], buffers={"table": block}, preamble=PREAMBLE)
+    return out["index"].astype(np.int64), out["pmf"].astype(np.float64)
+
+
+def test01_probabilities_sum_to_one(gl_ctx, tree):
+    block, b, *_ = tree
+    p, n = shading_points(64, 1)
+    pmf = glsl_pmf_all(block, p, n, b.infinite)
+    total = pmf.sum(axis=1)
+    assert np.all(total <= 1 + 2e-5) and np.all(total > 0.9), total.min()
+    # the lights at infinity: n_inf / (n_inf + 1) among them, uniformly
+    # the lights at infinity: in proportion to their irradiance (the directional one's
+    # times |cos|) beside the tree's root
+    root = np.array([lt.light_tree_importance(lt._node(block, 0), p[k], n[k]) for k in range(len(p))])
+    inf = np.flatnonzero(b.infinite)
+    irradiance = np.stack([b.phi[inf[0]] * np.abs(n @ b.w[inf[0]]), np.full(len(p), b.phi[inf[1]])], axis=1)
+    np.testing.assert_allclose(pmf[:, inf], irradiance / (irradiance.sum(axis=1) + root)[:, None], rtol=2e-4)
+    # numpy's twin
+    for k in range(0, 64, 9):
+        twin = [lt.light_tree_pmf(block, p[k], n[k], i, bool(b.infinite[i])) for i in range(len(b.phi))]
+        np.testing.assert_allclose(twin, pmf[k], rtol=2e-4, atol=1e-9)
+
+
+def test02_a_sample_has_the_probability_of_its_light(gl_ctx, tree):
+    block, b, *_ = tree
+    p, n = shading_points(4096, 2)
+    u = np.random.default_rng(3).random(4096, dtype=np.float32)
+    index, pmf = glsl_sample(block, p, n, u)
+    chosen = pmf > 0
+    assert chosen.mean() > 0.95
+    table = glsl_pmf_all(block, p[:256], n[:256], b.infinite)
+    np.testing.assert_allclose(pmf[:256][chosen[:256]], table[np.arange(256), index[:256]][chosen[:256]], rtol=1e-6)
+    # numpy's twin makes the same choices (float32 against float64: a choice near a
+    # boundary between children may differ)
+    twin = [lt.light_tree_sample(block, p[k], n[k], float(u[k])) for k in range(512)]
+    twin_index = np.array([t[0] for t in twin])
+    same = np.where(chosen[:512], twin_index == index[:512], twin_index == -1)
+    assert same.mean() > 0.99
+    np.testing.assert_allclose(np.array([t[1] for t in twin])[same], pmf[:512][same], rtol=2e-4)
+
+
+@pytest.mark.parametrize("point", range(CHI2_FAMILY))
+def test03_frequencies_match_the_pmf(gl_ctx, tree, point):
+    block, b, *_ = tree
+    p, n = shading_points(CHI2_FAMILY, 4)
+    samples = 200_000
+    pp = np.repeat(p[point:point + 1], samples, axis=0)
+    nn = np.repeat(n[point:point + 1], samples, axis=0)
+    u = np.random.default_rng(10 + point).random(samples, dtype=np.float32)
+    index, pmf = glsl_sample(block, pp, nn, u)
+    probability = glsl_pmf_all(block, p[point:point + 1], n[point:point + 1], b.infinite)[0]
+    # the outcomes: each light, then none (a pmf of 0)
+    expected = np.append(probability, max(1 - probability.sum(), 0.0)) * samples
+    index = np.where(pmf > 0, index, len(probability))
+    counts = np.bincount(index, minlength=len(expected)).astype(np.float64)
+    assert np.all(counts[expected == 0] == 0), "a light of probability 0 was chosen"
+    # pool the outcomes expected fewer than 5 times into one cell
+    small = (expected > 0) & (expected < 5)
+    cells_e = np.append(expected[expected >= 5], expected[small].sum())
+    cells_c = np.append(counts[expected >= 5], counts[small].sum())
+    if cells_e[-1] == 0:
+        cells_e, cells_c = cells_e[:-1], cells_c[:-1]
+    stat = float(np.sum((cells_c - cells_e) ** 2 / cells_e))
+    assert chi2_sf(stat, len(cells_e) - 1) >= sidak_alpha(0.01, CHI2_FAMILY)
+
+
+def test04_lights_never_chosen_bring_nothing(gl_ctx, tree):
+    """Where a light's probability is 0 at a point it cannot light the point: one-sided
+    planar lights have the point behind their plane, spots have it outside their cutoff."""
+    block, b, kind, corners, cos_cutoff = tree
+    p, n = shading_points(512, 5)
+    pmf = glsl_pmf_all(block, p, n, b.infinite)
+    zero = pmf == 0
+    assert zero.sum() > 1000    # the tree does rule lights out
+    for i in np.flatnonzero(kind == "planar"):
+        if b.two_sided[i]:
+            continue
+        ahead = (p[:, None, :] - corners[i][None]) @ b.w[i]   # (points, corners)
+        lit = (ahead > 1e-4).any(axis=1)
+        assert not np.any(zero[:, i] & lit), i
+    for i in np.flatnonzero(kind == "spot"):
+        d = p - b.lo[i]
+        cos = d @ b.w[i] / np.linalg.norm(d, axis=1)
+        assert not np.any(zero[:, i] & (cos > cos_cutoff[i] + 1e-5)), i
+
+
+def test05_point_and_spot_lights_alone(gl_ctx):
+    """A tree of one light is its root: chosen wherever it can reach (probability 1)."""
+    b = lt.LightBounds(lo=np.zeros((1, 3)), hi=np.zeros((1, 3)), phi=np.ones(1),
+                       w=np.array([[0.0, 0.0, -1.0]]), cos_o=np.array([np.cos(0.3)]),
+                       cos_e=np.array([np.cos(0.2)]), two_sided=np.zeros(1, bool),
+                       infinite=np.zeros(1, bool))
+    block = lt.light_tree_table(b)
+    p = np.array([[0, 0, -2], [0, 0, 2], [1.5, 0, -2]], np.float32)   # below, above, off-axis
+    n = np.zeros((3, 3), np.float32)
+    pmf = glsl_pmf_all(block, p, n, b.infinite)[:, 0]
+    np.testing.assert_array_equal(pmf, [1.0, 0.0, 0.0])   # atan(1.5 / 2) = 0.64 > 0.5
