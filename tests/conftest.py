@@ -10,6 +10,20 @@ DATA = Path(__file__).parent / "data"
 IN_CI = os.environ.get("CI", "").lower() in ("1", "true", "yes")
 
 
+@pytest.fixture(scope="session", autouse=True)
+def glrender_cache(tmp_path_factory):
+    """glrender's caches (the unit-size calibration, built BVHs and normals) in a temporary
+    folder, never in the user's: the suite neither reads what other runs left nor leaves
+    anything."""
+    old = os.environ.get("GLRENDER_CACHE_DIR")
+    os.environ["GLRENDER_CACHE_DIR"] = str(tmp_path_factory.mktemp("glrender-cache"))
+    yield os.environ["GLRENDER_CACHE_DIR"]
+    if old is None:
+        del os.environ["GLRENDER_CACHE_DIR"]
+    else:
+        os.environ["GLRENDER_CACHE_DIR"] = old
+
+
 @pytest.fixture(scope="session")
 def gl_ctx():
     """The session's OpenGL context (the device from $GLRENDER_DEVICE, else auto)."""

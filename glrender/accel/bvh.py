@@ -43,6 +43,11 @@ from .quantize import pack_nodes
 from .tree import BinaryTree, half_area
 
 METHODS = ("ploc", "binned_sah")
+# The version of what build_bvh and Bvh.pack output for given input and parameters. The BVH
+# cache (accel/bvh_cache.py) keys its entries by it: bump it with any change to the builder,
+# its stages (mesh clean-up, PLOC, binned SAH, leaf decisions, collapse, quantisation) or
+# the packed layout that changes a single output bit, or caches will serve the old trees.
+BUILDER_VERSION = 1
 LEAF_FLAG = 0x80000000
 LEAF_COUNT_SHIFT = 28
 LEAF_FIRST_MASK = (1 << LEAF_COUNT_SHIFT) - 1
@@ -82,6 +87,29 @@ class MotionBvh:
     bvh: Bvh
     world_lo: np.ndarray
     world_hi: np.ndarray
+
+
+@dataclass
+class BvhBuffers:
+    """What rendering needs of a built BVH (all of it cacheable, :mod:`.bvh_cache`): the
+    packed buffers of :meth:`Bvh.pack`, the ``prim_order`` of the static tree and then of
+    each motion instance's tree, the width and depth, and :meth:`Bvh.stats`."""
+
+    packed: dict[str, np.ndarray]
+    prim_orders: list[np.ndarray]
+    width: int
+    depth: int
+    build_stats: dict
+
+    def pack(self) -> dict[str, np.ndarray]:
+        """The packed buffers, as :meth:`Bvh.pack` (what :class:`~glrender.gpu.bvh_upload.GpuBvh`
+        uploads)."""
+        return self.packed
+
+    @property
+    def prim_order(self) -> np.ndarray:
+        """The static tree's BVH-order triangle -> input triangle index."""
+        return self.prim_orders[0]
 
 
 @dataclass
@@ -192,6 +220,11 @@ class Bvh:
                 m.bvh.triangle_count for m in self.motion), 1),
             "build_seconds": self.build_seconds,
         }
+
+    def buffers(self) -> BvhBuffers:
+        """The packed buffers, triangle orders and statistics (:class:`BvhBuffers`)."""
+        return BvhBuffers(self.pack(), [self.prim_order] + [m.bvh.prim_order for m in self.motion],
+                          self.width, self.depth, self.stats())
 
     def child_refs(self, node_offset: int = 0, triangle_offset: int = 0) -> np.ndarray:
         """(N, width) uint32 child references (see the module doc), for a tree stored

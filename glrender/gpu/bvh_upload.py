@@ -1,4 +1,5 @@
-"""Upload a :class:`~glrender.accel.bvh.Bvh` as the buffer textures the GLSL traversal reads.
+"""Upload a :class:`~glrender.accel.bvh.Bvh` (or its :class:`~glrender.accel.bvh.BvhBuffers`)
+as the buffer textures the GLSL traversal reads.
 
 Texture units 0-3 belong to geometry (:mod:`glrender.gpu.bindings` ``TEX_BVH_*``);
 ``shaders/geometry/bvh_layout.glsl`` declares them and nothing else does (a test checks the
@@ -8,7 +9,7 @@ from __future__ import annotations
 
 from ..errors import UsageError
 from ..gl.buffers import BufferTexture
-from ..accel.bvh import Bvh, max_depth
+from ..accel.bvh import Bvh, BvhBuffers, max_depth
 from . import bindings
 
 # node widths a GLSL traversal reads: 4 (shaders/geometry/bvh.glsl, the render kernels') and
@@ -26,7 +27,7 @@ TEXTURES = {
 class GpuBvh:
     """A BVH's buffer textures on one context; :meth:`bind` before dispatching."""
 
-    def __init__(self, ctx, bvh: Bvh):
+    def __init__(self, ctx, bvh: Bvh | BvhBuffers):
         if bvh.width not in TRAVERSAL_WIDTHS:
             raise UsageError(f"GpuBvh: the GLSL traversals read "
                              f"{' or '.join(map(str, TRAVERSAL_WIDTHS))}-wide trees, this one is "

@@ -56,6 +56,7 @@ class DeviceScene:
         self.env_texture: Any = None
         self.env_weights: np.ndarray | None = None
         self.texture_bytes = 0              # the atlas pages (RGBA16F) on the device
+        self.bvh_cache = "none"             # the BVH: "hit", "miss", "uncached" (accel/bvh_cache.py)
         self._units: list[tuple[int, Any]] = []    # (texture unit, its bind call) for bind()
         self._owned: list[Any] = []                # released with the last user
         try:
@@ -198,7 +199,8 @@ class DeviceScene:
     def _upload_mesh(self) -> None:
         """BVH over the static mesh triangles (world space) plus one tree per moving mesh
         (object space), and per-triangle shading data in the BVH's triangle order."""
-        from ..accel import MotionInstance, build_bvh
+        from ..accel import MotionInstance
+        from ..accel.bvh_cache import build_bvh_buffers
         from ..gl.buffers import BufferTexture
         from .bvh_upload import GpuBvh
 
@@ -212,13 +214,14 @@ class DeviceScene:
                                  mm.world_from_object_open, mm.world_from_object_close)
                   for mm in p.moving_meshes]
         tri = positions.reshape(-1, 3)
-        bvh = build_bvh(tri.astype(np.float32), np.arange(len(tri)).reshape(-1, 3), motion=motion)
+        bvh, self.bvh_cache = build_bvh_buffers(tri.astype(np.float32),
+                                                np.arange(len(tri)).reshape(-1, 3), motion=motion)
         # shading data of every BVH triangle id: the static ones, then each moving mesh's block
-        parts = [(normals, uvs, material, light, bvh.prim_order)]
-        for mm, mbvh in zip(p.moving_meshes, bvh.motion):
+        parts = [(normals, uvs, material, light, bvh.prim_orders[0])]
+        for mm, order in zip(p.moving_meshes, bvh.prim_orders[1:]):
             k = len(mm.positions)
             parts.append((mm.normals, mm.uvs, np.full(k, mm.material, np.uint32), np.zeros(k, np.uint32),
-                          mbvh.bvh.prim_order))
+                          order))
         # each part gathered into its rows of the float32 texel arrays (np.take: 2-3x faster
         # than indexing with an index array); uv texels hold u0 v0 u1 v1 | u2 v2 0 0
         total = sum(len(o) for *_, o in parts)

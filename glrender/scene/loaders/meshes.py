@@ -7,9 +7,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...accel import disk_cache
 from ...errors import SceneError
 from .. import model as m
 from .diagnostics import warn
+
+# The version of what vertex_normals computes: recomputed normals of large meshes are kept in
+# the BVH cache (accel/disk_cache.py) under it, so bump it with any change that alters a bit
+# of the result.
+NORMALS_VERSION = 1
+# below this many triangles the normals cost less than reading a cache file
+CACHE_MIN_TRIANGLES = 1 << 15
 
 
 @dataclass
@@ -92,8 +100,22 @@ def finish_mesh(mesh: MeshData, source, compute_normals: bool = True) -> MeshDat
         raise SceneError(f"{source}: no triangles with non-zero area")
     normals = _per_vertex(mesh.normals, len(v), 3, "normals", source)
     if normals is None and compute_normals:
-        normals = _angle_weighted_normals(len(v), f, e, face_normal)
+        normals = _cached_normals(v, f, e, face_normal)
     return MeshData(v, f, normals, _per_vertex(mesh.uvs, len(v), 2, "texture coordinates", source))
+
+
+def _cached_normals(v: np.ndarray, f: np.ndarray, e, face_normal) -> np.ndarray:
+    """:func:`_angle_weighted_normals`, from the cache when the mesh is large and was seen
+    before (keyed by the vertex and triangle arrays)."""
+    if len(f) < CACHE_MIN_TRIANGLES or not disk_cache.enabled():
+        return _angle_weighted_normals(len(v), f, e, face_normal)
+    key = disk_cache.key("normals", NORMALS_VERSION, {}, [v, f])
+    entry = disk_cache.load("normals", key, NORMALS_VERSION)
+    if entry is not None and entry.arrays.get("normals", np.zeros(0)).shape == v.shape:
+        return entry.arrays["normals"]
+    normals = _angle_weighted_normals(len(v), f, e, face_normal)
+    disk_cache.store("normals", key, NORMALS_VERSION, {"normals": normals}, {})
+    return normals
 
 
 def _per_vertex(values, count: int, width: int, what: str, source) -> np.ndarray | None:
