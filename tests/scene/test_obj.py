@@ -281,3 +281,59 @@ def test11_bulk_parser_on_the_vendored_and_test_obj_files(write):
             _same_obj(fast[0], _general(path))
     assert obj_module._read_obj_fast(paths[0].read_bytes(), paths[0]) is not None
     assert taken >= 1
+
+
+def _face(form: str, ids) -> str:
+    """One face line in ``form`` ("v", "v/vt", "v//vn", "v/vt/vn"), every index used for
+    each attribute."""
+    pattern = {"v": "{}", "v/vt": "{}/{}", "v//vn": "{}//{}", "v/vt/vn": "{}/{}/{}"}[form]
+    return "f " + " ".join(pattern.format(*[i] * pattern.count("{}")) for i in ids)
+
+
+@pytest.mark.parametrize("form", ["v", "v/vt", "v//vn", "v/vt/vn"])
+@pytest.mark.parametrize("shape", ["triangles", "quads", "mixed"])
+@pytest.mark.parametrize("relative", [False, True])
+def test12_bulk_parser_equals_the_general_one_on_each_face_form(write, form, shape, relative):
+    """Small files of each corner form, of triangles, quads or both (and a pentagon),
+    indices absolute or relative, with comments, blank lines and tabs: the bulk
+    parser (forced) reads what the general parser reads."""
+    from glrender.scene.loaders import obj as obj_module
+
+    rng = np.random.default_rng(len(form) + 7 * len(shape) + relative)
+    lines = ["# made by a test", "", "o blob"]
+    total = 0
+    for block in range(3):
+        n = 12
+        lines += [f"v {x:.5f}\t{y:.5f} {z:.5f}" for x, y, z in rng.random((n, 3))]
+        lines += [f"vt {u:.4f} {v:.4f}" for u, v in rng.random((n, 2))]
+        lines += [f"vn {x:.4f} {y:.4f} {z:.4f}" for x, y, z in rng.normal(size=(n, 3))]
+        total += n
+        lines += ["", "# faces of this block", f"usemtl m{block % 2}"]
+        sizes = {"triangles": [3] * 6, "quads": [4] * 6, "mixed": [3, 4, 4, 3, 5, 3]}[shape]
+        for size in sizes:
+            ids = rng.choice(n, size, replace=False) + total - n      # this block's vertices
+            ids = ids - total if relative else ids + 1
+            lines.append(_face(form, ids))
+        lines.append("   ")
+    path = write("forms.obj", "\n".join(lines) + "\n")
+    fast = obj_module._read_obj_fast(path.read_bytes(), path)
+    assert fast is not None
+    slow = _general(path)
+    _same_obj(fast[0], slow)
+    expected = {"triangles": 6, "quads": 12, "mixed": 10}[shape] * 3
+    assert len(fast[0].triangles) == len(slow.triangles) == expected
+
+
+def test13_a_large_file_with_a_bad_line_names_that_line(write):
+    """The bulk parser declines a file with one bad face; the general parser's one line
+    names the file and the line."""
+    lines = [f"v {k}.25 {k % 7}.5 {k % 3}.75" for k in range(3000)]
+    lines += [f"f {k + 1} {k + 2} {k + 3}" for k in range(0, 2997, 3)]
+    lines[3500] = "f 1 2 x"
+    path = write("big.obj", "\n".join(lines) + "\n")
+    from glrender.scene.loaders import obj as obj_module
+
+    assert path.stat().st_size > obj_module.FAST_PATH_BYTES
+    with pytest.raises(SceneError) as info:
+        glrender.load(path)
+    assert str(info.value).startswith(f"{path}:3501: malformed face vertex 'x'")

@@ -162,8 +162,9 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
 def _read_obj_fast(data: bytes, path: Path):
     """Large files, the common shape, parsed by numpy over the whole file: ``v`` lines with
     the same count (>= 3) of numbers, ``vt`` lines with the same count, ``vn`` with 3,
-    faces all with the same number of corners in the same ``v``, ``v/vt``, ``v//vn`` or
-    ``v/vt/vn`` form (relative indices resolved as the general parser does), comments,
+    faces of three or more corners (triangles, quads and larger polygons, mixed in any
+    order, fanned as the general parser fans them) all in the same ``v``, ``v/vt``,
+    ``v//vn`` or ``v/vt/vn`` form (relative indices resolved as the general parser does), comments,
     blank lines and ``usemtl``/``mtllib``/``o``/``g``/``s``. The lines are classified by
     their first bytes, their tokens counted per line and per face corner, and every kind
     parsed in bulk from the file's own bytes (the keywords blanked). Anything else returns
@@ -216,17 +217,20 @@ def _read_obj_fast(data: bytes, path: Path):
     if per_line[is_vn].size and (per_line[is_vn] != 4).any():
         return None
     widths = []
-    for mask in (is_v, is_vt, is_f):
+    for mask in (is_v, is_vt):
         counts = per_line[mask]
         widths.append(int(counts[0]) - 1 if counts.size else 0)
         if counts.size and (counts != counts[0]).any():
             return None
-    v_width, vt_width, k = widths
-    if v_width < 3 or (is_vt.any() and vt_width < 1) or k < 3:
-        return None
-    # face corners: each the same count of '/' and of '//' as the first one
+    v_width, vt_width = widths
     f_lines = np.flatnonzero(is_f)
-    corner_tokens = (line_token[f_lines][:, None] + np.arange(1, k + 1)).reshape(-1)  # not "f"
+    sizes = per_line[f_lines] - 1                     # corners of each face
+    if v_width < 3 or (is_vt.any() and vt_width < 1) or sizes.min() < 3:
+        return None
+    nf, total = len(f_lines), int(sizes.sum())
+    face_start = np.cumsum(sizes) - sizes             # each face's first corner
+    # face corners (the tokens after "f"): each the same count of '/' and of '//' as the first
+    corner_tokens = np.repeat(line_token[f_lines] + 1 - face_start, sizes) + np.arange(total)
     first, last = token_first[corner_tokens], token_last[corner_tokens] + 1
     slash_at = np.flatnonzero(buf == ord("/"))
     slashes = np.searchsorted(slash_at, last) - np.searchsorted(slash_at, first)
@@ -249,26 +253,29 @@ def _read_obj_fast(data: bytes, path: Path):
     text = blank.tobytes()
     del blank
 
-    def parse(mask, dtype, per_line_count):
+    def parse(mask, dtype, width, count):
+        """The numbers of the ``mask`` lines, ``count`` rows of ``width``."""
         line_end = np.append(starts, n)
         parts = []
         for a, b in _runs(mask):
             chunk = np.fromstring(text[line_end[a]:line_end[b]], dtype=dtype, sep=" ")
             parts.append(chunk)
         out = np.concatenate(parts) if parts else np.zeros(0, dtype)
-        if out.size != per_line_count * int(mask.sum()):
+        if out.size != width * count:
             raise ValueError("not a number")
-        return out.reshape(-1, per_line_count)
+        return out.reshape(-1, width)
 
     import warnings
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")   # numpy warns (DeprecationWarning) on a bad token
         try:
-            pos = parse(is_v, np.float64, v_width)[:, :3]
-            tex = parse(is_vt, np.float64, vt_width) if is_vt.any() else np.zeros((0, 1))
-            nrm = parse(is_vn, np.float64, 3) if is_vn.any() else np.zeros((0, 3))
-            ids = parse(is_f, np.int64, k * fields).reshape(len(f_lines), k, fields)
+            pos = parse(is_v, np.float64, v_width, np.count_nonzero(is_v))[:, :3]
+            tex = parse(is_vt, np.float64, vt_width, np.count_nonzero(is_vt)) if is_vt.any() \
+                else np.zeros((0, 1))
+            nrm = parse(is_vn, np.float64, 3, np.count_nonzero(is_vn)) if is_vn.any() \
+                else np.zeros((0, 3))
+            ids = parse(is_f, np.int64, fields, total)
         except (DeprecationWarning, ValueError):
             return None
     if not (np.isfinite(pos).all() and np.isfinite(tex).all() and np.isfinite(nrm).all()):
@@ -278,21 +285,29 @@ def _read_obj_fast(data: bytes, path: Path):
     else:
         tex = np.zeros((0, 2))
     # indices: 1-based, or relative to the count read before the face's line
-    before = [np.cumsum(mask)[f_lines] for mask in (is_v, is_vt, is_vn)]
     columns = [0, 1, 2][:fields] if n_double == 0 else [0, 2]
-    corner = np.full((len(f_lines), k, 3), -1, np.int64)
+    corner = np.full((total, 3), -1, np.int64)
     for j, axis in enumerate(columns):
-        i = ids[:, :, j]
+        i = ids[:, j]
         if (i == 0).any():
             return None
-        i = np.where(i < 0, i + before[axis][:, None], i - 1) if (i < 0).any() else i - 1
+        if (i < 0).any():
+            before = np.repeat(np.cumsum((is_v, is_vt, is_vn)[axis])[f_lines], sizes)
+            i = np.where(i < 0, i + before, i - 1)
+        else:
+            i = i - 1
         if i.size and (i.min() < 0 or i.max() >= (len(pos), len(tex), len(nrm))[axis]):
             return None
-        corner[:, :, axis] = i
-    nf = len(f_lines)
-    fan = corner if k == 3 else \
-        np.stack([corner[:, [0, j, j + 1]] for j in range(1, k - 1)], axis=1).reshape(-1, 3, 3)
-    face_of = np.repeat(np.arange(nf), k - 2)
+        corner[:, axis] = i
+    # polygons fanned around their first corner, face by face, as the general parser does
+    if (sizes == 3).all():
+        fan, face_of = corner.reshape(-1, 3, 3), np.arange(nf)
+    else:
+        per_face = sizes - 2
+        face_of = np.repeat(np.arange(nf), per_face)
+        first = face_start[face_of]
+        j = np.arange(len(face_of)) - np.repeat(np.cumsum(per_face) - per_face, per_face)
+        fan = corner[np.stack([first, first + j + 1, first + j + 2], axis=1)]
     # materials, objects and libraries: the face each marker precedes
     faces_before = np.cumsum(is_f) - is_f
     mat_starts, obj_starts, mtl_files = [], [], []
