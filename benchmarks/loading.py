@@ -12,7 +12,15 @@ tree (a hash of its packed buffers and its SAH cost: equal hashes, the same tree
 <commit>``) is measured alternately with this checkout, round by round, so both see
 the same machine load; medians over ``--repeats`` rounds are printed.
 
+``--cache`` measures the BVH cache (glrender/accel/disk_cache.py) instead: each round
+gives a fresh process an empty cache folder (the first load: normals and BVH computed,
+then written) and then another fresh process the same folder (the second load: both read
+back), and times ``glrender.load`` plus the device scene (packing, BVH, uploads; no
+kernel compile, no pass). It prints the medians, the ratio second / first, and the
+load average over the run.
+
     .venv/bin/python benchmarks/loading.py [--repeats 5] [--baseline DIR] [--formats ply,obj]
+    .venv/bin/python benchmarks/loading.py --cache [--repeats 5] [--formats ply,obj]
 """
 from __future__ import annotations
 
@@ -43,12 +51,32 @@ r.step(8)
 r.film()
 t3 = time.perf_counter()
 import hashlib
-bvh = r._scene_data.bvh.bvh       # the tree as uploaded: its buffers' hash and SAH cost
+bvh = r.device_scene.bvh.bvh     # the tree as uploaded: its buffers' hash and SAH cost
 tree = hashlib.sha256(b"".join(a.tobytes() for _, a in sorted(bvh.pack().items())))
 print(json.dumps({"load": t1 - t0, "pack": r.timings["pack"],
                   "bvh_upload": r.timings["build"] - r.timings["pack"], "compile": r.timings["compile"],
                   "pass": t3 - t2, "cpu_to_dispatch": c2 - c0, "loadavg": os.getloadavg()[0],
-                  "tree": f"{tree.hexdigest()[:12]} SAH {bvh.sah_cost():.4f}"}))
+                  "tree": f"{tree.hexdigest()[:12]} SAH {bvh.build_stats['sah_cost']:.4f}"}))
+"""
+
+MEASURE_CACHE = r"""
+import hashlib, json, os, sys, time, warnings
+warnings.simplefilter("ignore")
+import glrender
+from glrender.gl.context import default_context
+from glrender.gpu.device_scene import DeviceScene
+ctx = default_context()
+t0 = time.perf_counter()
+scene = glrender.load(sys.argv[1])
+t1 = time.perf_counter()
+device = DeviceScene(ctx, scene)
+t2 = time.perf_counter()
+bvh = device.bvh.bvh
+tree = hashlib.sha256(b"".join(a.tobytes() for _, a in sorted(bvh.pack().items())))
+print(json.dumps({"load": t1 - t0, "pack": device.timings["pack"],
+                  "bvh_upload": device.timings["build"] - device.timings["pack"],
+                  "to_device": t2 - t0, "cache": device.bvh_cache, "loadavg": os.getloadavg()[0],
+                  "tree": tree.hexdigest()[:12]}))
 """
 
 
@@ -82,11 +110,40 @@ def write_meshes(folder: Path) -> dict[str, Path]:
     return {"ply": ply, "obj": obj}
 
 
-def measure(checkout: Path, mesh: Path) -> dict:
-    env = dict(os.environ, PYTHONPATH=str(checkout))
-    out = subprocess.run([sys.executable, "-c", MEASURE, str(mesh)], env=env, cwd=checkout,
+def measure(checkout: Path, mesh: Path, script: str = MEASURE, **env_vars: str) -> dict:
+    env = dict(os.environ, PYTHONPATH=str(checkout), **env_vars)
+    out = subprocess.run([sys.executable, "-c", script, str(mesh)], env=env, cwd=checkout,
                          capture_output=True, text=True, check=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def measure_cache(meshes: dict[str, Path], formats: list[str], repeats: int) -> None:
+    """First load (empty cache) against second load (the same cache), alternating."""
+    rows: dict[tuple[str, str], list[dict]] = {}
+    loads = []
+    for _ in range(repeats):
+        for fmt in formats:
+            with tempfile.TemporaryDirectory() as cache:
+                for run in ("first", "second"):
+                    loads.append(os.getloadavg()[0])
+                    rows.setdefault((fmt, run), []).append(
+                        measure(ROOT, meshes[fmt], MEASURE_CACHE, GLRENDER_CACHE="on",
+                                GLRENDER_CACHE_DIR=cache))
+    loads.append(os.getloadavg()[0])
+    print(f"medians of {repeats} fresh processes per row (seconds, glrender.load to the mesh "
+          f"on the device; load average {min(loads):.1f}-{max(loads):.1f})")
+    for fmt in formats:
+        medians = {}
+        for run in ("first", "second"):
+            rs = rows[(fmt, run)]
+            med = {k: statistics.median(r[k] for r in rs) for k in ("load", "pack", "bvh_upload",
+                                                                     "to_device")}
+            medians[run] = med["to_device"]
+            print(f"{fmt:4} {run:6} load {med['load']:5.2f}  pack {med['pack']:5.2f}  "
+                  f"BVH+upload {med['bvh_upload']:5.2f}  to device {med['to_device']:5.2f}  "
+                  f"BVH cache {'/'.join(sorted({r['cache'] for r in rs}))}  "
+                  f"tree {' / '.join(sorted({r['tree'] for r in rs}))}")
+        print(f"{fmt:4} second / first: {medians['second'] / medians['first']:.3f}")
 
 
 def main(argv=None) -> None:
@@ -94,7 +151,13 @@ def main(argv=None) -> None:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--baseline", type=Path, default=None)
     parser.add_argument("--formats", default="ply,obj")
+    parser.add_argument("--cache", action="store_true",
+                        help="first load (empty BVH cache) against second load (cached)")
     args = parser.parse_args(argv)
+    if args.cache:
+        with tempfile.TemporaryDirectory() as tmp:
+            measure_cache(write_meshes(Path(tmp)), args.formats.split(","), args.repeats)
+        return
     checkouts = {"this": ROOT}
     if args.baseline is not None:
         checkouts = {"baseline": args.baseline.resolve(), "this": ROOT}
