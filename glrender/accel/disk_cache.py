@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import mmap
 import os
 import re
 import struct
@@ -51,7 +52,7 @@ _warned: set[str] = set()
 
 @dataclass
 class Entry:
-    """A cached result: its arrays (views of one buffer read from the file) and its JSON metadata."""
+    """A cached result: its arrays (views of the file, mapped copy-on-write) and its JSON metadata."""
 
     arrays: dict[str, np.ndarray]
     meta: dict
@@ -113,10 +114,12 @@ def load(kind: str, key_hex: str, version: int) -> Entry | None:
             size = os.fstat(f.fileno()).st_size
             if size < PREFIX.size:
                 return None
-            data = np.empty(size, np.uint8)       # not zero-filled: readinto fills it
-            if f.readinto(memoryview(data)) != size:
-                return None
-    except OSError:
+            # mapped copy-on-write, not read: the arrays are the page cache's pages until
+            # written to (a 70 MB entry checked in 30 ms instead of 50-160 ms for a read into
+            # fresh memory); writers replace files, never change one, so it stays whole
+            data = np.frombuffer(mmap.mmap(f.fileno(), size, flags=mmap.MAP_PRIVATE,
+                                           prot=mmap.PROT_READ | mmap.PROT_WRITE), np.uint8)
+    except (OSError, ValueError):
         return None
     entry = _parse(data, kind, key_hex, version)
     if entry is not None:
