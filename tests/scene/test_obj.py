@@ -337,3 +337,47 @@ def test13_a_large_file_with_a_bad_line_names_that_line(write):
     with pytest.raises(SceneError) as info:
         glrender.load(path)
     assert str(info.value).startswith(f"{path}:3501: malformed face vertex 'x'")
+
+
+def test14_a_parsed_file_is_cached_by_its_bytes(write, tmp_path, monkeypatch):
+    """The bulk parser's result is kept in the cache under the file's bytes: read again, it
+    comes back without parsing, the same arrays and names; a changed byte parses again;
+    GLRENDER_CACHE=off writes nothing."""
+    from glrender.scene.loaders import obj as obj_module
+
+    cache = tmp_path / "cache"
+    monkeypatch.setenv("GLRENDER_CACHE_DIR", str(cache))
+    monkeypatch.delenv("GLRENDER_CACHE", raising=False)
+    monkeypatch.setattr(obj_module, "CACHE_MIN_BYTES", 0)
+    rng = np.random.default_rng(9)
+    lines = ["mtllib none.mtl", "o thing"]
+    lines += [f"v {x:.5f} {y:.5f} {z:.5f}" for x, y, z in rng.random((2000, 3))]
+    lines += [f"vt {u:.4f} {v:.4f}" for u, v in rng.random((2000, 2))]
+    lines += ["usemtl a"] + [f"f {a}/{a} {b}/{b} {c}/{c}" for a, b, c in rng.integers(1, 2001, (1500, 3))]
+    lines += ["usemtl b"] + [f"f {a}/{a} {b}/{b} {c}/{c} {d}/{d}"
+                             for a, b, c, d in rng.integers(1, 2001, (1500, 4))]
+    path = write("cached.obj", "\n".join(lines) + "\n")
+    parsed = read_obj(path, read_materials=False)
+    assert len(list((cache / "bvh").glob("obj-*.bin"))) == 1
+
+    parse = obj_module._read_obj_fast
+    monkeypatch.setattr(obj_module, "_read_obj_fast", lambda *a: pytest.fail("parsed again"))
+    mtl_files = []
+    monkeypatch.setattr(obj_module, "_read_materials",
+                        lambda obj, files, *a: mtl_files.extend(files))
+    cached = read_obj(path)
+    for name in obj_module._OBJ_ARRAYS:
+        a, b = getattr(cached, name), getattr(parsed, name)
+        assert a.dtype == b.dtype, name
+        np.testing.assert_array_equal(a, b, err_msg=name)
+    assert (cached.material_names, cached.object_names) == (parsed.material_names, parsed.object_names)
+    assert cached.path == path and mtl_files == [("none.mtl", 1)]
+
+    monkeypatch.setattr(obj_module, "_read_obj_fast", parse)
+    changed = write("cached.obj", path.read_text().replace("v 0.", "v 1.", 1))
+    assert read_obj(changed, read_materials=False).positions[:, 0].max() > 1
+    assert len(list((cache / "bvh").glob("obj-*.bin"))) == 2
+    monkeypatch.setenv("GLRENDER_CACHE", "off")
+    write("cached.obj", path.read_text() + "# one more line\n")
+    read_obj(path, read_materials=False)
+    assert len(list((cache / "bvh").glob("obj-*.bin"))) == 2

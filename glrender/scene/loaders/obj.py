@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...accel import disk_cache
 from ...errors import SceneError
 from .. import model as m
 from .diagnostics import Notes, cause, excerpt, image_failure, read_image_checked, warn
@@ -36,6 +37,11 @@ from .scene_files import MissingFile, SceneFiles, read_bytes
 
 MAX_FILE_BYTES = 1 << 31
 FAST_PATH_BYTES = 1 << 16     # files above this try the bulk parser first
+# The version of what _read_obj_fast returns for given bytes: files of CACHE_MIN_BYTES or more
+# that it parses are kept in the BVH cache (accel/disk_cache.py) under it, keyed by their
+# bytes, so bump it with any change to that parser's output.
+BULK_PARSER_VERSION = 1
+CACHE_MIN_BYTES = 1 << 20
 
 
 @dataclass
@@ -335,12 +341,38 @@ def _read_obj_fast(data: bytes, path: Path):
     return obj, mtl_files
 
 
+_OBJ_ARRAYS = ("positions", "texcoords", "normals", "corners", "triangles", "tri_material", "tri_object")
+
+
+def _read_obj_cached(data: bytes, path: Path):
+    """:func:`_read_obj_fast`, read from the cache when a file of these bytes was parsed
+    before (files of ``CACHE_MIN_BYTES`` or more; what the bulk parser declines is not
+    cached: the general parser reads it, with its warnings, every time)."""
+    if len(data) < CACHE_MIN_BYTES or not disk_cache.enabled():
+        return _read_obj_fast(data, path)
+    key = disk_cache.key("obj", BULK_PARSER_VERSION, {}, [np.frombuffer(data, np.uint8)])
+    entry = disk_cache.load("obj", key, BULK_PARSER_VERSION)
+    if entry is not None and set(_OBJ_ARRAYS) <= set(entry.arrays):
+        meta = entry.meta
+        obj = ObjFile(path, *(entry.arrays[name] for name in _OBJ_ARRAYS),
+                      list(meta["material_names"]), list(meta["object_names"]))
+        return obj, [tuple(item) for item in meta["mtl_files"]]
+    fast = _read_obj_fast(data, path)
+    if fast is not None:
+        obj, mtl_files = fast
+        disk_cache.store("obj", key, BULK_PARSER_VERSION,
+                         {name: getattr(obj, name) for name in _OBJ_ARRAYS},
+                         {"material_names": obj.material_names, "object_names": obj.object_names,
+                          "mtl_files": mtl_files})
+    return fast
+
+
 def read_obj(path, files: SceneFiles | None = None, read_materials: bool = True) -> ObjFile:
     """Parse an OBJ file (and its MTL files when ``read_materials``)."""
     path = Path(path)
     files = files or SceneFiles(path.parent)
     data = read_bytes(path, MAX_FILE_BYTES)
-    fast = _read_obj_fast(data, path) if len(data) > FAST_PATH_BYTES else None
+    fast = _read_obj_cached(data, path) if len(data) > FAST_PATH_BYTES else None
     if fast is not None:
         obj, mtl_files = fast
         _read_materials(obj, mtl_files, path, files, read_materials)
