@@ -672,6 +672,11 @@ class SppmRenderer:
         """Bytes of the scene's texture atlas pages on the device."""
         return self.base.texture_bytes
 
+    @property
+    def bvh_cache(self) -> str:
+        """Where the scene's BVH came from (Renderer.bvh_cache)."""
+        return self.base.bvh_cache
+
     def __enter__(self) -> "SppmRenderer":
         return self
 

@@ -449,6 +449,7 @@ class Job:
             "stopped": result.stopped,
             "signal": o.stopped_by() if interrupted and o.stopped_by is not None else None,
             "seconds": {k: self.timings.get(k, 0.0) for k in PHASES},
+            "bvh_cache": r.bvh_cache,
             "denoise": None,
             "crop": o.crop, "clamp": s.clamp, "biased": s.clamp is not None,
             "memory": {"device_bytes_per_pixel": r.device_bytes_per_pixel(),

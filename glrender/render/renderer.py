@@ -244,6 +244,12 @@ class Renderer:
         """Bytes of the scene's texture atlas pages (RGBA16F) on the device."""
         return self.device_scene.texture_bytes if self.device_scene is not None else 0
 
+    @property
+    def bvh_cache(self) -> str:
+        """Where the scene's BVH came from: "hit" (the mesh cache), "miss" (built and
+        stored), "uncached" (built: a small mesh or the cache off) or "none" (no BVH)."""
+        return self.device_scene.bvh_cache if self.device_scene is not None else "none"
+
     # -- setup -------------------------------------------------------------------------------
     def _upload(self) -> None:
         """The settings' light table (selection pmf, alias table, spherical-rectangle flags,

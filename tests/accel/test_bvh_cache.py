@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -251,3 +252,26 @@ def test10_a_cached_scene_uploads_the_same_bytes_and_renders_the_same_image(cach
         assert len(other[1]) == len(off[1]) == 6
         assert all(a == b for a, b in zip(other[1], off[1]))
         np.testing.assert_array_equal(other[2], off[2])
+
+
+def test11_stats_say_where_the_bvh_came_from(cache, tmp_path, monkeypatch):
+    """``--stats`` records ``bvh_cache``: built and stored, then read back; built with the
+    cache off; none for a scene without BVH triangles."""
+    import json
+
+    from glrender.commands.cli import main
+
+    mesh = tmp_path / "ball.ply"
+    write_ply(mesh, *icosphere(3))
+    stats = tmp_path / "stats.json"
+
+    def bvh_cache_of(scene):
+        assert main(["render", str(scene), "--spp", "1", "--width", "8", "-o", str(tmp_path / "o.png"),
+                     "--stats", str(stats), "--quiet"]) == 0
+        return json.loads(stats.read_text())["bvh_cache"]
+
+    assert [bvh_cache_of(mesh) for _ in range(2)] == ["miss", "hit"]
+    monkeypatch.setenv("GLRENDER_CACHE", "off")
+    assert bvh_cache_of(mesh) == "uncached"
+    cornell = Path(__file__).resolve().parents[2] / "scenes" / "cornell-box" / "scene.toml"
+    assert bvh_cache_of(cornell) == "none"
