@@ -33,8 +33,7 @@ def build_bvh_buffers(vertices, triangles, **options) -> tuple[BvhBuffers, str]:
     bound = _SIGNATURE.bind(vertices, triangles, **options)
     bound.apply_defaults()
     motion = list(bound.arguments["motion"])
-    count = len(np.asarray(triangles).reshape(-1, 3)) + \
-        sum(len(np.asarray(m.triangles).reshape(-1, 3)) for m in motion)
+    count = (np.size(triangles) + sum(np.size(m.triangles) for m in motion)) // 3
     if count < MIN_TRIANGLES or not disk_cache.enabled():
         return build_bvh(vertices, triangles, **options).buffers(), "uncached"
     params = {k: v for k, v in bound.arguments.items() if k not in _NOT_IN_KEY}

@@ -1,8 +1,10 @@
-"""An on-disk cache of arrays computed from arrays: built BVHs and recomputed vertex normals.
+"""An on-disk cache of arrays computed from arrays: built BVHs, recomputed vertex normals and
+parsed OBJ files.
 
 A render of a large mesh spends seconds on work whose result depends only on its input
 arrays and the code that computes it (the BVH build, :mod:`.bvh_cache`; the vertex normals,
-``scene/loaders/meshes.py``). Each result is kept as one file named by a key: the SHA-256
+``scene/loaders/meshes.py``; the OBJ bulk parser, ``scene/loaders/obj.py``, whose input is
+the file's bytes). Each result is kept as one file named by a key: the SHA-256
 of the input arrays' bytes (with their dtypes and shapes), the parameters of the
 computation, the version constant its code carries (bumped when the output changes) and
 numpy's version (a reduction may sum in another order). Hashing is hardware SHA where the

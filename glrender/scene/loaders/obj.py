@@ -352,11 +352,14 @@ def _read_obj_cached(data: bytes, path: Path):
         return _read_obj_fast(data, path)
     key = disk_cache.key("obj", BULK_PARSER_VERSION, {}, [np.frombuffer(data, np.uint8)])
     entry = disk_cache.load("obj", key, BULK_PARSER_VERSION)
-    if entry is not None and set(_OBJ_ARRAYS) <= set(entry.arrays):
-        meta = entry.meta
-        obj = ObjFile(path, *(entry.arrays[name] for name in _OBJ_ARRAYS),
-                      list(meta["material_names"]), list(meta["object_names"]))
-        return obj, [tuple(item) for item in meta["mtl_files"]]
+    if entry is not None:
+        try:
+            meta = entry.meta
+            obj = ObjFile(path, *(entry.arrays[name] for name in _OBJ_ARRAYS),
+                          list(meta["material_names"]), list(meta["object_names"]))
+            return obj, [(str(name), int(line)) for name, line in meta["mtl_files"]]
+        except (KeyError, TypeError, ValueError):
+            pass                # not what this parser writes: parse again, and replace it
     fast = _read_obj_fast(data, path)
     if fast is not None:
         obj, mtl_files = fast
