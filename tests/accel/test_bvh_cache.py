@@ -254,24 +254,27 @@ def test10_a_cached_scene_uploads_the_same_bytes_and_renders_the_same_image(cach
         np.testing.assert_array_equal(other[2], off[2])
 
 
-def test11_stats_say_where_the_bvh_came_from(cache, tmp_path, monkeypatch):
+def test11_stats_say_where_the_bvh_came_from(tmp_path):
     """``--stats`` records ``bvh_cache``: built and stored, then read back; built with the
-    cache off; none for a scene without BVH triangles."""
+    cache off; none for a scene without BVH triangles. The command runs as users run it, in
+    its own process, on a mesh large enough to be cached (81,920 triangles)."""
     import json
-
-    from glrender.commands.cli import main
+    import subprocess
+    import sys
 
     mesh = tmp_path / "ball.ply"
-    write_ply(mesh, *icosphere(3))
+    write_ply(mesh, *icosphere(6))
     stats = tmp_path / "stats.json"
+    env = {**os.environ, "GLRENDER_CACHE_DIR": str(tmp_path / "cache")}
+    env.pop("GLRENDER_CACHE", None)
 
-    def bvh_cache_of(scene):
-        assert main(["render", str(scene), "--spp", "1", "--width", "8", "-o", str(tmp_path / "o.png"),
-                     "--stats", str(stats), "--quiet"]) == 0
+    def bvh_cache_of(scene, **extra):
+        subprocess.run([sys.executable, "-m", "glrender", "render", str(scene), "--spp", "1",
+                        "--width", "8", "-o", str(tmp_path / "o.png"), "--stats", str(stats),
+                        "--quiet"], env={**env, **extra}, check=True, timeout=300)
         return json.loads(stats.read_text())["bvh_cache"]
 
     assert [bvh_cache_of(mesh) for _ in range(2)] == ["miss", "hit"]
-    monkeypatch.setenv("GLRENDER_CACHE", "off")
-    assert bvh_cache_of(mesh) == "uncached"
+    assert bvh_cache_of(mesh, GLRENDER_CACHE="off") == "uncached"
     cornell = Path(__file__).resolve().parents[2] / "scenes" / "cornell-box" / "scene.toml"
     assert bvh_cache_of(cornell) == "none"
