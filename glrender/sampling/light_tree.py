@@ -37,7 +37,8 @@ weighs area and point lights alike.
 
 The build splits each node at the best of 12 buckets along each axis by the cost
 phi M_omega(theta_o, theta_e) area(box) (pbrt-v4's EvaluateCost, with its regularisation of
-thin boxes), in whole-array numpy per node. A node's cone is the set's mean axis
+thin boxes), in whole-array numpy per node; nodes of 16 lights or fewer split at the median
+of their widest axis. A node's cone is the set's mean axis
 (weighted by phi) with the largest angle of any member's cone from it: not the tightest
 cone, but one found without a pass per member.
 
@@ -67,6 +68,7 @@ import numpy as np
 from ._array import ONE_MINUS_EPSILON
 
 BUCKETS = 12
+SMALL = 16            # nodes of at most this many lights split at the median of their widest axis
 MAX_DEPTH = 32        # the bit trail's width: deeper subtrees are split by count
 HEADER = 4
 INFINITE_FLOATS = 8
@@ -172,9 +174,12 @@ class _Builder:
         c_lo, c_hi = centroid.min(axis=0), centroid.max(axis=0)
         box_lo, box_hi = b.lo[idx].min(axis=0), b.hi[idx].max(axis=0)
         extent = box_hi - box_lo
-        # a subtree whose lights could need more levels than the trail has splits by count
-        if depth + math.ceil(math.log2(len(idx))) >= MAX_DEPTH - 1 or not (c_hi > c_lo).any():
-            order = np.lexsort(centroid.T[::-1])
+        # a subtree whose lights could need more levels than the trail has splits by count;
+        # so do small nodes, where the bucketed cost's numpy passes cost more than they find
+        if len(idx) <= SMALL or depth + math.ceil(math.log2(len(idx))) >= MAX_DEPTH - 1 or \
+                not (c_hi > c_lo).any():
+            axis = int(np.argmax(c_hi - c_lo))
+            order = np.argsort(centroid[:, axis], kind="stable")
             half = len(idx) // 2
             return idx[order[:half]], idx[order[half:]]
         best = (math.inf, 0, 0)
@@ -213,7 +218,8 @@ class _Builder:
                 best = (float(cost[k]), dim, k)
         _, dim, k = best
         if not math.isfinite(best[0]):
-            order = np.lexsort(centroid.T[::-1])
+            axis = int(np.argmax(c_hi - c_lo))
+            order = np.argsort(centroid[:, axis], kind="stable")
             half = len(idx) // 2
             return idx[order[:half]], idx[order[half:]]
         t = (centroid[:, dim] - c_lo[dim]) / (c_hi[dim] - c_lo[dim])
