@@ -49,9 +49,10 @@ entries are bit-exact):
     offset in the block); then per light at infinity 8 elements: its light index (uint),
     its importance scale, 1 (uint) for a directional light (times |cos| to n), 0, its
     direction xyz, 0; then the nodes, 16 elements each (depth first: a node's first child
-    follows it):
-    lo xyz, phi; hi xyz, cos(theta_o); w xyz, cos(theta_e); the second child's node index
-    or the leaf's light index (uint), flags (uint: 1 leaf, 2 two-sided), 0, 0;
+    follows it): the box's centre xyz, phi; its half extent xyz (rounded outward),
+    cos(theta_o); w xyz, cos(theta_e); the second child's node index or the leaf's light
+    index (uint), flags (uint: 1 leaf, 2 two-sided), sin(theta_o), the box's half
+    diagonal;
     then per light: its leaf's node index + 1 (uint, 0: not in the tree) and its bit trail
     (uint: bit k is 1 where the descent takes the second child at depth k).
 
@@ -158,14 +159,21 @@ class _Builder:
     def node(self, idx: np.ndarray) -> np.ndarray:
         b = self.b
         rec = np.zeros(NODE_FLOATS, np.float32)
-        rec[0:3] = b.lo[idx].min(axis=0)
+        lo, hi = b.lo[idx].min(axis=0), b.hi[idx].max(axis=0)
+        # the box as centre and half extent, rounded outward in float32
+        centre = (0.5 * (lo + hi)).astype(np.float32)
+        extent = np.maximum(hi - centre, centre - lo).astype(np.float32)
+        extent = np.nextafter(extent, np.float32(np.inf))
+        rec[0:3] = centre
         rec[3] = b.phi[idx].sum()
-        rec[4:7] = b.hi[idx].max(axis=0)
+        rec[4:7] = extent
         axis, cos_o = _cone(b.w[idx], b.cos_o[idx], b.phi[idx])
         rec[7] = cos_o
         rec[8:11] = axis
         rec[11] = b.cos_e[idx].min()
         rec[13] = _uints([FLAG_TWO_SIDED if b.two_sided[idx].any() else 0])[0]
+        rec[14] = math.sqrt(max(1.0 - float(np.float32(cos_o)) ** 2, 0.0))
+        rec[15] = np.linalg.norm(extent.astype(np.float64))
         return rec
 
     def split(self, idx: np.ndarray, depth: int) -> tuple[np.ndarray, np.ndarray]:
@@ -287,25 +295,22 @@ def light_tree_importance(node: np.ndarray, p, n) -> np.ndarray:
     n (..., 3; 0: a point in a medium, no cosine there)."""
     p = np.asarray(p, np.float64)
     n = np.asarray(n, np.float64)
-    lo, hi = node[0:3].astype(np.float64), node[4:7].astype(np.float64)
+    pc, extent = node[0:3].astype(np.float64), node[4:7].astype(np.float64)
     phi, cos_o, w, cos_e = float(node[3]), float(node[7]), node[8:11].astype(np.float64), float(node[11])
     two_sided = (_u(node, 13) & FLAG_TWO_SIDED) != 0
-    pc = 0.5 * (lo + hi)
-    half_diag = 0.5 * np.linalg.norm(hi - lo)
+    sin_o, half_diag = float(node[14]), float(node[15])
     v = p - pc
     dc2 = (v * v).sum(axis=-1)
     d2 = np.maximum(np.maximum(dc2, (2 * CLAMP * half_diag) ** 2), MIN_DISTANCE2)
-    inside = np.all((p >= lo) & (p <= hi), axis=-1) | (dc2 <= half_diag * half_diag)
+    inside = np.all(np.abs(v) <= extent, axis=-1) | (dc2 <= half_diag * half_diag)
     with np.errstate(invalid="ignore", divide="ignore"):
         wi = v / np.sqrt(np.maximum(dc2, 1e-300))[..., None]
         cos_w = wi @ w
         if two_sided:
             cos_w = np.abs(cos_w)
         sin_w = np.sqrt(np.maximum(1 - cos_w * cos_w, 0.0))
-        sin2_b = half_diag * half_diag / np.maximum(dc2, 1e-300)
-        cos_b = np.sqrt(np.maximum(1 - sin2_b, 0.0))
-        sin_b = np.sqrt(np.maximum(1 - cos_b * cos_b, 0.0))
-        sin_o = math.sqrt(max(1 - cos_o * cos_o, 0.0))
+        sin_b = np.minimum(half_diag / np.sqrt(np.maximum(dc2, 1e-300)), 1.0)
+        cos_b = np.sqrt(np.maximum(1 - sin_b * sin_b, 0.0))
         cos_x = _cos_sub_clamped(sin_w, cos_w, sin_o, cos_o)
         sin_x = _sin_sub_clamped(sin_w, cos_w, sin_o, cos_o)
         cos_p = _cos_sub_clamped(sin_x, cos_x, sin_b, cos_b)

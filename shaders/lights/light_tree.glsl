@@ -17,29 +17,37 @@ const float kLightTreeMinDistance2 = 1e-10;
 const int kLightTreeMaxDepth = 32;
 
 struct LightTreeNode {
-    vec3 lo;
+    vec3 centre;
     float phi;
-    vec3 hi;
+    vec3 extent;      // the box's half extent
     float cos_o;
     vec3 w;
     float cos_e;
-    uint child;   // the second child's node index, or a leaf's light index
+    uint child;       // the second child's node index, or a leaf's light index
     uint flags;
+    float sin_o;
+    float half_diag;  // length(extent)
 };
 
-// Node i of the tree whose block starts at `tree`.
-LightTreeNode light_tree_node(uint tree, uint i) {
-    uint at = tree + kLightTreeHeader + kLightTreeInfiniteFloats * distribution_fetch_uint(tree + 1u) +
-              kLightTreeNodeFloats * i;
+// Where the nodes of the tree whose block starts at `tree` start.
+uint light_tree_nodes(uint tree) {
+    return tree + kLightTreeHeader + kLightTreeInfiniteFloats * distribution_fetch_uint(tree + 1u);
+}
+
+// Node i of the tree whose nodes start at `nodes`.
+LightTreeNode light_tree_node(uint nodes, uint i) {
+    uint at = nodes + kLightTreeNodeFloats * i;
     LightTreeNode nd;
-    nd.lo = vec3(distribution_fetch(at), distribution_fetch(at + 1u), distribution_fetch(at + 2u));
+    nd.centre = vec3(distribution_fetch(at), distribution_fetch(at + 1u), distribution_fetch(at + 2u));
     nd.phi = distribution_fetch(at + 3u);
-    nd.hi = vec3(distribution_fetch(at + 4u), distribution_fetch(at + 5u), distribution_fetch(at + 6u));
+    nd.extent = vec3(distribution_fetch(at + 4u), distribution_fetch(at + 5u), distribution_fetch(at + 6u));
     nd.cos_o = distribution_fetch(at + 7u);
     nd.w = vec3(distribution_fetch(at + 8u), distribution_fetch(at + 9u), distribution_fetch(at + 10u));
     nd.cos_e = distribution_fetch(at + 11u);
     nd.child = distribution_fetch_uint(at + 12u);
     nd.flags = distribution_fetch_uint(at + 13u);
+    nd.sin_o = distribution_fetch(at + 14u);
+    nd.half_diag = distribution_fetch(at + 15u);
     return nd;
 }
 
@@ -54,26 +62,23 @@ float sin_sub_clamped(float sin_a, float cos_a, float sin_b, float cos_b) {
 
 // A bound on what node nd's lights bring to point p with normal n (0: a point in a medium).
 float light_tree_importance(LightTreeNode nd, vec3 p, vec3 n) {
-    vec3 pc = 0.5 * (nd.lo + nd.hi);
-    float half_diag = 0.5 * length(nd.hi - nd.lo);
-    vec3 v = p - pc;
+    vec3 v = p - nd.centre;
     float dc2 = dot(v, v);
-    float floor_d = 2.0 * kLightTreeClamp * half_diag;
+    float floor_d = 2.0 * kLightTreeClamp * nd.half_diag;
     float d2 = max(max(dc2, floor_d * floor_d), kLightTreeMinDistance2);
-    bool inside = all(greaterThanEqual(p, nd.lo)) && all(lessThanEqual(p, nd.hi));
-    if (inside || dc2 <= half_diag * half_diag) return nd.phi / d2;
-    vec3 wi = v * inversesqrt(dc2);
+    if (all(lessThanEqual(abs(v), nd.extent)) || dc2 <= nd.half_diag * nd.half_diag) return nd.phi / d2;
+    float inv_d = inversesqrt(dc2);
+    vec3 wi = v * inv_d;
     float cos_w = dot(wi, nd.w);
     if ((nd.flags & kLightTreeTwoSided) != 0u) cos_w = abs(cos_w);
     float sin_w = sqrt(max(1.0 - cos_w * cos_w, 0.0));
     // the cone of directions the box subtends from p
-    float cos_b = sqrt(max(1.0 - half_diag * half_diag / dc2, 0.0));
-    float sin_b = sqrt(max(1.0 - cos_b * cos_b, 0.0));
-    float sin_o = sqrt(max(1.0 - nd.cos_o * nd.cos_o, 0.0));
+    float sin_b = min(nd.half_diag * inv_d, 1.0);
+    float cos_b = sqrt(max(1.0 - sin_b * sin_b, 0.0));
     // the angle from the emission cone to p, less the box's: theta' = max(0, theta_w -
     // theta_o - theta_b)
-    float cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, nd.cos_o);
-    float sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, nd.cos_o);
+    float cos_x = cos_sub_clamped(sin_w, cos_w, nd.sin_o, nd.cos_o);
+    float sin_x = sin_sub_clamped(sin_w, cos_w, nd.sin_o, nd.cos_o);
     float cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
     if (cos_p <= nd.cos_e) return 0.0;
     float importance = nd.phi * cos_p / d2;
@@ -102,7 +107,7 @@ float light_tree_top(uint tree, vec3 p, vec3 n, out float root) {
     uint n_inf = distribution_fetch_uint(tree + 1u);
     float infinite = 0.0;
     for (uint k = 0u; k < n_inf; ++k) infinite += light_tree_infinite_importance(tree, k, n);
-    root = distribution_fetch_uint(tree) > 0u ? light_tree_importance(light_tree_node(tree, 0u), p, n) : 0.0;
+    root = distribution_fetch_uint(tree) > 0u ? light_tree_importance(light_tree_node(light_tree_nodes(tree), 0u), p, n) : 0.0;
     return infinite;
 }
 
@@ -127,11 +132,12 @@ LightChoice light_tree_sample(uint tree, vec3 p, vec3 n, float u) {
     u = min((u_scaled - infinite) / root, kOneMinusEpsilon);
     float pmf = root / total;
     uint i = 0u;
-    LightTreeNode nd = light_tree_node(tree, 0u);
+    uint nodes = light_tree_nodes(tree);
+    LightTreeNode nd = light_tree_node(nodes, 0u);
     for (int depth = 0; depth <= kLightTreeMaxDepth; ++depth) {
         if ((nd.flags & kLightTreeLeaf) != 0u) return LightChoice(nd.child, pmf);
-        LightTreeNode first = light_tree_node(tree, i + 1u);
-        LightTreeNode second = light_tree_node(tree, nd.child);
+        LightTreeNode first = light_tree_node(nodes, i + 1u);
+        LightTreeNode second = light_tree_node(nodes, nd.child);
         float i0 = light_tree_importance(first, p, n);
         float i1 = light_tree_importance(second, p, n);
         if (!(i0 + i1 > 0.0)) break;
@@ -172,10 +178,11 @@ float light_tree_pmf(uint tree, vec3 p, vec3 n, uint light, bool infinite) {
     leaf -= 1u;
     float pmf = root / total;
     uint i = 0u;
-    LightTreeNode nd = light_tree_node(tree, 0u);
+    uint nodes = light_tree_nodes(tree);
+    LightTreeNode nd = light_tree_node(nodes, 0u);
     for (int depth = 0; depth < kLightTreeMaxDepth && i != leaf; ++depth) {
-        LightTreeNode first = light_tree_node(tree, i + 1u);
-        LightTreeNode second = light_tree_node(tree, nd.child);
+        LightTreeNode first = light_tree_node(nodes, i + 1u);
+        LightTreeNode second = light_tree_node(nodes, nd.child);
         float i0 = light_tree_importance(first, p, n);
         float i1 = light_tree_importance(second, p, n);
         if (!(i0 + i1 > 0.0)) return 0.0;
