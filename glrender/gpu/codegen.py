@@ -187,8 +187,8 @@ def _mesh_box(packed: PackedScene):
     """World box of every BVH triangle (over the shutter for moving meshes), grown by a
     relative margin for float32 rounding; None when there is nothing to bound."""
     points = []
-    if packed.mesh is not None:
-        points.append(packed.mesh[0].reshape(-1, 3))
+    if packed.mesh_bounds is not None:
+        points.append(np.stack(packed.mesh_bounds))
     for mm in packed.moving_meshes:
         from ..accel.instances import MotionInstance, motion_bounds
 

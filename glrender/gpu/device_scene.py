@@ -21,8 +21,9 @@ from typing import Any
 import numpy as np
 
 from ..scene import model as m
-from . import bindings, envmap, layout
-from .pack import PackedScene, pack_scene
+from . import bindings, envmap, layout, mesh_cache
+from .mesh_cache import DeviceMesh
+from .pack import PACKER_VERSION, PackedScene, pack_scene
 
 
 @dataclass(frozen=True)
@@ -56,6 +57,8 @@ class DeviceScene:
         self.env_texture: Any = None
         self.env_weights: np.ndarray | None = None
         self.texture_bytes = 0              # the atlas pages (RGBA16F) on the device
+        # the BVH triangles' normals, uvs and info texels as uploaded (empty: no BVH)
+        self.mesh_texels: tuple[np.ndarray, ...] = ()
         self.bvh_cache = "none"             # the BVH: "hit", "miss", "uncached" (accel/bvh_cache.py)
         self._units: list[tuple[int, Any]] = []    # (texture unit, its bind call) for bind()
         self._owned: list[Any] = []                # released with the last user
@@ -198,11 +201,32 @@ class DeviceScene:
 
     def _upload_mesh(self) -> None:
         """BVH over the static mesh triangles (world space) plus one tree per moving mesh
-        (object space), and per-triangle shading data in the BVH's triangle order."""
-        from ..accel import MotionInstance
-        from ..accel.bvh_cache import build_bvh_buffers
+        (object space), and per-triangle shading data in the BVH's triangle order: from the
+        device-ready mesh cache on a hit (gpu/mesh_cache.py), else built and gathered here
+        and kept there."""
         from ..gl.buffers import BufferTexture
         from .bvh_upload import GpuBvh
+
+        mesh = self.packed.cached_mesh
+        if mesh is not None:
+            self.bvh_cache = "hit"
+        else:
+            mesh = self._gather_mesh()
+        self.mesh_texels = mesh.texels
+        self.bvh = GpuBvh(self.ctx, mesh.bvh)
+        for unit, data, fmt, name in zip(
+                (bindings.TEX_TRI_NORMALS, bindings.TEX_TRI_UVS, bindings.TEX_TRI_INFO), mesh.texels,
+                ("rgba32f", "rgba32f", "rgba32ui"), ("triangle normals", "triangle uvs", "triangle info")):
+            tex = BufferTexture(self.ctx, data, fmt, name)
+            self._owned.append(tex)
+            self._units.append((unit, tex.bind))
+
+    def _gather_mesh(self) -> DeviceMesh:
+        """The BVH (accel/bvh_cache.py) and the per-triangle texels in its order; stored in
+        the device-ready mesh cache when the scene has a slot there and its BVH triangles
+        are static and emit nothing."""
+        from ..accel import MotionInstance
+        from ..accel.bvh_cache import build_bvh_buffers
 
         p = self.packed
         if p.mesh is not None:
@@ -237,13 +261,10 @@ class DeviceScene:
                 else np.take(u, o, axis=0).reshape(len(o), 6)
             info[rows, 0], info[rows, 1] = np.take(mt, o), np.take(li, o)
             row += len(o)
-        self.bvh = GpuBvh(self.ctx, bvh)
-        for unit, data, fmt, name in ((bindings.TEX_TRI_NORMALS, n4, "rgba32f", "triangle normals"),
-                                      (bindings.TEX_TRI_UVS, uv4, "rgba32f", "triangle uvs"),
-                                      (bindings.TEX_TRI_INFO, info, "rgba32ui", "triangle info")):
-            tex = BufferTexture(self.ctx, data, fmt, name)
-            self._owned.append(tex)
-            self._units.append((unit, tex.bind))
+        mesh = DeviceMesh(bvh, (n4, uv4, info))
+        if p.mesh_slot is not None and not p.moving_meshes and not light.any():
+            mesh_cache.store(p.mesh_slot, PACKER_VERSION, mesh, p.mesh_shapes, p.mesh_bounds)
+        return mesh
 
 
 def light_bounds(lights: np.ndarray, weights: np.ndarray, scene_bounds):

@@ -23,11 +23,16 @@ import numpy as np
 from ..errors import SceneError
 from ..scene import model as m
 from . import bindings, layout
+from .mesh_cache import DeviceMesh, MeshSlot, lookup
 from .textures import TextureTable
 
 NO_PRIMITIVE = 0xFFFFFFFF        # geometry/surface.glsl kNoPrimitive
 MAX_COMPILED_TRIANGLES_PER_MESH = 32
 MAX_COMPILED_PRIMITIVES = 96
+# The version of the BVH triangles' arrays (MeshSoup, and the texels device_scene.py gathers
+# from them): the device-ready mesh cache (gpu/mesh_cache.py) keys its entries by it, so bump
+# it with any change that alters a bit of them.
+PACKER_VERSION = 1
 
 # The six faces of Mitsuba's cube [-1, 1]^3 as (corner, e1, e2): corner + u e1 + v e2 has the
 # texture coordinates (u, v) of Mitsuba's cube mesh; on every face e1 x e2 points inward
@@ -80,6 +85,8 @@ class MeshSoup:
     uvs: list = field(default_factory=list)         # (T, 3, 2)
     material: list = field(default_factory=list)    # (T,)
     light: list = field(default_factory=list)       # (T,) light index + 1
+    shapes: list = field(default_factory=list)      # the scene's index of each mesh
+    bounds: list = field(default_factory=list)      # each mesh's (lo, hi)
 
     def arrays(self):
         if not self.positions:
@@ -119,6 +126,12 @@ class PackedScene:
     moving_meshes: list = field(default_factory=list)   # MovingMesh, for motion blur
     media: np.ndarray | None = None         # layout.MEDIA record; None: no shape or camera names a medium
     media_grids: np.ndarray | None = None   # (N, 4) float32 voxels of heterogeneous media (TEX_MEDIA_GRIDS)
+    # the BVH triangles' (lo, hi), moving meshes aside; their place in the device-ready mesh
+    # cache (None: not cached), which on a hit holds them instead of ``mesh``; and the
+    # scene's indices of the shapes they came from
+    mesh_bounds: tuple[np.ndarray, np.ndarray] | None = None
+    mesh_slot: MeshSlot | None = None
+    mesh_shapes: list[int] = field(default_factory=list)
 
     @property
     def has_media(self) -> bool:
@@ -126,7 +139,12 @@ class PackedScene:
 
     @property
     def has_bvh(self) -> bool:
-        return self.mesh is not None or bool(self.moving_meshes)
+        return self.mesh is not None or self.cached_mesh is not None or bool(self.moving_meshes)
+
+    @property
+    def cached_mesh(self) -> DeviceMesh | None:
+        """The BVH triangles as the device reads them, when the cache held them."""
+        return self.mesh_slot.mesh if self.mesh_slot is not None else None
     textures: TextureTable = field(default_factory=TextureTable)  # materials' textures
 
     @property
@@ -486,6 +504,8 @@ def pack_scene(scene: m.Scene) -> PackedScene:
     """Flatten a scene into compiled primitives, BVH triangles, materials and lights."""
     scene.validate()
     scene, media, medium_bits, media_grids = _media_variants(scene)
+    slot = lookup(scene, PACKER_VERSION)
+    cached = slot.shapes if slot is not None and slot.mesh is not None else frozenset()
     quads: list[Parallelogram] = []
     spheres: list[Sphere] = []
     soup = MeshSoup()
@@ -608,10 +628,13 @@ def pack_scene(scene: m.Scene) -> PackedScene:
                 for W in (open_, close):
                     grow(m.transform_points(W, tri.reshape(-1, 3)))
         elif shape.kind == "mesh":
+            if index in cached:
+                continue        # in the cached device arrays; their bounds are grown below
             tri, normals, uvs, ng = _transform_mesh(shape, where)
             if len(tri) == 0:
                 continue
-            grow(tri)
+            tri_bounds = m.point_bounds(tri)
+            grow(tri_bounds)
             # opacity cutouts are tested in the BVH traversal: such meshes always go there
             cutout = 0 <= shape.material < len(scene.materials) and \
                 scene.materials[shape.material].opacity is not None
@@ -637,8 +660,14 @@ def pack_scene(scene: m.Scene) -> PackedScene:
             soup.uvs.append(uvs)
             soup.material.append(np.full(len(tri), shape.material))
             soup.light.append(light_ids)
+            soup.shapes.append(index)
+            soup.bounds.append(tri_bounds)
         else:
             raise SceneError(f"{where}: unknown shape kind {shape.kind!r}")
+    mesh_bounds = m.point_bounds(np.concatenate(soup.bounds)) if soup.bounds else None
+    if cached:
+        mesh_bounds = slot.bounds
+        grow(mesh_bounds)
     if compiled_budget < 0:
         raise SceneError(f"{scene.source}: more than {MAX_COMPILED_PRIMITIVES} rectangles, cube "
                          f"faces and spheres; make some of them meshes")
@@ -714,4 +743,5 @@ def pack_scene(scene: m.Scene) -> PackedScene:
         light_kinds={k for k, v in layout.LIGHT_KINDS.items()
                      if len(light_arr) and (light_arr["info"][:, 0] == v).any()},
         environment=environment, env_image=env_image, textures=textures, moving_meshes=moving,
-        media=media, media_grids=media_grids)
+        media=media, media_grids=media_grids, mesh_bounds=mesh_bounds, mesh_slot=slot,
+        mesh_shapes=soup.shapes)

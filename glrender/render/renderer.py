@@ -422,9 +422,12 @@ class Renderer:
             yield "media", self.packed.media.tobytes()
         if self.packed.media_grids is not None:
             yield "media grids", self.packed.media_grids.tobytes()
-        if self.packed.mesh is not None:
-            for arr in self.packed.mesh:
-                yield "geometry", np.ascontiguousarray(arr).tobytes()
+        if self.device_scene is not None and self.device_scene.bvh is not None:
+            # the BVH triangles as the device reads them: the same whether packed now or
+            # read from the mesh cache (gpu/mesh_cache.py), which keeps no packed soup
+            device = self.device_scene
+            for arr in (device.bvh.bvh.pack()["triangles"], *device.mesh_texels):
+                yield "geometry", np.ascontiguousarray(arr).reshape(-1).view(np.uint8)
         if self.packed.env_image is not None:
             yield "environment map", np.ascontiguousarray(self.packed.env_image).tobytes()
         yield "textures", self.packed.textures.fingerprint()

@@ -245,7 +245,7 @@ def test10_a_cached_scene_uploads_the_same_bytes_and_renders_the_same_image(cach
 
     off = run("off")
     miss = run("on")
-    assert sorted(p.name.split("-")[0] for p in entries(cache)) == ["bvh", "normals"]
+    assert sorted(p.name.rsplit("-", 1)[0] for p in entries(cache)) == ["bvh", "device-mesh", "normals"]
     hit = run("on")
     assert (off[0], miss[0], hit[0]) == ("uncached", "miss", "hit")
     for other in (miss, hit):
