@@ -6,7 +6,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from ..errors import SceneError, UsageError
-from .loaders.diagnostics import GlrenderWarning, file_hashes, printable, record_files
+from .loaders.diagnostics import GlrenderWarning, file_hashes, printable, record_digests, record_files
 from .loaders.scene_files import check_regular, current_search_path
 from .loaders.scene_files import search_path as search_folders
 from .model import (Camera, Emission, Film, Integrator, Light, Material, Medium, Sampler, Scene,
@@ -48,13 +48,13 @@ def load(path: str | os.PathLike[str], *,
     loader = getattr(importlib.import_module(f".loaders.{module}", __name__), function)
     check_regular(path)
     try:
-        with record_files() as files, search_folders(folders):
+        with record_files() as files, record_digests() as digests, search_folders(folders):
             scene: Scene = loader(path, **params)
     except SceneError as exc:
         # the one door of every loader's errors: nothing non-printable reaches a terminal
         exc.args = tuple(printable(a) if isinstance(a, str) else a for a in exc.args)
         raise
-    scene.files = file_hashes([path, *files])
+    scene.files = file_hashes([path, *files], digests)
     return scene
 
 

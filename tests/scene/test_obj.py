@@ -381,3 +381,29 @@ def test14_a_parsed_file_is_cached_by_its_bytes(write, tmp_path, monkeypatch):
     write("cached.obj", path.read_text() + "# one more line\n")
     read_obj(path, read_materials=False)
     assert len(list((cache / "bvh").glob("obj-*.bin"))) == 2
+
+
+def test15_finished_meshes_of_a_cached_file_are_cached(write, tmp_path, monkeypatch):
+    """The meshes of a large file (one per object and material) are kept finished under the
+    file's bytes: loaded again, none is assembled or checked, and each is the same."""
+    import glrender
+    from glrender.scene.loaders import meshes
+    from glrender.scene.loaders import obj as obj_module
+
+    monkeypatch.setenv("GLRENDER_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.delenv("GLRENDER_CACHE", raising=False)
+    monkeypatch.setattr(obj_module, "CACHE_MIN_BYTES", 0)
+    rng = np.random.default_rng(5)
+    lines = [f"v {x:.5f} {y:.5f} {z:.5f}" for x, y, z in rng.random((2000, 3))]
+    for name in ("a", "b"):
+        lines += [f"usemtl {name}"] + [f"f {a} {b} {c}" for a, b, c in
+                                       (rng.choice(2000, 3, replace=False) + 1 for _ in range(3000))]
+    path = write("parts.obj", "\n".join(lines) + "\n")
+    first = glrender.load(path).shapes
+    monkeypatch.setattr(obj_module.ObjFile, "_assemble", lambda *a: pytest.fail("assembled again"))
+    monkeypatch.setattr(meshes, "_finish", lambda *a: pytest.fail("finished again"))
+    again = glrender.load(path).shapes
+    assert [s.name for s in again] == [s.name for s in first] and len(first) == 2
+    for a, b in zip(again, first):
+        for name in ("vertices", "triangles", "normals"):
+            np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)

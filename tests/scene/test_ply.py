@@ -87,3 +87,62 @@ def test06_bad_values(write, body, message):
 def test07_not_a_ply(write):
     with pytest.raises(SceneError, match="not a PLY file"):
         read_ply(write("x.ply", "hello\n"))
+
+
+def test08_a_large_file_is_finished_once(write, tmp_path, monkeypatch):
+    """A file of meshes.CACHE_MIN_FILE_BYTES or more is kept finished under its bytes: read
+    again, it is neither parsed nor checked, its arrays and its warning about zero-area
+    triangles are the same, and its SHA-256 (taken once) is what the scene records; a damaged
+    entry is finished again, a changed byte is another file."""
+    import hashlib
+    import warnings
+
+    import glrender
+    from glrender.accel import disk_cache
+    from glrender.scene.loaders import meshes, ply
+
+    cache = tmp_path / "cache"
+    monkeypatch.setenv("GLRENDER_CACHE_DIR", str(cache))
+    monkeypatch.delenv("GLRENDER_CACHE", raising=False)
+    monkeypatch.setattr(ply, "CACHE_MIN_FILE_BYTES", 0)
+    rng = np.random.default_rng(3)
+    v = rng.random((50, 3)).astype("<f4")
+    f = np.array([rng.choice(50, 3, replace=False) for _ in range(80)] + [[1, 1, 2]], "<i4")   # one zero-area
+    faces = np.zeros(len(f), np.dtype([("n", "u1"), ("i", "<i4", (3,))]))
+    faces["n"], faces["i"] = 3, f
+    path = write("blob.ply", _header("binary_little_endian", 50, len(f)).encode() + v.tobytes() +
+                 faces.tobytes())
+
+    def load():
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            scene = glrender.load(path)
+        dropped = [str(w.message) for w in caught if "zero-area" in str(w.message)]
+        return scene.shapes[0], dropped, scene.files
+
+    first, warned, files = load()
+    assert warned == [f"{path}: dropped 1 zero-area triangle of {len(f)}"]
+    assert files[str(path)] == hashlib.sha256(path.read_bytes()).hexdigest()
+    [entry] = cache.glob("bvh/mesh-*.bin")
+    parse, finish = ply._parse, meshes._finish
+    monkeypatch.setattr(ply, "_parse", lambda *a: pytest.fail("parsed again"))
+    monkeypatch.setattr(meshes, "_finish", lambda *a: pytest.fail("finished again"))
+    again, warned_again, files_again = load()
+    assert warned_again == warned and files_again == files
+    for name in ("vertices", "triangles", "normals"):
+        a, b = getattr(again, name), getattr(first, name)
+        assert a.dtype == b.dtype, name
+        np.testing.assert_array_equal(a, b, err_msg=name)
+    monkeypatch.setattr(ply, "_parse", parse)
+    monkeypatch.setattr(meshes, "_finish", finish)
+    damaged = bytearray(entry.read_bytes())
+    damaged[-1] ^= 0x40                               # the last byte of the payload
+    entry.write_bytes(bytes(damaged))
+    rebuilt, _, _ = load()
+    np.testing.assert_array_equal(rebuilt.normals, first.normals)
+    assert disk_cache.load("mesh", entry.name[5:-4], meshes.FINISH_VERSION) is not None   # replaced
+    v[0, 0] += 1                                      # another vertex: another file
+    write("blob.ply", _header("binary_little_endian", 50, len(f)).encode() + v.tobytes() +
+          faces.tobytes())
+    assert load()[2][str(path)] != files[str(path)]
+    assert len(list(cache.glob("bvh/mesh-*.bin"))) == 2

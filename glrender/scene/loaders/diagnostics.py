@@ -137,15 +137,46 @@ def note_file(path) -> None:
         _recording.files.append(Path(os.path.abspath(path)))
 
 
-def file_hashes(paths) -> dict[str, str]:
+@contextmanager
+def record_digests():
+    """Collect the SHA-256 of every file read whole on this thread (:func:`note_digest`):
+    yields a dict (absolute path -> hex digest) for :func:`file_hashes`, so a file that a
+    loader read and hashed (the mesh caches key large files by their bytes) is not read
+    and hashed again."""
+    outer = getattr(_recording, "digests", None)
+    digests: dict[str, str] = {}
+    _recording.digests = digests
+    try:
+        yield digests
+    finally:
+        _recording.digests = outer
+        if outer is not None:
+            outer.update(digests)
+
+
+def recording_digests() -> bool:
+    return getattr(_recording, "digests", None) is not None
+
+
+def note_digest(path, digest: str) -> None:
+    """The SHA-256 of the bytes just read from ``path``, for :func:`record_digests`, if any."""
+    if recording_digests():
+        _recording.digests[os.path.abspath(path)] = digest
+
+
+def file_hashes(paths, known: dict[str, str] | None = None) -> dict[str, str]:
     """SHA-256 of each file (absolute path -> hex digest): what a checkpoint records, so that
-    resuming after an input changed is refused by the file's name."""
+    resuming after an input changed is refused by the file's name. ``known``: digests of
+    bytes already read (:func:`record_digests`), taken as they are."""
     import hashlib
 
     hashes: dict[str, str] = {}
     for p in paths:
         key = os.path.abspath(p)
         if key in hashes:
+            continue
+        if known and key in known:
+            hashes[key] = known[key]
             continue
         h = hashlib.sha256()
         try:

@@ -18,6 +18,13 @@ from .diagnostics import warn
 NORMALS_VERSION = 1
 # below this many triangles the normals cost less than reading a cache file
 CACHE_MIN_TRIANGLES = 1 << 15
+# The version of what finish_mesh returns for given arrays: the finished meshes of mesh files
+# of CACHE_MIN_FILE_BYTES or more are kept in the BVH cache under it (keyed by the file's
+# bytes and its reader's version, finish_mesh_cached), so bump it with any change to the
+# checks, the drop of zero-area triangles or the arrays' types.
+FINISH_VERSION = 1
+CACHE_MIN_FILE_BYTES = 1 << 20
+_MESH_ARRAYS = ("vertices", "triangles", "normals", "uvs")
 
 
 @dataclass
@@ -75,6 +82,49 @@ def _angle_weighted_normals(count: int, f: np.ndarray, e: list[list[np.ndarray]]
 def finish_mesh(mesh: MeshData, source, compute_normals: bool = True) -> MeshData:
     """Validate a loaded mesh, drop zero-area triangles (one warning with the count) and
     compute vertex normals if the file has none."""
+    finished, dropped, total = _finish(mesh, source, compute_normals)
+    _warn_dropped(source, dropped, total)
+    return finished
+
+
+def finish_mesh_cached(read, source, origin: dict, compute_normals: bool = True) -> MeshData:
+    """``finish_mesh(read(), source, compute_normals)``, from the cache when the mesh that
+    ``origin`` names (JSON-able: its file's SHA-256, the reader and the reader's version)
+    was finished before: no parse, no checks, no search for zero-area triangles (the
+    warning about them is given again) and no normals."""
+    if not disk_cache.enabled():
+        return finish_mesh(read(), source, compute_normals)
+    key = disk_cache.key("mesh", FINISH_VERSION, {**origin, "normals": compute_normals and NORMALS_VERSION}, [])
+    entry = disk_cache.load("mesh", key, FINISH_VERSION)
+    if entry is not None:
+        try:
+            a = entry.arrays
+            mesh = MeshData(*(a.get(name) for name in _MESH_ARRAYS))
+            dropped, total = int(entry.meta["dropped"]), int(entry.meta["triangles"])
+            count = len(mesh.vertices)
+            if mesh.vertices.shape == (count, 3) and mesh.triangles.shape == (total - dropped, 3) and \
+                    all(x is None or x.shape == (count, w) for x, w in ((mesh.normals, 3), (mesh.uvs, 2))):
+                _warn_dropped(source, dropped, total)
+                return mesh
+        except (KeyError, TypeError, ValueError, AttributeError):
+            pass                # not what this function writes: finish again, and replace it
+    mesh, dropped, total = _finish(read(), source, compute_normals)
+    disk_cache.store("mesh", key, FINISH_VERSION,
+                     {name: getattr(mesh, name) for name in _MESH_ARRAYS if getattr(mesh, name) is not None},
+                     {"dropped": dropped, "triangles": total})
+    _warn_dropped(source, dropped, total)
+    return mesh
+
+
+def _warn_dropped(source, dropped: int, total: int) -> None:
+    if dropped:
+        warn(f"{source}: dropped {dropped} zero-area triangle{'s' if dropped > 1 else ''} "
+             f"of {total}")
+
+
+def _finish(mesh: MeshData, source, compute_normals: bool) -> tuple[MeshData, int, int]:
+    """:func:`finish_mesh` without the warning: the mesh, and how many of its triangles
+    were dropped of how many."""
     v = np.asarray(mesh.vertices, np.float64).reshape(-1, 3)
     f = np.asarray(mesh.triangles, np.int64).reshape(-1, 3)
     if not np.all(np.isfinite(v)):
@@ -85,14 +135,13 @@ def finish_mesh(mesh: MeshData, source, compute_normals: bool = True) -> MeshDat
         raise SceneError(f"{source}: triangle {bad} refers to vertex {f[bad].tolist()}, "
                          f"outside [0, {len(v)})")
     e = face_normal = None
+    total, dropped = len(f), 0
     if len(f):
         e = m.triangle_edges(v, f)
         face_normal = m.face_normals(e)
         keep = _length(face_normal) > 0
         dropped = int(len(f) - np.count_nonzero(keep))
         if dropped:
-            warn(f"{source}: dropped {dropped} zero-area triangle{'s' if dropped > 1 else ''} "
-                 f"of {len(f)}")
             f = f[keep]
             e = [[x[keep] for x in edge] for edge in e]
             face_normal = [x[keep] for x in face_normal]
@@ -101,7 +150,8 @@ def finish_mesh(mesh: MeshData, source, compute_normals: bool = True) -> MeshDat
     normals = _per_vertex(mesh.normals, len(v), 3, "normals", source)
     if normals is None and compute_normals:
         normals = _cached_normals(v, f, e, face_normal)
-    return MeshData(v, f, normals, _per_vertex(mesh.uvs, len(v), 2, "texture coordinates", source))
+    return MeshData(v, f, normals, _per_vertex(mesh.uvs, len(v), 2, "texture coordinates", source)), \
+        dropped, total
 
 
 def _cached_normals(v: np.ndarray, f: np.ndarray, e, face_normal) -> np.ndarray:

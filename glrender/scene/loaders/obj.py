@@ -31,9 +31,9 @@ from ...accel import disk_cache
 from ...errors import SceneError
 from .. import model as m
 from .diagnostics import Notes, cause, excerpt, image_failure, read_image_checked, warn
-from .meshes import MeshData, finish_mesh
+from .meshes import MeshData, finish_mesh, finish_mesh_cached
 from .pbr import metallic_roughness_material
-from .scene_files import MissingFile, SceneFiles, read_bytes
+from .scene_files import MissingFile, SceneFiles, read_bytes, read_bytes_digest
 
 MAX_FILE_BYTES = 1 << 31
 FAST_PATH_BYTES = 1 << 16     # files above this try the bulk parser first
@@ -79,9 +79,21 @@ class ObjFile:
     material_names: list = field(default_factory=list)
     object_names: list = field(default_factory=list)
     materials: dict = field(default_factory=dict)
+    # what names the file's bytes and their parser (meshes.finish_mesh_cached), when its
+    # finished meshes are cached: large files the bulk parser read
+    origin: dict | None = None
 
-    def mesh(self, select: np.ndarray | None = None) -> MeshData:
-        """The triangles ``select`` (a boolean mask; all by default) as one mesh."""
+    def mesh(self, select: np.ndarray | None = None, part: int | None = None) -> MeshData:
+        """The triangles ``select`` (a boolean mask; all by default) as one mesh, finished
+        (meshes.finish_mesh). ``part``: a number that names ``select`` among the file's
+        selections, under which the finished mesh is cached (no number with a mask: not
+        cached)."""
+        if self.origin is None or (select is not None and part is None):
+            return finish_mesh(self._assemble(select), self.path)
+        return finish_mesh_cached(lambda: self._assemble(select), self.path, {**self.origin, "part": part})
+
+    def _assemble(self, select: np.ndarray | None) -> MeshData:
+        """The triangles ``select`` as one mesh, unfinished."""
         tris = self.triangles if select is None else self.triangles[select]
         if select is None and np.bincount(tris.reshape(-1), minlength=len(self.corners)).all():
             # every corner used (the usual whole file): no sort needed
@@ -96,7 +108,7 @@ class ObjFile:
         if (c[:, 2] >= 0).any() and len(self.normals):
             # corners without a normal get 0: the renderer falls back to the face normal there
             normals = np.where((c[:, 2] >= 0)[:, None], self.normals[np.maximum(c[:, 2], 0)], 0.0)
-        return finish_mesh(MeshData(vertices, inverse.reshape(-1, 3), normals, uvs), self.path)
+        return MeshData(vertices, inverse.reshape(-1, 3), normals, uvs)
 
     def merged(self) -> MeshData:
         return self.mesh()
@@ -344,13 +356,14 @@ def _read_obj_fast(data: bytes, path: Path):
 _OBJ_ARRAYS = ("positions", "texcoords", "normals", "corners", "triangles", "tri_material", "tri_object")
 
 
-def _read_obj_cached(data: bytes, path: Path):
-    """:func:`_read_obj_fast`, read from the cache when a file of these bytes was parsed
-    before (files of ``CACHE_MIN_BYTES`` or more; what the bulk parser declines is not
-    cached: the general parser reads it, with its warnings, every time)."""
+def _read_obj_cached(data: bytes, digest: str, path: Path):
+    """:func:`_read_obj_fast`, read from the cache when a file of these bytes (``digest``:
+    their SHA-256) was parsed before (files of ``CACHE_MIN_BYTES`` or more; what the bulk
+    parser declines is not cached: the general parser reads it, with its warnings, every
+    time)."""
     if len(data) < CACHE_MIN_BYTES or not disk_cache.enabled():
         return _read_obj_fast(data, path)
-    key = disk_cache.key("obj", BULK_PARSER_VERSION, {}, [np.frombuffer(data, np.uint8)])
+    key = disk_cache.key("obj", BULK_PARSER_VERSION, {"sha256": digest, "bytes": len(data)}, [])
     entry = disk_cache.load("obj", key, BULK_PARSER_VERSION)
     if entry is not None:
         try:
@@ -374,10 +387,12 @@ def read_obj(path, files: SceneFiles | None = None, read_materials: bool = True)
     """Parse an OBJ file (and its MTL files when ``read_materials``)."""
     path = Path(path)
     files = files or SceneFiles(path.parent)
-    data = read_bytes(path, MAX_FILE_BYTES)
-    fast = _read_obj_cached(data, path) if len(data) > FAST_PATH_BYTES else None
+    data, digest = read_bytes_digest(path, MAX_FILE_BYTES)
+    fast = _read_obj_cached(data, digest, path) if len(data) > FAST_PATH_BYTES else None
     if fast is not None:
         obj, mtl_files = fast
+        if len(data) >= CACHE_MIN_BYTES:
+            obj.origin = {"reader": "obj", "version": BULK_PARSER_VERSION, "sha256": digest}
         _read_materials(obj, mtl_files, path, files, read_materials)
         return obj
     text = data.decode("utf-8", errors="replace")
@@ -684,7 +699,7 @@ def load_obj_scene(path, **params) -> m.Scene:
     single = bool((key == key[0]).all())
     for pair in (key[:1] if single else np.unique(key)).tolist():
         obj_id, mat_id = divmod(pair, len(obj.material_names))
-        mesh = obj.mesh(None if single else key == pair)
+        mesh = obj.mesh(None if single else key == pair, pair)
         scene.shapes.append(m.Shape("mesh", material=mat_ids[mat_id], vertices=mesh.vertices,
                                     triangles=mesh.triangles, normals=mesh.normals, uvs=mesh.uvs,
                                     emission=emissions[mat_id],

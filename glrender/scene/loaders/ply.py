@@ -18,8 +18,13 @@ import numpy as np
 
 from ...errors import SceneError
 from .diagnostics import excerpt
-from .meshes import MeshData, finish_mesh
-from .scene_files import read_bytes
+from .meshes import CACHE_MIN_FILE_BYTES, MeshData, finish_mesh, finish_mesh_cached
+from .scene_files import read_bytes_digest
+
+# The version of what _parse returns for given bytes: finished meshes of large PLY files are
+# kept in the BVH cache under it (meshes.finish_mesh_cached), so bump it with any change to
+# the reader's output.
+READER_VERSION = 1
 
 _TYPES = {
     "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1",
@@ -95,8 +100,18 @@ def _header(data: bytes, path: Path):
 
 
 def read_ply(path) -> MeshData:
+    """A PLY file's mesh, finished (meshes.finish_mesh); a file of
+    ``meshes.CACHE_MIN_FILE_BYTES`` or more is kept in the cache under its bytes."""
     path = Path(path)
-    data = read_bytes(path)
+    data, digest = read_bytes_digest(path)
+    if len(data) < CACHE_MIN_FILE_BYTES:
+        return finish_mesh(_parse(data, path), path)
+    return finish_mesh_cached(lambda: _parse(data, path), path,
+                              {"reader": "ply", "version": READER_VERSION, "sha256": digest})
+
+
+def _parse(data: bytes, path: Path) -> MeshData:
+    """The mesh in a PLY file's bytes, as read (not finished)."""
     fmt, elements, start = _header(data, path)
     names = [e.name for e in elements]
     if "vertex" not in names or "face" not in names:
@@ -123,7 +138,7 @@ def read_ply(path) -> MeshData:
     faces = values["face"]
     if faces is None:
         raise SceneError(f"{path}: faces have no 'vertex_indices' list")
-    return finish_mesh(MeshData(vertices, faces, normals, uvs), path)
+    return MeshData(vertices, faces, normals, uvs)
 
 
 def _fan(lists: list[np.ndarray]) -> np.ndarray:

@@ -13,6 +13,7 @@ not the file exists. Every file is read through :func:`read_bytes` or after
 """
 from __future__ import annotations
 
+import hashlib
 import os
 import stat
 import threading
@@ -20,7 +21,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from ...errors import SceneError
-from .diagnostics import excerpt, note_file, printable
+from .diagnostics import excerpt, note_digest, note_file, printable, recording_digests
 
 
 class MissingFile(SceneError):
@@ -149,7 +150,24 @@ def check_regular(path) -> os.stat_result:
 
 def read_bytes(path, limit: int | None = None) -> bytes:
     """A whole regular file, with errors that name it; files above ``limit`` bytes are
-    refused before they are read."""
+    refused before they are read. While a scene loads (diagnostics.record_digests) its
+    SHA-256 is noted for the scene's file hashes."""
+    data = _read(path, limit)
+    if recording_digests():
+        note_digest(path, hashlib.sha256(data).hexdigest())
+    return data
+
+
+def read_bytes_digest(path, limit: int | None = None) -> tuple[bytes, str]:
+    """:func:`read_bytes` and the SHA-256 of what it read (hex): the key a cache of what
+    is read from the file is kept under, noted for the scene's file hashes too."""
+    data = _read(path, limit)
+    digest = hashlib.sha256(data).hexdigest()
+    note_digest(path, digest)
+    return data, digest
+
+
+def _read(path, limit: int | None) -> bytes:
     info = check_regular(path)
     if limit is not None and info.st_size > limit:
         raise SceneError(f"{printable(str(path))}: {info.st_size} bytes is more than this loader "
