@@ -80,12 +80,14 @@ class _Parser(argparse.ArgumentParser):
 def cmd_info(args) -> int:
     from ..gl import egl
     from ..gl.context import create_context
+    from ..gpu.capacity import reference_capacity
 
     devices = [{"index": d.index, "kind": d.kind, "drm_file": d.drm_file,
                 "extensions": list(d.extensions)} for d in egl.list_devices()]
     ctx = create_context(args.device, threads=args.threads)
     info = ctx.info()
     info["devices"] = devices
+    info["mesh"] = reference_capacity(ctx.gl.info["GL_MAX_TEXTURE_BUFFER_SIZE"])
     if args.json:
         print(json.dumps(info, indent=2))
         return 0
@@ -104,6 +106,11 @@ def cmd_info(args) -> int:
     print("limits:")
     for key, value in info["limits"].items():
         print(f"  {key:42s} {value}")
+    mesh = info["mesh"]
+    print(f"BVH triangles:   {mesh['bytes_per_triangle']:.0f} device bytes per triangle (a "
+          f"{mesh['triangles']:,}-triangle reference mesh; a scene's own: --stats), at most "
+          f"{mesh['max_triangles']:,} triangles (its {mesh['limited_by']} buffer reaches "
+          f"GL_MAX_TEXTURE_BUFFER_SIZE)")
     print("extensions:")
     for key, value in info["extensions"].items():
         print(f"  {key:42s} {'yes' if value else 'no'}")

@@ -59,6 +59,7 @@ class DeviceScene:
         self.texture_bytes = 0              # the atlas pages (RGBA16F) on the device
         # the BVH triangles' normals, uvs and info texels as uploaded (empty: no BVH)
         self.mesh_texels: tuple[np.ndarray, ...] = ()
+        self._mesh_textures: list[Any] = []        # their buffer textures
         self.bvh_cache = "none"             # the BVH: "hit", "miss", "uncached" (accel/bvh_cache.py)
         self._units: list[tuple[int, Any]] = []    # (texture unit, its bind call) for bind()
         self._owned: list[Any] = []                # released with the last user
@@ -96,7 +97,7 @@ class DeviceScene:
             obj.release()
         if self.bvh is not None:
             self.bvh.release()
-        self._owned, self._units, self.bvh = [], [], None
+        self._owned, self._units, self._mesh_textures, self.bvh = [], [], [], None
 
     # -- what the kernels read ----------------------------------------------------------------
     def bind(self) -> None:
@@ -219,7 +220,20 @@ class DeviceScene:
                 ("rgba32f", "rgba32f", "rgba32ui"), ("triangle normals", "triangle uvs", "triangle info")):
             tex = BufferTexture(self.ctx, data, fmt, name)
             self._owned.append(tex)
+            self._mesh_textures.append(tex)
             self._units.append((unit, tex.bind))
+
+    def mesh_capacity(self) -> dict | None:
+        """:func:`~glrender.gpu.capacity.mesh_capacity` of the uploaded BVH triangles (the
+        tree's buffers and the triangle texels); None without BVH triangles."""
+        from .capacity import mesh_capacity
+
+        if self.bvh is None or not len(self.mesh_texels[0]):
+            return None
+        buffers = {f"bvh {name}": (t.texels, t.nbytes) for name, t in self.bvh.textures.items()}
+        buffers.update({t.name: (t.texels, t.nbytes) for t in self._mesh_textures})
+        return mesh_capacity(buffers, len(self.mesh_texels[0]),
+                             self.ctx.gl.info["GL_MAX_TEXTURE_BUFFER_SIZE"])
 
     def _gather_mesh(self) -> DeviceMesh:
         """The BVH (accel/bvh_cache.py) and the per-triangle texels in its order; stored in

@@ -677,6 +677,11 @@ class SppmRenderer:
         """Where the scene's BVH came from (Renderer.bvh_cache)."""
         return self.base.bvh_cache
 
+    @property
+    def mesh_capacity(self) -> dict | None:
+        """The BVH triangles' bytes per triangle and the most that fit (Renderer.mesh_capacity)."""
+        return self.base.mesh_capacity
+
     def __enter__(self) -> "SppmRenderer":
         return self
 

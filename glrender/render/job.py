@@ -60,6 +60,7 @@ from .. import integrators
 from ..errors import UsageError
 from ..film import Film
 from ..film.io import WriteError
+from ..gpu.capacity import device_limits
 from .checkpoint import (BandLayout, Checkpoint, band_checkpoint_unit_size,
                          load_band_checkpoint, restore_checkpoint, save_band_checkpoint,
                          save_checkpoint)
@@ -450,6 +451,8 @@ class Job:
             "signal": o.stopped_by() if interrupted and o.stopped_by is not None else None,
             "seconds": {k: self.timings.get(k, 0.0) for k in PHASES},
             "bvh_cache": r.bvh_cache,
+            "mesh": r.mesh_capacity,
+            "device_limits": device_limits(ctx.gl.info),
             "denoise": None,
             "crop": o.crop, "clamp": s.clamp, "biased": s.clamp is not None,
             "memory": {"device_bytes_per_pixel": r.device_bytes_per_pixel(),

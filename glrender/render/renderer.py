@@ -250,6 +250,12 @@ class Renderer:
         stored), "uncached" (built: a small mesh or the cache off) or "none" (no BVH)."""
         return self.device_scene.bvh_cache if self.device_scene is not None else "none"
 
+    @property
+    def mesh_capacity(self) -> dict | None:
+        """The BVH triangles' device bytes per triangle and the most that fit
+        (DeviceScene.mesh_capacity); None without BVH triangles."""
+        return self.device_scene.mesh_capacity() if self.device_scene is not None else None
+
     # -- setup -------------------------------------------------------------------------------
     def _upload(self) -> None:
         """The settings' light table (selection pmf, alias table, spherical-rectangle flags,

@@ -119,3 +119,49 @@ def test08_stats(tmp_path, film):
     assert stats["samples_per_second"] > 0
     assert stats["outputs"] == [str(out)]
     assert len(stats["scene_hash"]) == 64
+
+
+def test09_stats_and_info_give_bytes_per_triangle_and_device_limits(tmp_path):
+    """``--stats`` records the device limits that bound a scene and, for a mesh, what its
+    BVH triangles take on the device per triangle and how many would fit; ``glrender info``
+    gives the same limits and the figures of a reference mesh."""
+    n = 30                                            # a 30 x 30 height field: 1,800 triangles
+    y, x = np.mgrid[0:n + 1, 0:n + 1] / n
+    v = np.stack([x, y, 0.1 * np.sin(6 * x)], axis=-1).reshape(-1, 3).astype("<f4")
+    k = (np.arange(n)[:, None] * (n + 1) + np.arange(n)[None, :]).reshape(-1)
+    f = np.concatenate([np.stack([k, k + 1, k + n + 2], 1), np.stack([k, k + n + 2, k + n + 1], 1)])
+    faces = np.zeros(len(f), np.dtype([("n", "u1"), ("i", "<i4", (3,))]))
+    faces["n"], faces["i"] = 3, f
+    mesh = tmp_path / "field.ply"
+    mesh.write_bytes((f"ply\nformat binary_little_endian 1.0\nelement vertex {len(v)}\n"
+                      "property float x\nproperty float y\nproperty float z\n"
+                      f"element face {len(f)}\nproperty list uchar int vertex_indices\nend_header\n").encode()
+                     + v.tobytes() + faces.tobytes())
+    info = json.loads(glrender("info", "--json").stdout)
+    limits = {name: info["limits"][name] for name in
+              ("GL_MAX_TEXTURE_BUFFER_SIZE", "GL_MAX_SHADER_STORAGE_BLOCK_SIZE", "GL_MAX_TEXTURE_SIZE")}
+
+    def stats_of(scene):
+        path = tmp_path / "s.json"
+        r = glrender("render", scene, "--spp", "1", "--width", "8", "-o", tmp_path / "o.png",
+                     "--stats", path, "--quiet")
+        assert r.returncode == 0, r.stderr
+        return json.loads(path.read_text())
+
+    stats = stats_of(mesh)
+    assert stats["device_limits"] == limits
+    m = stats["mesh"]
+    assert m["triangles"] == len(f)
+    assert m["bytes_per_triangle"] == pytest.approx(m["device_bytes"] / len(f), abs=0.01)
+    # corners (3 texels), normals (3), uvs (2) and info (1) of 16 bytes, and the nodes
+    assert 9 * 16 < m["bytes_per_triangle"] < 9 * 16 + 64
+    worst = max(m["texels_per_triangle"].values())
+    assert m["texels_per_triangle"][m["limited_by"]] == worst == 3
+    assert m["max_triangles"] == limits["GL_MAX_TEXTURE_BUFFER_SIZE"] // 3
+    cornell = stats_of(CORNELL)
+    assert cornell["mesh"] is None and cornell["device_limits"] == limits
+    reference = info["mesh"]
+    assert 9 * 16 < reference["bytes_per_triangle"] < 9 * 16 + 64
+    assert reference["max_triangles"] == m["max_triangles"]
+    text = glrender("info").stdout
+    assert f"at most {m['max_triangles']:,} triangles" in text
