@@ -16,8 +16,9 @@ the same machine load; medians over ``--repeats`` rounds are printed.
 gives a fresh process an empty cache folder (the first load: normals and BVH computed,
 then written) and then another fresh process the same folder (the second load: both read
 back), and times ``glrender.load`` plus the device scene (packing, BVH, uploads; no
-kernel compile, no pass). It prints the medians, the ratio second / first, and the
-load average over the run.
+kernel compile, no pass). It prints the medians, the ratio second / first, the load
+average over the run, and a hash of the uploaded buffers (the tree's and the triangle
+texels': one hash per row, the same for both rows, or the cache changed a bit).
 
     .venv/bin/python benchmarks/loading.py [--repeats 5] [--baseline DIR] [--formats ply,obj]
     .venv/bin/python benchmarks/loading.py --cache [--repeats 5] [--formats ply,obj]
@@ -73,6 +74,8 @@ device = DeviceScene(ctx, scene)
 t2 = time.perf_counter()
 bvh = device.bvh.bvh
 tree = hashlib.sha256(b"".join(a.tobytes() for _, a in sorted(bvh.pack().items())))
+for texels in device.mesh_texels:      # and the triangle data in the tree's order
+    tree.update(texels.tobytes())
 print(json.dumps({"load": t1 - t0, "pack": device.timings["pack"],
                   "bvh_upload": device.timings["build"] - device.timings["pack"],
                   "to_device": t2 - t0, "cache": device.bvh_cache, "loadavg": os.getloadavg()[0],
