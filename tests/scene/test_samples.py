@@ -31,7 +31,8 @@ TWINS = [("door/scene.toml", "door/scene.xml", "bdpt"),
          ("cornell-fog/scene.toml", "cornell-fog/scene.xml", "path"),
          ("smoke/scene.toml", "smoke/scene.xml", "path"),
          ("volumetric-caustic/scene.toml", "volumetric-caustic/scene.xml", "path"),
-         ("window-fog/scene.toml", "window-fog/scene.xml", "path")]
+         ("window-fog/scene.toml", "window-fog/scene.xml", "path"),
+         ("many-lights/scene.toml", "many-lights/scene.xml", "path")]
 
 
 def _files() -> tuple[list[Path], list[Path]]:
