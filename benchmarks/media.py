@@ -32,7 +32,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bdpt import arguments, conditions, equal_time  # noqa: E402
 from cornell_vs_mitsuba import ROOT  # noqa: E402
-from results_md import END_OF_RUN, commit, put_run  # noqa: E402
+from results_md import commit, put_run_with_targets  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "RESULTS.md"
 MARKER = "## Participating media"
@@ -98,9 +98,7 @@ def write_results(runs, args, load_start, load_end) -> None:
             targets.append(f"- {name}, in the window: {best} reaches Mitsuba's RMSE {r:.3g}x sooner "
                            f"(efficiency in the window); target at least {WINDOW_TARGET[name]:g}x: "
                            f"{'met' if r >= WINDOW_TARGET[name] else 'missed'}.")
-    section = "\n".join(lines + ["", "Targets:", ""] + targets + ["", END_OF_RUN]) + "\n"
-    put_run(RESULTS, MARKER, section)
-    print(section)
+    print(put_run_with_targets(RESULTS, MARKER, lines, targets))
 
 
 if __name__ == "__main__":

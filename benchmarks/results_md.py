@@ -48,3 +48,11 @@ def put_run(path: Path, marker: str, section: str) -> None:
     rest = "\n".join(old[last:]).strip("\n")
     text = text[:start + 1] + section.rstrip("\n") + "\n" + ("\n" + rest + "\n" if rest else "") + text[end:]
     path.write_text(text.rstrip("\n") + "\n")
+
+
+def put_run_with_targets(path: Path, marker: str, lines: list[str], targets: list[str]) -> str:
+    """:func:`put_run` of a run whose table (``lines``: heading, paragraph, table) is followed
+    by its target lines, the run ending with :data:`END_OF_RUN`; returns the section written."""
+    section = "\n".join(lines + ["", "Targets:", ""] + targets + ["", END_OF_RUN]) + "\n"
+    put_run(path, marker, section)
+    return section

@@ -38,7 +38,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bdpt import arguments, conditions, equal_time, label_of  # noqa: E402
 from cornell_vs_mitsuba import ROOT  # noqa: E402
-from results_md import END_OF_RUN, commit, put_run  # noqa: E402
+from results_md import commit, put_run_with_targets  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "RESULTS.md"
 MARKER = "## Vertex connection and merging"
@@ -148,9 +148,7 @@ def write_results(results, device, args, load_start, load_end) -> None:
                          f"{ours[0]} | {ours[1]} | "
                          f"{ratio(m['eff'] / mitsuba['eff'] if mitsuba else None)} | "
                          f"{ratio(m['eff_window'] / mitsuba['eff_window'] if mitsuba else None)} |")
-    section = "\n".join(lines + ["", "Targets:", ""] + target_lines(results) + ["", END_OF_RUN]) + "\n"
-    put_run(RESULTS, MARKER, section)
-    print(section)
+    print(put_run_with_targets(RESULTS, MARKER, lines, target_lines(results)))
 
 
 if __name__ == "__main__":

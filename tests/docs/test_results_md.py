@@ -36,3 +36,16 @@ def test02_a_run_of_several_tables_ends_at_its_marker(tmp_path):
     assert text.count(rm.END_OF_RUN) == 1 and text.count("| 22 |") == 1
     assert text.rstrip().endswith("note")
     assert rm.commit() not in ("", None)
+
+
+def test03_a_run_with_targets_keeps_them_inside_the_run(tmp_path):
+    rm = results_md()
+    path = tmp_path / "RESULTS.md"
+    for k in (1, 2):
+        section = rm.put_run_with_targets(path, "## T", ["## T", "", f"run {k}", "", "| a |", "|---|", f"| {k} |"],
+                                          [f"- target {k}: met."])
+        if k == 1:
+            path.write_text(path.read_text() + "\nnote\n")
+    text = path.read_text()
+    assert section in text and "target 1" not in text and "| 1 |" not in text
+    assert text.index("- target 2: met.") < text.index(rm.END_OF_RUN) < text.index("note")
