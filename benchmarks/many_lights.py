@@ -25,7 +25,7 @@ Python 3.11 environment of its own (``python3.11 -m venv bpy && bpy/bin/pip inst
 numpy``) named by ``--bpy-python`` or $GLRENDER_BPY_PYTHON (without it the Cycles rows are
 skipped, with a note).
 
-    .venv/bin/python benchmarks/many_lights.py [--seconds 5] [--rounds 2] [--bpy-python PATH]
+    .venv/bin/python benchmarks/many_lights.py [--seconds 5] [--rounds 3] [--bpy-python PATH]
 """
 from __future__ import annotations
 
@@ -230,7 +230,7 @@ def configs(tmp: Path, bpy: str | None) -> list[tuple[str, list[str], dict]]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seconds", type=float, default=5.0, help="render time per config")
-    ap.add_argument("--rounds", type=int, default=2, help="alternating rounds (medians reported)")
+    ap.add_argument("--rounds", type=int, default=3, help="alternating rounds (medians reported)")
     ap.add_argument("--bpy-python", default=None, help="a Python with Blender's bpy module (Cycles)")
     args = ap.parse_args()
     if not REFERENCE.exists():
