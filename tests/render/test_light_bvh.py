@@ -1,13 +1,14 @@
 """Light selection by the light BVH (``light_selection = "bvh"``) renders what power
-selection renders: a room lit by 60 small one-sided emitters facing every way, 12 point
-lights and 8 spot lights whose intensities span three decades, under a dim constant
-environment (a light at infinity, outside the tree), with a glossy floor. The path tracer
-(MIS between light samples, whose probabilities now depend on the shading point, and BSDF
-samples that hit emitters, weighed by the tree's probability at the vertex they left) and
-direct lighting, per 8-pixel block at a Šidák-corrected alpha of 0.01 over every block,
-channel and case of this file, sigma from the seeds. Also: the tree does what it is for
-(lower MSE than power selection at equal samples), sppm's camera paths take it, and the
-wavefront executor refuses it in one line.
+selection renders: a street between two walls lit by 60 one-sided emitters (some turned to
+the wall), 12 point lights and 8 spot lights whose intensities span three decades, under a
+dim constant environment (a light at infinity, beside the tree), with a glossy floor. The
+path tracer (MIS between light samples, whose probabilities now depend on the shading
+point, and BSDF samples that hit emitters, weighed by the tree's probability at the vertex
+they left; also with emitters large enough that BSDF samples find them often) and direct
+lighting, per 8-pixel block at a Šidák-corrected alpha of 0.01 over every block, channel
+and case of this file, sigma from the seeds. Also: the tree does what it is for (a lower
+median pixel variance than power selection at equal samples), and the wavefront executor
+refuses it in one line.
 """
 from __future__ import annotations
 
