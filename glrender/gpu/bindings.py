@@ -6,7 +6,7 @@ sees two blocks or samplers on one binding point.
 
 GL counts three binding spaces apart: uniform blocks (``UBO_*``), storage blocks (``SSBO_*``)
 and texture units (``TEX_*``). The render kernel's scene owns uniform block 0, storage blocks
-0-7 and texture units 0-10; the kernels beside it (bdpt's strategy images, the photon map and
+0-7 and texture units 0-10 and 16-31 (the geometry's further parts); the kernels beside it (bdpt's strategy images, the photon map and
 SPPM kernels) number theirs from there and never meet in one kernel, so storage blocks 8 and
 up and texture units 11 and up are each used by more than one of them.
 """
@@ -66,7 +66,8 @@ TEX_BVH_NODES = 0
 TEX_BVH_TRIANGLES = 1
 TEX_BVH_INSTANCES = 2
 TEX_GEOMETRY_RESERVED = 3
-# per-triangle shading data, environment and surface textures (scene/layout.glsl)
+# per-triangle shading data (geometry/bvh_layout.glsl), environment and surface textures
+# (scene/layout.glsl)
 TEX_TRI_NORMALS = 4
 TEX_TRI_UVS = 5
 TEX_TRI_INFO = 6
@@ -81,6 +82,14 @@ TEX_CAUSTIC_MAP = 12
 TEX_GLOBAL_CELLS = 13
 TEX_CAUSTIC_CELLS = 14
 TEX_MEDIA_GRIDS = 15        # the voxels of heterogeneous media (scene/layout.glsl)
+# the further parts of the BVH and per-triangle data past one buffer texture's limit
+# (geometry/bvh_layout.glsl): each kind's from its unit up to the next one's, the last up to the
+# device's GL_MAX_COMPUTE_TEXTURE_IMAGE_UNITS (32 on llvmpipe and NVIDIA)
+TEX_BVH_NODES_MORE = 16
+TEX_BVH_TRIANGLES_MORE = 19
+TEX_TRI_NORMALS_MORE = 23
+TEX_TRI_UVS_MORE = 27
+TEX_TRI_INFO_MORE = 30
 
 # ---- flag bits --------------------------------------------------------------------------
 # MaterialData.info.y (bsdf/bsdf_common.glsl)

@@ -91,11 +91,11 @@ def has_emission_textures(packed: PackedScene) -> bool:
 
 _ALPHA_PASS = [
     "bool bvh_alpha_pass(uint tri, vec2 bary) {",
-    "    MaterialHeader m = scene_material(texelFetch(u_tri_info, int(tri)).x);",
+    "    MaterialHeader m = scene_material(tri_info_texel(int(tri), 0).x);",
     "    uint tex = uint(m.opacity_texture);",
     "    if (tex == 0u) return true;",
-    "    vec4 uv01 = texelFetch(u_tri_uvs, 2 * int(tri));",
-    "    vec2 uv2 = texelFetch(u_tri_uvs, 2 * int(tri) + 1).xy;",
+    "    vec4 uv01 = tri_uv_texel(2 * int(tri), 0);",
+    "    vec2 uv2 = tri_uv_texel(2 * int(tri), 1).xy;",
     "    vec2 uv = (1.0 - bary.x - bary.y) * uv01.xy + bary.x * uv01.zw + bary.y * uv2;",
     "    return opacity_at(tex - 1u, uv) >= m.alpha_cutoff;",
     "}",

@@ -41,8 +41,11 @@ class DeviceScene:
     """A scene's settings-independent data on the device of ``ctx``.
 
     ``packed``: the scene already packed (None: pack it here). Holds ``packed``, ``bvh``
-    (a :class:`~glrender.gpu.bvh_upload.GpuBvh`, None without mesh triangles) and the
-    triangle, surface and environment textures; :meth:`bind` binds them all to their units.
+    (a :class:`~glrender.gpu.bvh_upload.GpuBvh`, None without mesh triangles), ``shading``
+    (the triangles' normals, uvs and records, each a
+    :class:`~glrender.gpu.bvh_upload.PartedTexture`) and the surface and environment
+    textures; :meth:`bind` binds them all to their units, and the kernels compile with
+    :meth:`defines`.
     ``timings``: seconds of packing ("pack") and of packing plus building and uploading
     ("build")."""
 
@@ -54,12 +57,12 @@ class DeviceScene:
         t_pack = time.perf_counter()
         self.users = 1
         self.bvh: Any = None
+        self.shading: dict[str, Any] = {}
         self.env_texture: Any = None
         self.env_weights: np.ndarray | None = None
         self.texture_bytes = 0              # the atlas pages (RGBA16F) on the device
         # the BVH triangles' normals, uvs and info texels as uploaded (empty: no BVH)
         self.mesh_texels: tuple[np.ndarray, ...] = ()
-        self._mesh_textures: list[Any] = []        # their buffer textures
         self.bvh_cache = "none"             # the BVH: "hit", "miss", "uncached" (accel/bvh_cache.py)
         self._units: list[tuple[int, Any]] = []    # (texture unit, its bind call) for bind()
         self._owned: list[Any] = []                # released with the last user
@@ -95,17 +98,32 @@ class DeviceScene:
     def _free(self) -> None:
         for obj in self._owned:
             obj.release()
+        for texture in self.shading.values():
+            texture.release()
         if self.bvh is not None:
             self.bvh.release()
-        self._owned, self._units, self._mesh_textures, self.bvh = [], [], [], None
+        self._owned, self._units, self.bvh, self.shading = [], [], None, {}
 
     # -- what the kernels read ----------------------------------------------------------------
     def bind(self) -> None:
         """Bind the environment, surface and triangle textures and the BVH to their units."""
         for unit, bind in self._units:
             bind(unit)
+        for texture in self.shading.values():
+            texture.bind()
         if self.bvh is not None:
             self.bvh.bind()
+
+    def defines(self) -> dict[str, int]:
+        """The host defines of the kernels that read this scene's geometry: the kinds of it cut
+        into parts (glrender/gpu/bvh_upload.py part_defines; none in a scene that fits one
+        buffer texture of each)."""
+        from .bvh_upload import part_defines
+
+        if self.bvh is None:
+            return {}
+        parts = {**self.bvh.parts, **{kind: len(t.parts) for kind, t in self.shading.items()}}
+        return part_defines(parts, self.ctx.gl)
 
     def light_table(self, light_selection: str, area_sampling: str) -> LightTable:
         """The light records and distributions under the settings' light selection
@@ -205,23 +223,20 @@ class DeviceScene:
         (object space), and per-triangle shading data in the BVH's triangle order: from the
         device-ready mesh cache on a hit (gpu/mesh_cache.py), else built and gathered here
         and kept there."""
-        from ..gl.buffers import BufferTexture
-        from .bvh_upload import GpuBvh
+        from .bvh_upload import GpuBvh, PartedTexture, check_triangles
 
         mesh = self.packed.cached_mesh
+        total = len(mesh.texels[2]) if mesh is not None else 0
         if mesh is not None:
+            check_triangles(self.ctx.gl, total)   # (a miss checks before building the tree)
             self.bvh_cache = "hit"
         else:
             mesh = self._gather_mesh()
+            total = len(mesh.texels[2])
         self.mesh_texels = mesh.texels
         self.bvh = GpuBvh(self.ctx, mesh.bvh)
-        for unit, data, fmt, name in zip(
-                (bindings.TEX_TRI_NORMALS, bindings.TEX_TRI_UVS, bindings.TEX_TRI_INFO), mesh.texels,
-                ("rgba32f", "rgba32f", "rgba32ui"), ("triangle normals", "triangle uvs", "triangle info")):
-            tex = BufferTexture(self.ctx, data, fmt, name)
-            self._owned.append(tex)
-            self._mesh_textures.append(tex)
-            self._units.append((unit, tex.bind))
+        for kind, data in zip(("normals", "uvs", "info"), mesh.texels):
+            self.shading[kind] = PartedTexture(self.ctx, kind, data, total)
 
     def mesh_capacity(self) -> dict | None:
         """:func:`~glrender.gpu.capacity.mesh_capacity` of the uploaded BVH triangles (the
@@ -231,7 +246,7 @@ class DeviceScene:
         if self.bvh is None or not len(self.mesh_texels[0]):
             return None
         buffers = {f"bvh {name}": (t.texels, t.nbytes) for name, t in self.bvh.textures.items()}
-        buffers.update({t.name: (t.texels, t.nbytes) for t in self._mesh_textures})
+        buffers.update({f"triangle {kind}": (t.texels, t.nbytes) for kind, t in self.shading.items()})
         return mesh_capacity(buffers, len(self.mesh_texels[0]),
                              self.ctx.gl.info["GL_MAX_TEXTURE_BUFFER_SIZE"])
 
@@ -241,6 +256,7 @@ class DeviceScene:
         are static and emit nothing."""
         from ..accel import MotionInstance
         from ..accel.bvh_cache import build_bvh_buffers
+        from .bvh_upload import check_triangles
 
         p = self.packed
         if p.mesh is not None:
@@ -251,6 +267,7 @@ class DeviceScene:
         motion = [MotionInstance(mm.positions.reshape(-1, 3), np.arange(3 * len(mm.positions)).reshape(-1, 3),
                                  mm.world_from_object_open, mm.world_from_object_close)
                   for mm in p.moving_meshes]
+        check_triangles(self.ctx.gl, len(positions) + sum(len(mm.positions) for mm in p.moving_meshes))
         tri = positions.reshape(-1, 3)
         bvh, self.bvh_cache = build_bvh_buffers(tri.astype(np.float32),
                                                 np.arange(len(tri)).reshape(-1, 3), motion=motion)

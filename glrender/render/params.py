@@ -14,7 +14,8 @@ LIGHT_SELECTION = {"uniform": 0, "power": 1, "bvh": 2}
 AREA_SAMPLING = {"area": 0, "solid-angle": 1}
 FILTERS = {"box": 0, "tent": 1, "gaussian": 2, "mitchell": 3}
 RR_RULES = {"throughput": 0, "fixed": 1, "off": 2}
-#: the switches params.glsl defaults to 0 (the BVH depth: to 31) when the host leaves them out
+#: the switches params.glsl defaults to 0 (the BVH depth: to 31, the parts: to 1) when the host
+#: leaves them out
 OPTIONAL_DEFINES = {
     "GLRENDER_NORMAL_SHADOWING": "a material's normal map has the shadowing term",
     "GLRENDER_ALPHA_CUTOUTS": "opacity textures cut holes into mesh triangles",
@@ -31,6 +32,13 @@ OPTIONAL_DEFINES = {
     "GLRENDER_VCM_CACHE": "vcm: connections per camera vertex to a light vertex cache (0: none)",
     "GLRENDER_SHARED_TIME": "every sample of a pass takes one shutter time (vcm with motion)",
     "GLRENDER_MEDIA": "shapes or the camera name participating media",
+    # geometry/bvh_layout.glsl, from glrender/gpu/bvh_upload.py: the geometry textures' parts
+    "GLRENDER_GEOMETRY_PART_TEXELS": "texels of each part of a geometry texture cut into parts",
+    "GLRENDER_BVH_NODE_PARTS": "buffer textures the BVH nodes span (1 when absent)",
+    "GLRENDER_BVH_TRIANGLE_PARTS": "buffer textures the triangle corners span (1 when absent)",
+    "GLRENDER_TRI_NORMAL_PARTS": "buffer textures the vertex normals span (1 when absent)",
+    "GLRENDER_TRI_UV_PARTS": "buffer textures the texture coordinates span (1 when absent)",
+    "GLRENDER_TRI_INFO_PARTS": "buffer textures the triangles' material records span (1 when absent)",
 }
 
 

@@ -301,6 +301,8 @@ class Renderer:
             area_sampling=integ.area_sampling, filter=self.scene.film.filter, aovs=s.aovs,
             count_loops=s.count_loops, count_rays=s.count_rays, debug_nonfinite=s.debug_nonfinite,
             emission_only=s.emission_only)
+        assert self.device_scene is not None, "the renderer was released"
+        self.defines.update(self.device_scene.defines())   # geometry past one buffer texture
         if p.has_bvh and codegen.has_alpha_cutouts(p):
             self.defines["GLRENDER_ALPHA_CUTOUTS"] = 1     # geometry/bvh.glsl asks the scene
         if codegen.has_normal_shadowing(p):

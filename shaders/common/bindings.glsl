@@ -4,7 +4,7 @@
 //
 // GL counts three binding spaces apart: uniform blocks (UBO_*), storage blocks (SSBO_*)
 // and texture units (TEX_*). The render kernel's scene owns uniform block 0, storage
-// blocks 0-7 and texture units 0-10; bdpt's strategy images and the photon kernels number
+// blocks 0-7 and texture units 0-10 and 16-31 (the geometry's further parts); bdpt's strategy images and the photon kernels number
 // theirs from there and never meet in one kernel.
 
 // ---- uniform blocks (std140) ------------------------------------------------------------
@@ -62,7 +62,8 @@
 #define TEX_BVH_TRIANGLES 1
 #define TEX_BVH_INSTANCES 2
 #define TEX_GEOMETRY_RESERVED 3
-// per-triangle shading data, environment and surface textures (scene/layout.glsl)
+// per-triangle shading data (geometry/bvh_layout.glsl), environment and surface
+// textures (scene/layout.glsl)
 #define TEX_TRI_NORMALS 4
 #define TEX_TRI_UVS 5
 #define TEX_TRI_INFO 6
@@ -78,6 +79,14 @@
 #define TEX_CAUSTIC_CELLS 14
 // the grids of heterogeneous media (scene/layout.glsl)
 #define TEX_MEDIA_GRIDS 15
+// the further parts of the BVH and per-triangle data past one buffer texture's limit
+// (geometry/bvh_layout.glsl): each kind's from its unit up to the next one's, the last up
+// to the device's GL_MAX_COMPUTE_TEXTURE_IMAGE_UNITS
+#define TEX_BVH_NODES_MORE 16
+#define TEX_BVH_TRIANGLES_MORE 19
+#define TEX_TRI_NORMALS_MORE 23
+#define TEX_TRI_UVS_MORE 27
+#define TEX_TRI_INFO_MORE 30
 
 // ---- flag bits --------------------------------------------------------------------------
 // MaterialData.info.y

@@ -17,7 +17,8 @@
 #endif
 
 // Switches the host passes only for the scenes or tests that need them
-// (glrender/render/params.py OPTIONAL_DEFINES): each is a number here, 0 when absent.
+// (glrender/render/params.py OPTIONAL_DEFINES): each is a number here, 0 when absent
+// (the geometry's parts: 1).
 // Code reads the typed constant; it tests the macro (#if) only where a declaration
 // depends on it (a struct field, a storage block, a function the scene code defines).
 #ifndef GLRENDER_NORMAL_SHADOWING
@@ -64,6 +65,24 @@
 #endif
 #ifndef GLRENDER_MEDIA
 #define GLRENDER_MEDIA 0
+#endif
+#ifndef GLRENDER_GEOMETRY_PART_TEXELS
+#define GLRENDER_GEOMETRY_PART_TEXELS 0
+#endif
+#ifndef GLRENDER_BVH_NODE_PARTS
+#define GLRENDER_BVH_NODE_PARTS 1
+#endif
+#ifndef GLRENDER_BVH_TRIANGLE_PARTS
+#define GLRENDER_BVH_TRIANGLE_PARTS 1
+#endif
+#ifndef GLRENDER_TRI_NORMAL_PARTS
+#define GLRENDER_TRI_NORMAL_PARTS 1
+#endif
+#ifndef GLRENDER_TRI_UV_PARTS
+#define GLRENDER_TRI_UV_PARTS 1
+#endif
+#ifndef GLRENDER_TRI_INFO_PARTS
+#define GLRENDER_TRI_INFO_PARTS 1
 #endif
 // A material's normal map has Mitsuba's shadowing term (bsdf/bsdf.glsl
 // bsdf_normal_shadowing; bdpt's vertices keep the unperturbed normal for it).

@@ -46,7 +46,7 @@ struct BvhHit {
 
 // Corner k (0, 1, 2) of triangle prim (BVH order), in world space.
 vec3 bvh_triangle_vertex(uint prim, uint k) {
-    return texelFetch(u_bvh_triangles, int(prim) * kBvhTexelsPerTriangle + int(k)).xyz;
+    return bvh_triangle_texel(int(prim) * kBvhTexelsPerTriangle, int(k)).xyz;
 }
 
 // Whether the ray hits triangle prim (BVH order) in (0, t_max) where it is solid (not cut
@@ -58,9 +58,8 @@ bool bvh_triangle_hit(WatertightRay r, uint prim, float t_max, out float t, out 
     t = t_max;
     bary = vec2(0.0);
     bool solid = false;
-    if (watertight_candidate(r, texelFetch(u_bvh_triangles, base).xyz,
-                             texelFetch(u_bvh_triangles, base + 1).xyz,
-                             texelFetch(u_bvh_triangles, base + 2).xyz, t_max, uvwt)) {
+    if (watertight_candidate(r, bvh_triangle_texel(base, 0).xyz, bvh_triangle_texel(base, 1).xyz,
+                             bvh_triangle_texel(base, 2).xyz, t_max, uvwt)) {
         solid = watertight_resolve(uvwt, t_max, t, bary);
 #if GLRENDER_ALPHA_CUTOUTS
         solid = solid && bvh_alpha_pass(prim, bary);
@@ -111,10 +110,10 @@ NodeFrame bvh_node_frame(SlabRay r, uvec4 head) {
 vec4 bvh_node_entry(SlabRay r, uint node, float t_max, out uvec4 child) {
     const float kPlaneError = 5.0 * kMachineEpsilon;
     int base = int(node) * kBvhTexelsPerNode;
-    uvec4 head = texelFetch(u_bvh_nodes, base);
-    child = texelFetch(u_bvh_nodes, base + 1);
-    uvec4 xy = texelFetch(u_bvh_nodes, base + 2);  // lo.x, hi.x, lo.y, hi.y
-    uvec2 z = texelFetch(u_bvh_nodes, base + 3).xy;  // lo.z, hi.z
+    uvec4 head = bvh_node_texel(base, 0);
+    child = bvh_node_texel(base, 1);
+    uvec4 xy = bvh_node_texel(base, 2);  // lo.x, hi.x, lo.y, hi.y
+    uvec2 z = bvh_node_texel(base, 3).xy;  // lo.z, hi.z
     // as bvh_node_frame, written out: through the struct this loop measured ~3% slower
     vec3 scale = uintBitsToFloat(((uvec3(head.w) >> uvec3(0u, 8u, 16u)) & 255u) << 23u);
     vec3 a = scale * r.inv_d;
@@ -169,9 +168,9 @@ bool bvh_traverse(uint root, vec3 o, vec3 d, float t_max, const bool any_hit, ou
             // 4-5% slower (benchmarks/RESULTS.md, "Busy lanes")
             int base = int(leaf_first) * kBvhTexelsPerTriangle;
             vec4 uvwt;
-            if (watertight_candidate(tri_ray, texelFetch(u_bvh_triangles, base).xyz,
-                                     texelFetch(u_bvh_triangles, base + 1).xyz,
-                                     texelFetch(u_bvh_triangles, base + 2).xyz, hit.t, uvwt)) {
+            if (watertight_candidate(tri_ray, bvh_triangle_texel(base, 0).xyz,
+                                     bvh_triangle_texel(base, 1).xyz,
+                                     bvh_triangle_texel(base, 2).xyz, hit.t, uvwt)) {
                 float t;
                 vec2 bary;
                 bool solid = watertight_resolve(uvwt, hit.t, t, bary);

@@ -90,12 +90,12 @@ bool bvh8_traverse_lane(uint root, vec3 o, vec3 d, float t_max, const bool any_h
             node = kNone;
         } else {
             int base = int(node) * kBvh8TexelsPerNode;
-            NodeFrame f = bvh_node_frame(slab, texelFetch(u_bvh_nodes, base));
-            uvec4 c03 = texelFetch(u_bvh_nodes, base + 1);
-            uvec4 c47 = texelFetch(u_bvh_nodes, base + 2);
-            uvec4 px = texelFetch(u_bvh_nodes, base + 3);
-            uvec4 py = texelFetch(u_bvh_nodes, base + 4);
-            uvec4 pz = texelFetch(u_bvh_nodes, base + 5);
+            NodeFrame f = bvh_node_frame(slab, bvh_node_texel(base, 0));
+            uvec4 c03 = bvh_node_texel(base, 1);
+            uvec4 c47 = bvh_node_texel(base, 2);
+            uvec4 px = bvh_node_texel(base, 3);
+            uvec4 py = bvh_node_texel(base, 4);
+            uvec4 pz = bvh_node_texel(base, 5);
             vec4 ta = bvh8_half_entry(slab, f, px, py, pz, 0, hit.t);
             vec4 tb = bvh8_half_entry(slab, f, px, py, pz, 1, hit.t);
             float t0 = ta.x, t1 = ta.y, t2 = ta.z, t3 = ta.w;
@@ -238,12 +238,12 @@ bool bvh8_traverse_group(bool has_ray, uint root, vec3 o, vec3 d, float t_max,
                 node = kNone;
             } else {
                 int base = int(node) * kBvh8TexelsPerNode;
-                NodeFrame f = bvh_node_frame(slab, texelFetch(u_bvh_nodes, base));
-                uvec4 refs = texelFetch(u_bvh_nodes, base + 1 + int(half_sel));
+                NodeFrame f = bvh_node_frame(slab, bvh_node_texel(base, 0));
+                uvec4 refs = bvh_node_texel(base, 1 + int(half_sel));
                 uint ref = lane < 4u ? refs[lane] : refs[lane - 4u];
-                uvec4 px = texelFetch(u_bvh_nodes, base + 3);
-                uvec4 py = texelFetch(u_bvh_nodes, base + 4);
-                uvec4 pz = texelFetch(u_bvh_nodes, base + 5);
+                uvec4 px = bvh_node_texel(base, 3);
+                uvec4 py = bvh_node_texel(base, 4);
+                uvec4 pz = bvh_node_texel(base, 5);
                 vec3 qn = vec3(float((px[near_word.x] >> shift) & 255u),
                                float((py[near_word.y] >> shift) & 255u),
                                float((pz[near_word.z] >> shift) & 255u));

@@ -1,7 +1,7 @@
-// The geometry buffer textures and their encoding: the one place texture units
-// 0-3 are declared. glrender/gpu/bvh_upload.py binds them and a test checks the
-// units and constants below against it and against glrender/accel/bvh.py; the unit
-// numbers are named in common/bindings.glsl.
+// The geometry buffer textures and their encoding: the one place the BVH's and the mesh
+// triangles' texture units are declared. glrender/gpu/bvh_upload.py binds them and a test
+// checks the units and constants below against it and against glrender/accel/bvh.py; the
+// unit numbers are named in common/bindings.glsl.
 //
 // u_bvh_nodes      rgba32ui, 4 texels (64 bytes) per 4-wide node
 //                  (glrender/accel/quantize.py): origin + exponents, the four
@@ -9,13 +9,24 @@
 // u_bvh_triangles  rgba32f, 3 texels per triangle: corners v0, v1, v2 (BVH order).
 // u_bvh_instances  rgba32f, the motion instances (geometry/motion.glsl).
 // Unit 3 is reserved for geometry.
+// The shading data of each triangle, in BVH order (geometry/mesh_surface.glsl):
+// u_tri_normals    rgba32f, 3 texels per triangle: vertex normals (xyz, -).
+// u_tri_uvs        rgba32f, 2 texels per triangle: (uv0, uv1), (uv2, -, -).
+// u_tri_info       rgba32ui, 1 texel per triangle: material, light + 1, flags, -.
 //
 // A child reference is an inner node index (high bit clear), or a leaf
 // kBvhLeafFlag | count << kBvhLeafCountShift | first: triangles [first, first + count).
+//
+// Parts: a buffer texture holds at most GL_MAX_TEXTURE_BUFFER_SIZE texels (2^27 on
+// llvmpipe: the corners of 44.7M triangles). Past that, the nodes, the corners and each
+// kind of shading data are cut into parts of kGeometryPartTexels texels, a multiple of 12
+// so that no node (4 or 6 texels) or triangle record (1 to 3) straddles two: part 0 is the
+// texture above, parts 1.. an array from the kind's *_MORE unit on. How many parts each
+// kind has is a host define (GLRENDER_*_PARTS, 1 when absent), so a scene whose kinds fit
+// one texture each compiles to the very fetches it had before parts existed: traversal is
+// the hot loop. Every texel is read through the *_texel functions below.
 #include "common/bindings.glsl"
-layout(binding = TEX_BVH_NODES) uniform usamplerBuffer u_bvh_nodes;
-layout(binding = TEX_BVH_TRIANGLES) uniform samplerBuffer u_bvh_triangles;
-layout(binding = TEX_BVH_INSTANCES) uniform samplerBuffer u_bvh_instances;
+#include "common/params.glsl"
 
 const uint kBvhLeafFlag = 0x80000000u;
 const uint kBvhLeafCountShift = 28u;
@@ -23,3 +34,68 @@ const uint kBvhLeafFirstMask = 0x0FFFFFFFu;
 const int kBvhTexelsPerNode = 4;
 const int kBvhTexelsPerTriangle = 3;
 const uint kBvhExponentBias = 127u;
+const int kGeometryPartTexels = GLRENDER_GEOMETRY_PART_TEXELS;
+
+// T fn(int base, int k): texel base + k of one kind, base the first texel of a node or of a
+// triangle's record; in one texture ...
+#define GEOMETRY_TEXEL(T, fn, first) \
+T fn(int base, int k) { \
+    return texelFetch(first, base + k); \
+}
+// ... or in parts: base picks the part. Indexing an array of samplers takes a dynamically
+// uniform index, so the loop visits the parts in turn (each fetch runs only where a lane
+// reads that part).
+#define GEOMETRY_PARTS_TEXEL(T, fn, first, more, parts) \
+T fn(int base, int k) { \
+    int part = base / kGeometryPartTexels; \
+    int i = base - part * kGeometryPartTexels + k; \
+    T v = T(0); \
+    if (part == 0) v = texelFetch(first, i); \
+    for (int j = 1; j < parts; ++j) { \
+        if (part == j) v = texelFetch(more[j - 1], i); \
+    } \
+    return v; \
+}
+
+layout(binding = TEX_BVH_NODES) uniform usamplerBuffer u_bvh_nodes;
+#if GLRENDER_BVH_NODE_PARTS > 1
+layout(binding = TEX_BVH_NODES_MORE) uniform usamplerBuffer u_bvh_nodes_more[GLRENDER_BVH_NODE_PARTS - 1];
+GEOMETRY_PARTS_TEXEL(uvec4, bvh_node_texel, u_bvh_nodes, u_bvh_nodes_more, GLRENDER_BVH_NODE_PARTS)
+#else
+GEOMETRY_TEXEL(uvec4, bvh_node_texel, u_bvh_nodes)
+#endif
+
+layout(binding = TEX_BVH_TRIANGLES) uniform samplerBuffer u_bvh_triangles;
+#if GLRENDER_BVH_TRIANGLE_PARTS > 1
+layout(binding = TEX_BVH_TRIANGLES_MORE) uniform samplerBuffer u_bvh_triangles_more[GLRENDER_BVH_TRIANGLE_PARTS - 1];
+GEOMETRY_PARTS_TEXEL(vec4, bvh_triangle_texel, u_bvh_triangles, u_bvh_triangles_more,
+                     GLRENDER_BVH_TRIANGLE_PARTS)
+#else
+GEOMETRY_TEXEL(vec4, bvh_triangle_texel, u_bvh_triangles)
+#endif
+
+layout(binding = TEX_BVH_INSTANCES) uniform samplerBuffer u_bvh_instances;
+
+layout(binding = TEX_TRI_NORMALS) uniform samplerBuffer u_tri_normals;
+#if GLRENDER_TRI_NORMAL_PARTS > 1
+layout(binding = TEX_TRI_NORMALS_MORE) uniform samplerBuffer u_tri_normals_more[GLRENDER_TRI_NORMAL_PARTS - 1];
+GEOMETRY_PARTS_TEXEL(vec4, tri_normal_texel, u_tri_normals, u_tri_normals_more, GLRENDER_TRI_NORMAL_PARTS)
+#else
+GEOMETRY_TEXEL(vec4, tri_normal_texel, u_tri_normals)
+#endif
+
+layout(binding = TEX_TRI_UVS) uniform samplerBuffer u_tri_uvs;
+#if GLRENDER_TRI_UV_PARTS > 1
+layout(binding = TEX_TRI_UVS_MORE) uniform samplerBuffer u_tri_uvs_more[GLRENDER_TRI_UV_PARTS - 1];
+GEOMETRY_PARTS_TEXEL(vec4, tri_uv_texel, u_tri_uvs, u_tri_uvs_more, GLRENDER_TRI_UV_PARTS)
+#else
+GEOMETRY_TEXEL(vec4, tri_uv_texel, u_tri_uvs)
+#endif
+
+layout(binding = TEX_TRI_INFO) uniform usamplerBuffer u_tri_info;
+#if GLRENDER_TRI_INFO_PARTS > 1
+layout(binding = TEX_TRI_INFO_MORE) uniform usamplerBuffer u_tri_info_more[GLRENDER_TRI_INFO_PARTS - 1];
+GEOMETRY_PARTS_TEXEL(uvec4, tri_info_texel, u_tri_info, u_tri_info_more, GLRENDER_TRI_INFO_PARTS)
+#else
+GEOMETRY_TEXEL(uvec4, tri_info_texel, u_tri_info)
+#endif

@@ -1,6 +1,6 @@
 // The surface record of a BVH triangle hit: normals, texture coordinates, material, light.
 //
-// Shading data lives in per-triangle buffer textures in BVH order (scene/layout.glsl).
+// Shading data lives in per-triangle buffer textures in BVH order (geometry/bvh_layout.glsl).
 // As in Mitsuba, the geometric normal is flipped to the side of the interpolated
 // shading normal, so that vertex normals decide which side of a mesh is its front.
 #include "geometry/bvh.glsl"
@@ -17,18 +17,18 @@ void mesh_surface(uint tri, vec2 bary, out vec3 p, out vec3 ng, out vec3 ns, out
     float b0 = 1.0 - bary.x - bary.y;
     p = b0 * p0 + bary.x * p1 + bary.y * p2;
     int base = 3 * int(tri);
-    vec3 n = b0 * texelFetch(u_tri_normals, base).xyz + bary.x * texelFetch(u_tri_normals, base + 1).xyz +
-             bary.y * texelFetch(u_tri_normals, base + 2).xyz;
+    vec3 n = b0 * tri_normal_texel(base, 0).xyz + bary.x * tri_normal_texel(base, 1).xyz +
+             bary.y * tri_normal_texel(base, 2).xyz;
     float len = length(n);
     ns = len > 0.0 ? n / len : ng;
     ng = dot(ng, ns) < 0.0 ? -ng : ng;
-    vec4 uv01 = texelFetch(u_tri_uvs, 2 * int(tri));
-    vec2 uv2 = texelFetch(u_tri_uvs, 2 * int(tri) + 1).xy;
+    vec4 uv01 = tri_uv_texel(2 * int(tri), 0);
+    vec2 uv2 = tri_uv_texel(2 * int(tri), 1).xy;
     uv = b0 * uv01.xy + bary.x * uv01.zw + bary.y * uv2;
     vec2 duv1 = uv01.zw - uv01.xy, duv2 = uv2 - uv01.xy;
     float det = duv1.x * duv2.y - duv1.y * duv2.x;
     dpdu = det != 0.0 ? ((p1 - p0) * duv2.y - (p2 - p0) * duv1.y) / det : vec3(0.0);
-    uvec4 info = texelFetch(u_tri_info, int(tri));
+    uvec4 info = tri_info_texel(int(tri), 0);
     material = info.x;
     light = info.y;
 }

@@ -131,11 +131,8 @@ layout(std430, binding = SSBO_DEBUG_COUNTERS) buffer DebugCounters { uint debug_
 layout(std430, binding = SSBO_ACCUM_SPLAT) buffer AccumSplat { uint accum_splat[]; };
 
 // ---- texture units ---------------------------------------------------------------
-// 0-3: BVH nodes and triangles (geometry/bvh_layout.glsl).
-// 4-6: per-triangle shading data of BVH meshes, in BVH order.
-layout(binding = TEX_TRI_NORMALS) uniform samplerBuffer u_tri_normals;  // 3 texels per triangle: vertex normals (xyz, -)
-layout(binding = TEX_TRI_UVS) uniform samplerBuffer u_tri_uvs;      // 2 texels per triangle: (uv0, uv1), (uv2, -, -)
-layout(binding = TEX_TRI_INFO) uniform usamplerBuffer u_tri_info;    // 1 texel per triangle: material, light + 1, flags, -
+// 0-6 and 16-31: BVH nodes and triangles and the triangles' shading data, in BVH order
+// (geometry/bvh_layout.glsl).
 // 7: environment map (lat-long, linear RGB).
 layout(binding = TEX_ENVMAP) uniform sampler2D u_envmap;
 // 8: surface textures: one layer per bitmap, each in the corner [0, w) x [0, h) of

@@ -112,7 +112,7 @@ def trace_glsl(gpu_bvh, o: np.ndarray, d: np.ndarray, t_max=np.inf,
     return run_glsl("\n".join(body), {"o": np.asarray(o, np.float32), "d": np.asarray(d, np.float32),
                                        "t_max": t_max},
                     outputs, includes=["geometry/bvh.glsl"],
-                    defines={**shader_defines(), **(defines or {})})
+                    defines={**shader_defines(), **gpu_bvh.defines(), **(defines or {})})
 
 
 def random_soup(rng, count: int, spread: float = 1.0, size: float = 0.2) -> tuple[np.ndarray, np.ndarray]:

@@ -234,8 +234,8 @@ def test10_a_cached_scene_uploads_the_same_bytes_and_renders_the_same_image(cach
         scene.lights.append(m.Light("constant", radiance=(1.0, 1.0, 1.0)))
         device = DeviceScene(gl_ctx, scene)
         try:
-            textures = list(device.bvh.textures.values()) + \
-                [t for t in device._owned if hasattr(t, "buffer")]
+            textures = [part for kinds in (device.bvh.textures, device.shading) for t in kinds.values()
+                        for part in t.parts] + [device.bvh.instances]
             uploaded = [t.buffer.read() for t in textures]
             status = device.bvh_cache
         finally:

@@ -119,7 +119,7 @@ def trace_t(gpu, o, d, time, t_max=np.inf):
                     {"o": o, "d": d, "time": time.astype(np.float32),
                      "t_max": np.broadcast_to(np.float32(t_max), (n,)).copy()},
                     {"t": "float", "prim": "uint", "hit": "bool", "any": "bool"},
-                    includes=["geometry/motion.glsl"], defines=shader_defines())
+                    includes=["geometry/motion.glsl"], defines={**shader_defines(), **gpu.defines()})
 
 
 def test05_queries_at_a_time_against_brute_force(gl_ctx):

@@ -18,8 +18,8 @@ from bvh_reference import NO_HIT, brute_force, icosphere, load_mesh, random_soup
 
 from glrender.accel import build_bvh
 from glrender.accel import bvh as bvh_module
-from glrender.gpu import bindings
-from glrender.gpu.bvh_upload import TEXTURES, UNITS_RESERVED, GpuBvh
+from glrender.gpu import bindings, bvh_upload
+from glrender.gpu.bvh_upload import INSTANCES, KINDS, UNITS_RESERVED, GpuBvh
 from glrender.errors import UsageError
 from glrender.gl.shaders import packaged_root
 
@@ -271,18 +271,26 @@ def test09_stack_overflow_is_reported_not_silent(gl_ctx):
 
 
 def test10_texture_units_agree_with_the_layout_file():
+    """Every geometry sampler of bvh_layout.glsl at the unit and of the type bvh_upload binds;
+    each kind's further parts an array sized by its parts define, at units past every other
+    texture unit."""
     text = (packaged_root() / "geometry" / "bvh_layout.glsl").read_text()
     points = bindings.binding_points()
-    declared = {m[2]: (points[m[0]], m[1]) for m in
-                re.findall(r"layout\(binding = (\w+)\) uniform (\w+) (\w+);", text)}
-    expected = {name: (unit, "usamplerBuffer" if fmt.endswith("ui") else "samplerBuffer")
-                for unit, fmt, name in TEXTURES.values()}
+    declared = {m[2]: (points[m[0]], m[1], m[3]) for m in
+                re.findall(r"layout\(binding = (\w+)\) uniform (\w+) (\w+)(?:\[(\w+) - 1\])?;", text)}
+    expected = {INSTANCES[2]: (INSTANCES[0], "samplerBuffer", "")}
+    for spec in KINDS.values():
+        sampler = "usamplerBuffer" if spec.fmt.endswith("ui") else "samplerBuffer"
+        expected[spec.sampler] = (spec.unit, sampler, "")
+        expected[spec.sampler + "_more"] = (spec.more, sampler, spec.parts_define)
     assert declared == expected
-    assert all(unit in UNITS_RESERVED for unit, _ in declared.values())
+    assert all(unit in UNITS_RESERVED for unit in (KINDS["nodes"].unit, KINDS["triangles"].unit, INSTANCES[0]))
+    more = sorted(spec.more for spec in KINDS.values())
+    assert max(set(points.values()) - set(more)) < more[0]
     # No other shader file declares a geometry unit.
     for path in packaged_root().rglob("*.glsl"):
         if path.name != "bvh_layout.glsl":
-            assert not re.search(r"uniform u?samplerBuffer u_bvh_", path.read_text()), path
+            assert not re.search(r"uniform u?samplerBuffer u_(bvh|tri)_", path.read_text()), path
     constants = dict(re.findall(r"const \w+ (k\w+) = (0x[0-9A-Fa-f]+|\d+)u?;", text))
     assert int(constants["kBvhLeafFlag"], 0) == bvh_module.LEAF_FLAG
     assert int(constants["kBvhLeafCountShift"], 0) == bvh_module.LEAF_COUNT_SHIFT
@@ -315,7 +323,7 @@ def trace_glsl8(gpu, o, d, t_max, has_ray, coop_lanes, count_loops=False):
     return run_glsl("\n".join(body), {"o": o, "d": d, "t_max": np.asarray(t_max, np.float32),
                                        "has": has_ray.astype(np.uint32)}, outputs,
                     includes=["geometry/bvh8.glsl"],
-                    defines={**shader_defines(), "GLRENDER_COOP_LANES": coop_lanes,
+                    defines={**shader_defines(), **gpu.defines(), "GLRENDER_COOP_LANES": coop_lanes,
                              "GLRENDER_COUNT_LOOPS": int(count_loops)})
 
 
@@ -378,3 +386,35 @@ def test12c_8_wide_constants_match_the_builder():
     src = (packaged_root() / "geometry" / "bvh8.glsl").read_text()
     assert re.search(rf"kBvh8TexelsPerNode = {texels_per_node(8)};", src)
     assert re.search(rf"kBvh8MaxDepth = {bvh_module.max_depth(8)};", src)
+
+
+@pytest.mark.parametrize("width, coop_lanes", [(4, None), (8, 0), (8, 8)],
+                         ids=["4-wide", "8-wide-per-lane", "8-wide-cooperative"])
+def test13_trees_in_parts_answer_as_from_one_texture(gl_ctx, monkeypatch, width, coop_lanes):
+    """A 20,000-triangle soup's tree with the texel limit forced down to 15,000, so that its
+    nodes span three textures (4-wide; 8-wide: two) and its corners four (geometry/bvh_layout.glsl): the same
+    answers, bit for bit, as from one texture of each, through the 4-wide traversal and the
+    8-wide one per lane and cooperatively."""
+    rng = np.random.default_rng(29)
+    v, f = random_soup(rng, 20000, size=0.05)
+    bvh = build_bvh(v, f, width=width)
+    o, d = random_rays(rng, 8192, v.min(0), v.max(0))
+    t_max = np.where(rng.random(len(o)) < 0.5, np.inf, rng.random(len(o))).astype(np.float32)
+
+    def trace(gpu):
+        if width == 4:
+            return trace_glsl(gpu, o, d, t_max)
+        return trace_glsl8(gpu, o, d, t_max, np.ones(len(o), bool), coop_lanes)
+
+    whole = GpuBvh(gl_ctx, bvh)
+    assert whole.parts == {"nodes": 1, "triangles": 1} and whole.defines() == {}
+    expected = trace(whole)
+    monkeypatch.setattr(bvh_upload, "TEXEL_LIMIT", 15_000)
+    split = GpuBvh(gl_ctx, bvh)
+    assert split.parts == {"nodes": 3 if width == 4 else 2, "triangles": 4}
+    got = trace(split)
+    whole.release()
+    split.release()
+    assert expected["hit"].mean() > 0.2
+    for key, value in expected.items():
+        np.testing.assert_array_equal(got[key], value, err_msg=key)
