@@ -23,8 +23,8 @@
 // so that no node (4 or 6 texels) or triangle record (1 to 3) straddles two: part 0 is the
 // texture above, parts 1.. an array from the kind's *_MORE unit on. How many parts each
 // kind has is a host define (GLRENDER_*_PARTS, 1 when absent), so a scene whose kinds fit
-// one texture each compiles to the very fetches it had before parts existed: traversal is
-// the hot loop. Every texel is read through the *_texel functions below.
+// one texture each compiles to the very fetches it had before parts existed (the same NIR):
+// traversal is the hot loop. Every texel is read through the *_texel functions below.
 #include "common/bindings.glsl"
 #include "common/params.glsl"
 
@@ -34,72 +34,50 @@ const uint kBvhLeafFirstMask = 0x0FFFFFFFu;
 const int kBvhTexelsPerNode = 4;
 const int kBvhTexelsPerTriangle = 3;
 const uint kBvhExponentBias = 127u;
-const int kGeometryPartTexels = GLRENDER_GEOMETRY_PART_TEXELS;
+// (1 without parts: a divisor that is never used)
+const int kGeometryPartTexels = max(GLRENDER_GEOMETRY_PART_TEXELS, 1);
 
 // T fn(int base, int k): texel base + k of one kind, base the first texel of a node or of a
-// triangle's record; in one texture ...
-#define GEOMETRY_TEXEL(T, fn, first) \
+// triangle's record, first its part 0 and more its further parts. base picks the part.
+// Indexing an array of samplers takes a dynamically uniform index, so the further parts are
+// visited in turn, each fetch running only where a lane reads that part: a SIMD vector whose
+// lanes read k parts makes k fetches. Part 0 is read unconditionally (a lane of a later part
+// overwrites it), and the later parts only where a lane reads one: on llvmpipe this measured
+// 5-6% faster than a branch per part (benchmarks/large_meshes.py with a forced texel limit).
+// With one part every branch folds away and the array of further parts goes unused.
+#define GEOMETRY_TEXEL(T, fn, first, more, parts) \
 T fn(int base, int k) { \
-    return texelFetch(first, base + k); \
-}
-// ... or in parts: base picks the part. Indexing an array of samplers takes a dynamically
-// uniform index, so the further parts are visited in turn, each fetch running only where a
-// lane reads that part: a SIMD vector whose lanes read k parts makes k fetches. Part 0 is
-// read unconditionally (a lane of a later part overwrites it), and the later parts only
-// where a lane reads one: on llvmpipe this measured 5-6% faster than a branch per part
-// (benchmarks/large_meshes.py with a forced texel limit).
-#define GEOMETRY_PARTS_TEXEL(T, fn, first, more, parts) \
-T fn(int base, int k) { \
-    int part = base / kGeometryPartTexels; \
+    int part = parts > 1 ? base / kGeometryPartTexels : 0; \
     int i = base - part * kGeometryPartTexels + k; \
     T v = texelFetch(first, i); \
-    if (part > 0) { \
+    if (parts > 1 && part > 0) { \
         for (int j = 1; j < parts; ++j) { \
             if (part == j) v = texelFetch(more[j - 1], i); \
         } \
     } \
     return v; \
 }
+// The further parts' array: one unused sampler when there are none (GLSL has no empty arrays).
+#define GEOMETRY_MORE(parts) (parts > 1 ? parts - 1 : 1)
 
 layout(binding = TEX_BVH_NODES) uniform usamplerBuffer u_bvh_nodes;
-#if GLRENDER_BVH_NODE_PARTS > 1
-layout(binding = TEX_BVH_NODES_MORE) uniform usamplerBuffer u_bvh_nodes_more[GLRENDER_BVH_NODE_PARTS - 1];
-GEOMETRY_PARTS_TEXEL(uvec4, bvh_node_texel, u_bvh_nodes, u_bvh_nodes_more, GLRENDER_BVH_NODE_PARTS)
-#else
-GEOMETRY_TEXEL(uvec4, bvh_node_texel, u_bvh_nodes)
-#endif
+layout(binding = TEX_BVH_NODES_MORE) uniform usamplerBuffer u_bvh_nodes_more[GEOMETRY_MORE(GLRENDER_BVH_NODE_PARTS)];
+GEOMETRY_TEXEL(uvec4, bvh_node_texel, u_bvh_nodes, u_bvh_nodes_more, GLRENDER_BVH_NODE_PARTS)
 
 layout(binding = TEX_BVH_TRIANGLES) uniform samplerBuffer u_bvh_triangles;
-#if GLRENDER_BVH_TRIANGLE_PARTS > 1
-layout(binding = TEX_BVH_TRIANGLES_MORE) uniform samplerBuffer u_bvh_triangles_more[GLRENDER_BVH_TRIANGLE_PARTS - 1];
-GEOMETRY_PARTS_TEXEL(vec4, bvh_triangle_texel, u_bvh_triangles, u_bvh_triangles_more,
-                     GLRENDER_BVH_TRIANGLE_PARTS)
-#else
-GEOMETRY_TEXEL(vec4, bvh_triangle_texel, u_bvh_triangles)
-#endif
+layout(binding = TEX_BVH_TRIANGLES_MORE) uniform samplerBuffer u_bvh_triangles_more[GEOMETRY_MORE(GLRENDER_BVH_TRIANGLE_PARTS)];
+GEOMETRY_TEXEL(vec4, bvh_triangle_texel, u_bvh_triangles, u_bvh_triangles_more, GLRENDER_BVH_TRIANGLE_PARTS)
 
 layout(binding = TEX_BVH_INSTANCES) uniform samplerBuffer u_bvh_instances;
 
 layout(binding = TEX_TRI_NORMALS) uniform samplerBuffer u_tri_normals;
-#if GLRENDER_TRI_NORMAL_PARTS > 1
-layout(binding = TEX_TRI_NORMALS_MORE) uniform samplerBuffer u_tri_normals_more[GLRENDER_TRI_NORMAL_PARTS - 1];
-GEOMETRY_PARTS_TEXEL(vec4, tri_normal_texel, u_tri_normals, u_tri_normals_more, GLRENDER_TRI_NORMAL_PARTS)
-#else
-GEOMETRY_TEXEL(vec4, tri_normal_texel, u_tri_normals)
-#endif
+layout(binding = TEX_TRI_NORMALS_MORE) uniform samplerBuffer u_tri_normals_more[GEOMETRY_MORE(GLRENDER_TRI_NORMAL_PARTS)];
+GEOMETRY_TEXEL(vec4, tri_normal_texel, u_tri_normals, u_tri_normals_more, GLRENDER_TRI_NORMAL_PARTS)
 
 layout(binding = TEX_TRI_UVS) uniform samplerBuffer u_tri_uvs;
-#if GLRENDER_TRI_UV_PARTS > 1
-layout(binding = TEX_TRI_UVS_MORE) uniform samplerBuffer u_tri_uvs_more[GLRENDER_TRI_UV_PARTS - 1];
-GEOMETRY_PARTS_TEXEL(vec4, tri_uv_texel, u_tri_uvs, u_tri_uvs_more, GLRENDER_TRI_UV_PARTS)
-#else
-GEOMETRY_TEXEL(vec4, tri_uv_texel, u_tri_uvs)
-#endif
+layout(binding = TEX_TRI_UVS_MORE) uniform samplerBuffer u_tri_uvs_more[GEOMETRY_MORE(GLRENDER_TRI_UV_PARTS)];
+GEOMETRY_TEXEL(vec4, tri_uv_texel, u_tri_uvs, u_tri_uvs_more, GLRENDER_TRI_UV_PARTS)
 
 layout(binding = TEX_TRI_INFO) uniform usamplerBuffer u_tri_info;
-#if GLRENDER_TRI_INFO_PARTS > 1
-layout(binding = TEX_TRI_INFO_MORE) uniform usamplerBuffer u_tri_info_more[GLRENDER_TRI_INFO_PARTS - 1];
-GEOMETRY_PARTS_TEXEL(uvec4, tri_info_texel, u_tri_info, u_tri_info_more, GLRENDER_TRI_INFO_PARTS)
-#else
-GEOMETRY_TEXEL(uvec4, tri_info_texel, u_tri_info)
-#endif
+layout(binding = TEX_TRI_INFO_MORE) uniform usamplerBuffer u_tri_info_more[GEOMETRY_MORE(GLRENDER_TRI_INFO_PARTS)];
+GEOMETRY_TEXEL(uvec4, tri_info_texel, u_tri_info, u_tri_info_more, GLRENDER_TRI_INFO_PARTS)

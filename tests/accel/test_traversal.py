@@ -277,7 +277,7 @@ def test10_texture_units_agree_with_the_layout_file():
     text = (packaged_root() / "geometry" / "bvh_layout.glsl").read_text()
     points = bindings.binding_points()
     declared = {m[2]: (points[m[0]], m[1], m[3]) for m in
-                re.findall(r"layout\(binding = (\w+)\) uniform (\w+) (\w+)(?:\[(\w+) - 1\])?;", text)}
+                re.findall(r"layout\(binding = (\w+)\) uniform (\w+) (\w+)(?:\[GEOMETRY_MORE\((\w+)\)\])?;", text)}
     expected = {INSTANCES[2]: (INSTANCES[0], "samplerBuffer", "")}
     for spec in KINDS.values():
         sampler = "usamplerBuffer" if spec.fmt.endswith("ui") else "samplerBuffer"
