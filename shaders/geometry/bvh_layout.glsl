@@ -23,7 +23,7 @@
 // so that no node (4 or 6 texels) or triangle record (1 to 3) straddles two: part 0 is the
 // texture above, parts 1.. an array from the kind's *_MORE unit on. How many parts each
 // kind has is a host define (GLRENDER_*_PARTS, 1 when absent), so a scene whose kinds fit
-// one texture each compiles to the very fetches it had before parts existed (the same NIR):
+// one texture each compiles to the fetches it had before parts existed (the same NIR code):
 // traversal is the hot loop. Every texel is read through the *_texel functions below.
 #include "common/bindings.glsl"
 #include "common/params.glsl"
