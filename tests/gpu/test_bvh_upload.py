@@ -57,18 +57,21 @@ def big_mesh_scene() -> m.Scene:
     return scene
 
 
-def render(scene: m.Scene, gl_ctx) -> tuple[np.ndarray, dict]:
-    with Renderer(scene, settings_from_scene(scene, spp=4, seed=3, integrator="path"), ctx=gl_ctx) as r:
+def render(scene: m.Scene, gl_ctx, **options) -> tuple[np.ndarray, dict]:
+    with Renderer(scene, settings_from_scene(scene, spp=4, seed=3, **options), ctx=gl_ctx) as r:
         r.step(4)
         return r.film().mean.copy(), dict(r.device_scene.defines())
 
 
-def test01_a_mesh_in_parts_renders_bitwise_the_one_texture_image(gl_ctx, monkeypatch):
+@pytest.mark.parametrize("options", [dict(integrator="path"), dict(integrator="path", executor="wavefront"),
+                                     dict(integrator="bdpt")], ids=["path", "wavefront", "bdpt"])
+def test01_a_mesh_in_parts_renders_bitwise_the_one_texture_image(gl_ctx, monkeypatch, options):
+    """The render kernel, the wavefront executor's stages and bdpt (light subpaths, splats)."""
     scene = big_mesh_scene()
-    whole, defines = render(scene, gl_ctx)
+    whole, defines = render(scene, gl_ctx, **options)
     assert defines == {}
     monkeypatch.setattr(bvh_upload, "TEXEL_LIMIT", TEXEL_LIMIT)
-    split, defines = render(scene, gl_ctx)
+    split, defines = render(scene, gl_ctx, **options)
     assert defines == {"GLRENDER_GEOMETRY_PART_TEXELS": 69_996, "GLRENDER_BVH_NODE_PARTS": 2,
                        "GLRENDER_BVH_TRIANGLE_PARTS": 5, "GLRENDER_TRI_NORMAL_PARTS": 5,
                        "GLRENDER_TRI_UV_PARTS": 3, "GLRENDER_TRI_INFO_PARTS": 2}
