@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import glrender.accel
+import glrender.accel.bvh_cache
 from glrender.errors import UsageError
 from glrender.render.renderer import Renderer, settings_from_scene
 
@@ -22,15 +22,16 @@ from denoise_scenes import CORNELL, cornell, textured_cornell  # noqa: E402
 
 @pytest.fixture
 def builds(monkeypatch):
-    """The number of BVH builds so far (glrender.accel.build_bvh calls)."""
+    """The number of BVH builds so far (the builder calls of glrender.accel.bvh_cache, through
+    which a device scene builds its tree)."""
     count = [0]
-    build = glrender.accel.build_bvh
+    build = glrender.accel.bvh_cache.build_bvh
 
     def counted(*args, **kwargs):
         count[0] += 1
         return build(*args, **kwargs)
 
-    monkeypatch.setattr(glrender.accel, "build_bvh", counted)
+    monkeypatch.setattr(glrender.accel.bvh_cache, "build_bvh", counted)
     return count
 
 
