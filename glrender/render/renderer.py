@@ -251,7 +251,7 @@ class Renderer:
         return self.device_scene.bvh_cache if self.device_scene is not None else "none"
 
     @property
-    def mesh_capacity(self) -> dict | None:
+    def mesh_capacity(self) -> dict[str, Any] | None:
         """The BVH triangles' device bytes per triangle and the most that fit
         (DeviceScene.mesh_capacity); None without BVH triangles."""
         return self.device_scene.mesh_capacity() if self.device_scene is not None else None
@@ -435,7 +435,7 @@ class Renderer:
             # read from the mesh cache (gpu/mesh_cache.py), which keeps no packed soup
             device = self.device_scene
             for arr in (device.bvh.bvh.pack()["triangles"], *device.mesh_texels):
-                yield "geometry", np.ascontiguousarray(arr).reshape(-1).view(np.uint8)
+                yield "geometry", np.ascontiguousarray(arr).tobytes()
         if self.packed.env_image is not None:
             yield "environment map", np.ascontiguousarray(self.packed.env_image).tobytes()
         yield "textures", self.packed.textures.fingerprint()

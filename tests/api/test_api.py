@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import glrender
+import glrender.accel.bvh_cache
 
 ROOT = Path(__file__).resolve().parents[2]
 CORNELL = ROOT / "scenes" / "cornell-box" / "scene.toml"
@@ -149,6 +150,7 @@ def test_camera_edit_does_not_rebuild(monkeypatch):
     """Moving the camera of a Renderer keeps the packed scene, BVH and kernel: counted
     calls to the packer, the BVH builder and the compiler stay at one. The image after the
     move is bitwise that of a new renderer built with the moved camera."""
+    monkeypatch.setenv("GLRENDER_CACHE", "off")   # every renderer builds its tree: the counter counts
     import glrender.accel
     import glrender.gl.shaders
     # glrender.render is the function: reach the module by its name
@@ -163,7 +165,7 @@ def test_camera_edit_does_not_rebuild(monkeypatch):
         return wrapper
 
     monkeypatch.setattr(renderer_module, "pack_scene", counted("pack", renderer_module.pack_scene))
-    monkeypatch.setattr(glrender.accel, "build_bvh", counted("bvh", glrender.accel.build_bvh))
+    monkeypatch.setattr(glrender.accel.bvh_cache, "build_bvh", counted("bvh", glrender.accel.bvh_cache.build_bvh))
     monkeypatch.setattr(glrender.gl.shaders, "compile_compute",
                         counted("compile", glrender.gl.shaders.compile_compute))
     scene = small(BUNNY, 24)

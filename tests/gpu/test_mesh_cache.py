@@ -58,7 +58,10 @@ def device_data(gl_ctx, scene):
     device = DeviceScene(gl_ctx, scene)
     try:
         p = device.packed
-        textures = list(device.bvh.textures.values()) + [t for t in device._owned if hasattr(t, "buffer")]
+        parted = list(device.bvh.textures.values()) + list(device.shading.values())
+        textures = [part for t in parted for part in t.parts] + [t for t in device._owned if hasattr(t, "buffer")]
+        if device.bvh.instances is not None:
+            textures.append(device.bvh.instances)
         return {"buffers": [t.buffer.read() for t in textures],
                 "quads": repr(p.quads), "spheres": repr(p.spheres), "bounds": repr(p.bounds),
                 "lights": p.lights.tobytes(), "source": codegen.generate(p, has_bvh=p.has_bvh),
