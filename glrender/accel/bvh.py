@@ -8,7 +8,8 @@ request, :mod:`.binned_sah`), choose leaves of at most four triangles by SAH
 default) or 8 children per node with a bounded depth (:mod:`.collapse`) and
 reorder the triangles so that every leaf is a contiguous range. Rigid motion
 instances (:mod:`.instances`) get their own trees, of the same width, in the
-same buffers.
+same buffers; so do the prototypes of static instances, followed by a top-level
+tree over the instances (``instanced``).
 
 The packed layout (:meth:`Bvh.pack`) is what ``shaders/geometry/bvh.glsl``
 reads through buffer textures (it reads 4-wide trees):
@@ -22,7 +23,9 @@ reads through buffer textures (it reads 4-wide trees):
 ``triangles`` (rgba32f, 3 texels per triangle)
     the corners v0, v1, v2 of each triangle in BVH order (``w`` unused).
 ``instances`` (rgba32f)
-    a header and the motion instances (``shaders/geometry/motion.glsl``).
+    a header (motion instances, static triangles, static instances, top-level root),
+    the motion instances (``shaders/geometry/motion.glsl``), then the static instances
+    in the top-level tree's leaf order (``shaders/geometry/instances.glsl``).
 """
 from __future__ import annotations
 
@@ -36,7 +39,8 @@ from ..errors import UsageError
 from .binned_sah import build_binned_sah
 from .collapse import (DEFAULT_WIDTH, KIND_EMPTY, KIND_INNER, KIND_LEAF, MAX_LEAF_SIZE, WIDTHS, BvhArrays,
                        collapse_to_bvh)
-from .instances import MAX_MOTION_INSTANCES, MotionInstance, motion_bounds, pack_instance
+from .instances import (MAX_MOTION_INSTANCES, MotionInstance, StaticInstances, instance_world_bounds,
+                        motion_bounds, pack_instance, pack_static_instances)
 from .mesh import PreparedTriangles, prepare_triangles
 from .ploc import DEFAULT_RADIUS, DEFAULT_TOP_CLUSTERS, build_ploc
 from .quantize import pack_nodes
@@ -90,10 +94,23 @@ class MotionBvh:
 
 
 @dataclass
+class TopLevel:
+    """The top-level tree over static instances: its wide tree (one instance per leaf),
+    ``order`` (leaf order -> instance index) and the instances' world boxes."""
+
+    instanced: StaticInstances
+    arrays: BvhArrays
+    order: np.ndarray
+    world_lo: np.ndarray
+    world_hi: np.ndarray
+
+
+@dataclass
 class BvhBuffers:
     """What rendering needs of a built BVH (all of it cacheable, :mod:`.bvh_cache`): the
-    packed buffers of :meth:`Bvh.pack`, the ``prim_order`` of the static tree and then of
-    each motion instance's tree, the width and depth, and :meth:`Bvh.stats`."""
+    packed buffers of :meth:`Bvh.pack`, the ``prim_order`` of the static tree, then of
+    each motion instance's tree, then of each static prototype's tree, the width and depth,
+    and :meth:`Bvh.stats`."""
 
     packed: dict[str, np.ndarray]
     prim_orders: list[np.ndarray]
@@ -124,6 +141,8 @@ class Bvh:
     build_seconds: float = 0.0
     binary_sah: float = 0.0
     motion: list[MotionBvh] = field(default_factory=list)
+    prototypes: list[Bvh] = field(default_factory=list)   # static instances' bottom-level trees
+    top: TopLevel | None = None
     _packed: dict | None = field(default=None, repr=False)
 
     @property
@@ -143,7 +162,8 @@ class Bvh:
     def depth(self) -> int:
         """Depth of the deepest inner node (the root is 0), motion instances' trees included."""
         own = int(self.arrays.depth.max()) if self.node_count else 0
-        return max([own] + [m.bvh.depth for m in self.motion])
+        top = int(self.top.arrays.depth.max()) if self.top is not None else 0
+        return max([own, top] + [m.bvh.depth for m in self.motion] + [p.depth for p in self.prototypes])
 
     def motion_prim_ranges(self) -> list[tuple[int, int]]:
         """[begin, end) of each motion instance's triangles in the packed (BVH-order) ids.
@@ -215,37 +235,39 @@ class Bvh:
             "binary_sah_cost": self.binary_sah,
             "motion_instances": len(self.motion),
             "motion_triangles": sum(m.bvh.triangle_count for m in self.motion),
+            "static_instances": len(self.top.order) if self.top is not None else 0,
+            "prototype_triangles": sum(p.triangle_count for p in self.prototypes),
+            "instanced_triangles": self.instanced_triangles,
             "bytes": nbytes,
             "bytes_per_triangle": nbytes / max(self.triangle_count + sum(
-                m.bvh.triangle_count for m in self.motion), 1),
+                m.bvh.triangle_count for m in self.motion) + self.instanced_triangles, 1),
             "build_seconds": self.build_seconds,
         }
 
     def buffers(self) -> BvhBuffers:
         """The packed buffers, triangle orders and statistics (:class:`BvhBuffers`)."""
-        return BvhBuffers(self.pack(), [self.prim_order] + [m.bvh.prim_order for m in self.motion],
-                          self.width, self.depth, self.stats())
+        return BvhBuffers(self.pack(), [self.prim_order] + [m.bvh.prim_order for m in self.motion]
+                          + [p.prim_order for p in self.prototypes], self.width, self.depth, self.stats())
+
+    @property
+    def instanced_triangles(self) -> int:
+        """Triangles the static instances place (each copy counted)."""
+        if self.top is None:
+            return 0
+        counts = np.array([p.triangle_count for p in self.prototypes], np.int64)
+        return int(counts[self.top.instanced.prototype[self.top.order]].sum())
 
     def child_refs(self, node_offset: int = 0, triangle_offset: int = 0) -> np.ndarray:
         """(N, width) uint32 child references (see the module doc), for a tree stored
         ``node_offset`` nodes and ``triangle_offset`` triangles into the buffers."""
-        a = self.arrays
-        refs = np.full(a.child_kind.shape, EMPTY_REF, np.uint64)
-        inner = a.child_kind == KIND_INNER
-        leaf = a.child_kind == KIND_LEAF
-        refs[inner] = (a.child_index[inner] + node_offset).astype(np.uint64)
-        first = a.child_index[leaf] + triangle_offset
-        if len(first) and first.max() + MAX_LEAF_SIZE_BY_WIDTH[self.width] > LEAF_FIRST_MASK:
-            raise UsageError(f"too many triangles for a leaf reference (at most {LEAF_FIRST_MASK})")
-        refs[leaf] = (LEAF_FLAG | (a.child_count[leaf] << LEAF_COUNT_SHIFT) | first).astype(np.uint64)
-        return refs.astype(np.uint32)
+        return _child_refs(self.arrays, node_offset, triangle_offset)
 
     def pack(self) -> dict[str, np.ndarray]:
         """The arrays of the buffer textures: ``nodes`` (uint32), ``triangles`` and
         ``instances`` (float32). Motion instances' trees follow the static one."""
         if self._packed is None:
-            trees = [self] + [m.bvh for m in self.motion]
-            nodes, tris, records = [], [], []
+            trees = [self] + [m.bvh for m in self.motion] + self.prototypes
+            nodes, tris, records, roots = [], [], [], []
             node_base, tri_base = 0, 0
             for k, tree in enumerate(trees):
                 a = tree.arrays
@@ -254,14 +276,26 @@ class Bvh:
                 t = np.zeros((tree.triangle_count, 3, 4), np.float32)
                 t[..., :3] = tree.corners
                 tris.append(t.reshape(-1, 4))
-                if k:
+                if 0 < k <= len(self.motion):
                     m = self.motion[k - 1]
                     records.append(pack_instance(m.instance, node_base, tri_base,
                                                  tri_base + tree.triangle_count, m.world_lo, m.world_hi))
+                elif k > len(self.motion):
+                    roots.append(node_base)
                 node_base += tree.node_count
                 tri_base += tree.triangle_count
             header = np.zeros((1, 4), np.float32)
-            header[0, :2] = np.array([len(self.motion), self.triangle_count], np.uint32).view(np.float32)
+            top = self.top
+            header[0] = np.array([len(self.motion), self.triangle_count,
+                                  len(top.order) if top is not None else 0,
+                                  node_base if top is not None else 0], np.uint32).view(np.float32)
+            if top is not None:
+                a = top.arrays
+                nodes.append(pack_nodes(a.child_lo, a.child_hi, a.child_kind != KIND_EMPTY,
+                                        _child_refs(a, node_base, 0)))
+                proto = top.instanced.prototype[top.order]
+                records.append(pack_static_instances(top.instanced.transforms[top.order],
+                                                     np.asarray(roots, np.int64)[proto]))
             self._packed = {"nodes": np.concatenate(nodes), "triangles": np.concatenate(tris),
                             "instances": np.concatenate([header] + records)}
         return self._packed
@@ -271,7 +305,8 @@ def build_bvh(vertices, triangles, *, method: str = "ploc", radius: int = DEFAUL
               top_clusters: int = DEFAULT_TOP_CLUSTERS, threads: int | None = None,
               on_invalid: str = "skip", remove_degenerate: bool = True,
               remove_duplicates: bool = True, max_leaf_size: int = MAX_LEAF_SIZE,
-              c_node: float = C_NODE, c_tri: float = C_TRI, motion=(), width: int = DEFAULT_WIDTH) -> Bvh:
+              c_node: float = C_NODE, c_tri: float = C_TRI, motion=(), width: int = DEFAULT_WIDTH,
+              instanced: StaticInstances | None = None) -> Bvh:
     """Build a ``width``-wide BVH over ``triangles`` (T, 3) int indexing ``vertices`` (V, 3).
 
     ``method``: ``"ploc"`` (fast, the default) or ``"binned_sah"`` (a full
@@ -280,9 +315,11 @@ def build_bvh(vertices, triangles, *, method: str = "ploc", radius: int = DEFAUL
     exactly duplicated triangles are dropped (counted in :meth:`Bvh.stats`)
     unless disabled. ``prim_order`` maps BVH-order triangles to input indices.
     ``motion``: :class:`~glrender.accel.instances.MotionInstance` objects, each
-    built into its own tree (see :meth:`Bvh.motion_prim_ranges`). ``width``: 4
-    children per node (what the GLSL traversal reads) or 8; ``max_leaf_size``
-    at most 4 for width 4 and 7 for width 8.
+    built into its own tree (see :meth:`Bvh.motion_prim_ranges`). ``instanced``:
+    :class:`~glrender.accel.instances.StaticInstances`, a tree per prototype and a
+    top-level tree over the instances (instances of an empty prototype are left out).
+    ``width``: 4 children per node (what the GLSL traversal reads) or 8;
+    ``max_leaf_size`` at most 4 for width 4 and 7 for width 8.
     """
     if method not in METHODS:
         raise UsageError(f"build_bvh: method must be one of {METHODS}, got {method!r}")
@@ -320,8 +357,52 @@ def build_bvh(vertices, triangles, *, method: str = "ploc", radius: int = DEFAUL
         if tree.triangle_count:
             lo, hi = motion_bounds(instance, lo, hi)
         bvh.motion.append(MotionBvh(instance, tree, lo, hi))
+    if instanced is not None and len(instanced):
+        if not isinstance(instanced, StaticInstances):
+            raise UsageError("build_bvh: instanced is not a StaticInstances")
+        options = dict(method=method, radius=radius, top_clusters=top_clusters, threads=threads,
+                       on_invalid=on_invalid, remove_degenerate=remove_degenerate,
+                       remove_duplicates=remove_duplicates, max_leaf_size=max_leaf_size,
+                       c_node=c_node, c_tri=c_tri, width=width)
+        bvh.prototypes = [build_bvh(v, f, **options) for v, f in instanced.prototypes]
+        bvh.top = _top_level(instanced, bvh.prototypes, method, radius, top_clusters, threads, width)
     bvh.build_seconds = time.perf_counter() - start
     return bvh
+
+
+def _top_level(instanced: StaticInstances, prototypes: list[Bvh], method: str, radius: int,
+               top_clusters: int, threads: int, width: int) -> TopLevel | None:
+    """The top-level tree over the instances of non-empty prototypes (None: none)."""
+    lo = np.zeros((len(instanced), 3), np.float32)
+    hi = np.zeros((len(instanced), 3), np.float32)
+    keep = np.zeros(len(instanced), bool)
+    for k, proto in enumerate(prototypes):
+        mine = np.flatnonzero(instanced.prototype == k)
+        if proto.triangle_count and len(mine):
+            lo[mine], hi[mine] = instance_world_bounds(instanced.transforms[mine], *proto.bounds)
+            keep[mine] = True
+    index = np.flatnonzero(keep)
+    if not len(index):
+        return None
+    lo, hi = lo[index], hi[index]
+    tree = build_ploc(lo, hi, radius, top_clusters, threads) if method == "ploc" else build_binned_sah(lo, hi)
+    # one instance per leaf: a leaf costs a ray transform and a bottom-level traversal
+    arrays = collapse_tree(tree, 1, C_NODE, C_TRI, width)
+    return TopLevel(instanced, arrays, index[arrays.prim_order], lo, hi)
+
+
+def _child_refs(a: BvhArrays, node_offset: int, first_offset: int) -> np.ndarray:
+    """(N, width) uint32 child references of tree ``a`` (see the module doc), stored
+    ``node_offset`` nodes into the node buffer, leaves ``first_offset`` into their items."""
+    refs = np.full(a.child_kind.shape, EMPTY_REF, np.uint64)
+    inner = a.child_kind == KIND_INNER
+    leaf = a.child_kind == KIND_LEAF
+    refs[inner] = (a.child_index[inner] + node_offset).astype(np.uint64)
+    first = a.child_index[leaf] + first_offset
+    if len(first) and first.max() + MAX_LEAF_SIZE_BY_WIDTH[a.width] > LEAF_FIRST_MASK:
+        raise UsageError(f"too many triangles for a leaf reference (at most {LEAF_FIRST_MASK})")
+    refs[leaf] = (LEAF_FLAG | (a.child_count[leaf] << LEAF_COUNT_SHIFT) | first).astype(np.uint64)
+    return refs.astype(np.uint32)
 
 
 def build_threads() -> int:

@@ -1,11 +1,17 @@
-"""Instances: static ones are flattened into world space; rigid motion gets its own BVH.
+"""Instances: a few static copies are flattened, many share one tree, motion gets its own.
 
-Static instances (glTF nodes, Mitsuba shapes placed by a transform) are
-flattened at load: their triangles are transformed to world space and join the
-one BVH. On llvmpipe a second traversal level costs a ray transform and a second
-stack per instance visited, and breaks the one-node-one-triangle rhythm of the
-traversal loop, while the memory it would save (one copy of the mesh instead of
-k) only matters for heavy repetition, which the scenes in scope do not have.
+Static instances (glTF nodes, Mitsuba ``shapegroup``/``instance``, TOML ``instances``)
+of a mesh with few copies are flattened at load: their triangles are transformed to
+world space and join the one BVH. On llvmpipe a second traversal level costs a ray
+transform and a second stack per instance visited, and breaks the
+one-node-one-triangle rhythm of the traversal loop. Heavy repetition (a forest) is
+kept two-level (:class:`StaticInstances`): each prototype mesh has one bottom-level
+tree over its object-space triangles, stored after the static tree in the same node
+and triangle buffers, and a top-level tree over the instances' world boxes (leaves of
+one instance each, in the node buffer after the bottom-level trees) leads a ray to
+the instances it may meet; there it is moved into the instance's object space
+(geometry/instances.glsl). Memory grows with the prototypes' triangles plus
+:data:`TEXELS_PER_STATIC_INSTANCE` texels per instance, not with the copies.
 
 Motion instances (rigid motion over the shutter, for motion blur) cannot be
 flattened: their triangles move. Each keeps its own BVH over its object-space
@@ -39,6 +45,9 @@ from ..errors import SceneError, UsageError
 BOUND_SAMPLES = 128
 TEXELS_PER_INSTANCE = 12
 MAX_MOTION_INSTANCES = 64
+# A static instance's record (geometry/instances.glsl): object_from_world's three rows,
+# world_from_object's three rows, and its prototype's root node.
+TEXELS_PER_STATIC_INSTANCE = 7
 
 
 def _affine(m, name: str) -> np.ndarray:
@@ -211,3 +220,66 @@ def pack_instance(instance: MotionInstance, root: int, prim_begin: int, prim_end
     tex[8] = q1
     tex[9:12, :3] = s1
     return tex
+
+
+@dataclass
+class StaticInstances:
+    """Copies of prototype meshes, each placed by an affine transform (two-level BVH).
+
+    ``prototypes``: list of (vertices (V, 3), triangles (T, 3)) in object space;
+    ``prototype``: (K,) the prototype of each instance; ``transforms``: (K, 3, 4) or
+    (K, 4, 4) world_from_object of each instance."""
+
+    prototypes: list
+    prototype: np.ndarray
+    transforms: np.ndarray
+
+    def __post_init__(self):
+        self.prototype = np.asarray(self.prototype, np.int64).reshape(-1)
+        t = np.asarray(self.transforms, np.float64)
+        if t.ndim != 3 or t.shape[0] != len(self.prototype) or t.shape[1:] not in ((3, 4), (4, 4)):
+            raise UsageError(f"StaticInstances: transforms must have shape (K, 3, 4) or (K, 4, 4) "
+                             f"for K = {len(self.prototype)} instances, got {t.shape}")
+        if not np.all(np.isfinite(t)):
+            raise SceneError("StaticInstances: a transform has NaN or infinite entries")
+        if t.shape[1] == 4 and not np.allclose(t[:, 3], [0, 0, 0, 1]):
+            raise UsageError("StaticInstances: the last row of a 4x4 transform must be (0, 0, 0, 1)")
+        self.transforms = np.ascontiguousarray(t[:, :3])
+        if len(self.prototype) and not (0 <= self.prototype.min() and
+                                        self.prototype.max() < len(self.prototypes)):
+            raise UsageError(f"StaticInstances: a prototype index outside [0, {len(self.prototypes)})")
+        det = np.linalg.det(self.transforms[:, :, :3])
+        scale = np.abs(self.transforms[:, :, :3]).max(axis=(1, 2)) ** 3
+        if np.any(np.abs(det) <= 1e-12 * np.maximum(scale, 1e-300)):
+            raise SceneError("StaticInstances: a transform is singular (it flattens its instance)")
+
+    def __len__(self) -> int:
+        return len(self.prototype)
+
+
+def instance_world_bounds(transforms: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """World boxes (K, 3) of the object box (lo, hi) under each 3x4 transform (K, 3, 4),
+    rounded outwards to float32 with room for the rounding of the transform."""
+    t = np.asarray(transforms, np.float64)
+    lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
+    centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+    # an affine map of a box: centre to centre, half extent through |M| (Arvo 1990)
+    c = np.einsum("kij,j->ki", t[:, :, :3], centre) + t[:, :, 3]
+    e = np.einsum("kij,j->ki", np.abs(t[:, :, :3]), half)
+    pad = 1e-6 * (np.abs(c) + e).max(axis=1, keepdims=True) + 1e-30
+    return (np.nextafter((c - e - pad).astype(np.float32), np.float32(-np.inf)),
+            np.nextafter((c + e + pad).astype(np.float32), np.float32(np.inf)))
+
+
+def pack_static_instances(transforms: np.ndarray, roots: np.ndarray) -> np.ndarray:
+    """The TEXELS_PER_STATIC_INSTANCE rgba32f texels of each instance (geometry/instances.glsl):
+    object_from_world's rows, world_from_object's rows, the root node (uint bits)."""
+    t = np.asarray(transforms, np.float64)
+    k = len(t)
+    tex = np.zeros((k, TEXELS_PER_STATIC_INSTANCE, 4), np.float32)
+    inverse = np.linalg.inv(t[:, :, :3])
+    tex[:, 0:3, :3] = inverse
+    tex[:, 0:3, 3] = -np.einsum("kij,kj->ki", inverse, t[:, :, 3])
+    tex[:, 3:6] = t
+    tex[:, 6, 0] = np.asarray(roots, np.uint32).view(np.float32)
+    return tex.reshape(-1, 4)

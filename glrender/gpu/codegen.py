@@ -197,11 +197,30 @@ def _mesh_box(packed: PackedScene):
                               mm.world_from_object_close)
         lo, hi = motion_bounds(inst, obj.min(axis=0), obj.max(axis=0))
         points.append(np.stack([lo, hi]))
+    for im in packed.instanced_meshes:
+        points.append(np.concatenate(im.world_bounds()))
     if not points:
         return None
     lo, hi = point_bounds(np.concatenate(points))
     pad = 1e-5 * (np.abs(lo) + np.abs(hi) + (hi - lo)) + 1e-30
     return lo - pad, hi + pad
+
+
+def _instanced_query(moving: bool) -> list[str]:
+    """``scene_bvh_query``: the static (and moving) meshes' trees, then the static instances
+    (geometry/instances.glsl); inst is the instance hit, or kNoInstance."""
+    base = ("bvh_traverse_t(o, d, t_max, time, any_hit, bh)" if moving
+            else "bvh_traverse(0u, o, d, t_max, any_hit, bh)")
+    return [
+        "bool scene_bvh_query(vec3 o, vec3 d, float t_max, float time, const bool any_hit, "
+        "out BvhHit bh, out uint inst) {",
+        "    inst = kNoInstance;",
+        f"    bool found = {base};",
+        "    if (bh.prim == kBvhStackOverflow || (any_hit && found)) return found;",
+        "    return instances_traverse(o, d, any_hit, bh, inst) || found;",
+        "}",
+        "",
+    ]
 
 
 def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
@@ -216,10 +235,13 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
         '#include "scene/layout.glsl"',
     ]
     moving = bool(packed.moving_meshes)
+    instanced = bool(packed.instanced_meshes)
     if has_bvh:
         lines += ['#include "geometry/bvh.glsl"', '#include "geometry/mesh_surface.glsl"']
     if moving:
         lines += ['#include "geometry/mesh_surface_motion.glsl"']
+    if instanced:
+        lines += ['#include "geometry/instances.glsl"']
     n_compiled = len(packed.quads) + len(packed.spheres)
     lines += generate_lights(packed.lights if lights is None else lights)
     lines += generate_materials(packed.materials)
@@ -269,19 +291,24 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
     box = _mesh_box(packed) if has_bvh else None
     box_test = (f"ray_meets_box(o, inv_d, {_v3(box[0])}, {_v3(box[1])}, {{}})" if box is not None
                 else "true")
+    closest = 'bvh_intersect_closest_t(o, d, t, time, bh)' if moving else 'bvh_intersect_closest(o, d, t, bh)'
+    if instanced:
+        closest = 'scene_bvh_query(o, d, t, time, false, bh, inst)'
+        lines += _instanced_query(moving)
     if has_bvh:
         body += [
             "    BvhHit bh;",
+            *(["    uint inst = kNoInstance;"] if instanced else []),
             "#if GLRENDER_WAVE_BVH_HITS",
             "    // the wavefront's extend stage traced the BVH already (kernels/wavefront.comp.glsl)",
             "    if (wave_bvh_hit(t, bh)) {",
             "#else",
-            f"    if ({box_test.format('t')} && "
-            f"{'bvh_intersect_closest_t(o, d, t, time, bh)' if moving else 'bvh_intersect_closest(o, d, t, bh)'}) {{",
+            f"    if ({box_test.format('t')} && {closest}) {{",
             "#endif",
             "        t = bh.t;",
             "        prim = kCompiledPrimitives + bh.prim;",
             f"        {'mesh_surface_t(bh.prim, bh.bary, time, p, ng, ns, uv, material, light, dpdu)' if moving else 'mesh_surface(bh.prim, bh.bary, p, ng, ns, uv, material, light, dpdu)'};",
+            *(["        if (inst != kNoInstance) instance_surface(inst, p, ng, ns, dpdu);"] if instanced else []),
             "        sphere.w = 0.0;",
             "    }",
         ]
@@ -337,8 +364,11 @@ def generate(packed: PackedScene, has_bvh: bool, lights=None) -> str:
         occ.append(f"    t = min(t, {test if not s.light else f'ignore == {k}u ? t_max : {test}'});")
     occ.append("    if (t < t_max) return true;")
     if has_bvh:
-        occ.append(f"    return {box_test.format('t_max')} && "
-                   f"{'bvh_intersect_any_t(o, d, t_max, time)' if moving else 'bvh_intersect_any(o, d, t_max)'};")
+        any_hit = 'bvh_intersect_any_t(o, d, t_max, time)' if moving else 'bvh_intersect_any(o, d, t_max)'
+        if instanced:
+            occ += ["    BvhHit bh;", "    uint inst;"]
+            any_hit = 'scene_bvh_query(o, d, t_max, time, true, bh, inst)'
+        occ.append(f"    return {box_test.format('t_max')} && {any_hit};")
     else:
         occ.append("    return false;")
     occ += ["}", ""]

@@ -256,6 +256,7 @@ class DeviceScene:
         are static and emit nothing."""
         from ..accel import MotionInstance
         from ..accel.bvh_cache import build_bvh_buffers
+        from ..accel.instances import StaticInstances
         from .bvh_upload import check_triangles
 
         p = self.packed
@@ -267,16 +268,26 @@ class DeviceScene:
         motion = [MotionInstance(mm.positions.reshape(-1, 3), np.arange(3 * len(mm.positions)).reshape(-1, 3),
                                  mm.world_from_object_open, mm.world_from_object_close)
                   for mm in p.moving_meshes]
-        check_triangles(self.ctx.gl, len(positions) + sum(len(mm.positions) for mm in p.moving_meshes))
+        instanced = None
+        if p.instanced_meshes:
+            prototypes = [(im.positions.reshape(-1, 3).astype(np.float32),
+                           np.arange(3 * len(im.positions)).reshape(-1, 3)) for im in p.instanced_meshes]
+            instanced = StaticInstances(
+                prototypes, np.concatenate([np.full(len(im.transforms), k)
+                                            for k, im in enumerate(p.instanced_meshes)]),
+                np.concatenate([im.transforms for im in p.instanced_meshes]))
+        check_triangles(self.ctx.gl, len(positions) + sum(len(mm.positions) for mm in p.moving_meshes)
+                        + sum(len(im.positions) for im in p.instanced_meshes))
         tri = positions.reshape(-1, 3)
-        bvh, self.bvh_cache = build_bvh_buffers(tri.astype(np.float32),
-                                                np.arange(len(tri)).reshape(-1, 3), motion=motion)
-        # shading data of every BVH triangle id: the static ones, then each moving mesh's block
+        bvh, self.bvh_cache = build_bvh_buffers(tri.astype(np.float32), np.arange(len(tri)).reshape(-1, 3),
+                                                motion=motion, instanced=instanced)
+        # shading data of every BVH triangle id: the static ones, then each moving mesh's
+        # block, then each instanced mesh's
         parts = [(normals, uvs, material, light, bvh.prim_orders[0])]
-        for mm, order in zip(p.moving_meshes, bvh.prim_orders[1:]):
-            k = len(mm.positions)
-            parts.append((mm.normals, mm.uvs, np.full(k, mm.material, np.uint32), np.zeros(k, np.uint32),
-                          order))
+        for mesh, order in zip(p.moving_meshes + p.instanced_meshes, bvh.prim_orders[1:]):
+            k = len(mesh.positions)
+            parts.append((mesh.normals, mesh.uvs, np.full(k, mesh.material, np.uint32),
+                          np.zeros(k, np.uint32), order))
         # each part gathered into its rows of the float32 texel arrays (np.take: 2-3x faster
         # than indexing with an index array); uv texels hold u0 v0 u1 v1 | u2 v2 0 0
         total = sum(len(o) for *_, o in parts)

@@ -19,7 +19,8 @@ before it), so a hit gives the arrays a fresh load gives, bit for bit.
 
 Only scenes whose BVH triangles are all static and none emits are stored (emissive
 triangles add lights as they are packed; moving meshes have trees of their own, cached by
-accel/bvh_cache.py), and only when they hold :data:`~glrender.accel.bvh_cache.MIN_TRIANGLES`
+accel/bvh_cache.py, as are instanced meshes' trees: a scene with ``Shape.instances`` has no
+entry), and only when they hold :data:`~glrender.accel.bvh_cache.MIN_TRIANGLES`
 or more mesh triangles.
 """
 from __future__ import annotations
@@ -61,8 +62,8 @@ class MeshSlot:
 def lookup(scene: m.Scene, version: int) -> MeshSlot | None:
     """The slot of ``scene`` (packer ``version``), read from the cache; None when the
     cache is off or the scene's meshes are too small to be worth an entry."""
-    if not disk_cache.enabled():
-        return None
+    if not disk_cache.enabled() or any(s.instances is not None for s in scene.shapes):
+        return None       # instanced meshes: their trees are cached by accel/bvh_cache.py
     count = sum(np.size(s.triangles) // 3 for s in scene.shapes
                 if s.kind == "mesh" and s.triangles is not None)
     if count < bvh_cache.MIN_TRIANGLES:

@@ -7,8 +7,10 @@ Geometry splits two ways, decided per shape:
   flat meshes become constants in generated GLSL (``glrender/gpu/codegen.py``):
   the compiler folds the zero components of axis-aligned quads, which measured up
   to 8x faster than fetching the same data from a buffer.
-- *BVH triangles*: every other mesh, flattened into world space (instances are
-  flattened at load), with per-triangle shading data in BVH order.
+- *BVH triangles*: every other mesh, flattened into world space, with per-triangle
+  shading data in BVH order. A mesh placed :data:`INSTANCE_MIN_COPIES` times or more
+  (``Shape.instances``) keeps one copy of its triangles, which the copies share through a
+  two-level BVH (:mod:`glrender.accel.instances`); fewer copies are flattened.
 
 Materials and lights become std430 arrays (``glrender/gpu/layout.py``).
 """
@@ -33,6 +35,10 @@ MAX_COMPILED_PRIMITIVES = 96
 # from them): the device-ready mesh cache (gpu/mesh_cache.py) keys its entries by it, so bump
 # it with any change that alters a bit of them.
 PACKER_VERSION = 1
+# Copies of one mesh from which they share one bottom-level tree instead of being flattened
+# (benchmarks/instancing.py: the render cost of two levels against the memory and build
+# time of the copies).
+INSTANCE_MIN_COPIES = 8
 
 # The six faces of Mitsuba's cube [-1, 1]^3 as (corner, e1, e2): corner + u e1 + v e2 has the
 # texture coordinates (u, v) of Mitsuba's cube mesh; on every face e1 x e2 points inward
@@ -111,6 +117,25 @@ class MovingMesh:
 
 
 @dataclass
+class InstancedMesh:
+    """A mesh drawn at many places through one bottom-level tree: its triangles and shading
+    data in the space its copies' transforms map to the world (the shape's own transform
+    applied), and those transforms."""
+
+    positions: np.ndarray     # (T, 3, 3)
+    normals: np.ndarray       # (T, 3, 3)
+    uvs: np.ndarray           # (T, 3, 2)
+    material: int
+    transforms: np.ndarray    # (K, 3, 4) world_from_object of each copy
+
+    def world_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """(K, 3) lo and hi: each copy's world box."""
+        from ..accel.instances import instance_world_bounds
+
+        return instance_world_bounds(self.transforms, *m.point_bounds(self.positions))
+
+
+@dataclass
 class PackedScene:
     quads: list[Parallelogram]
     spheres: list[Sphere]
@@ -132,6 +157,7 @@ class PackedScene:
     mesh_bounds: tuple[np.ndarray, np.ndarray] | None = None
     mesh_slot: MeshSlot | None = None
     mesh_shapes: list[int] = field(default_factory=list)
+    instanced_meshes: list = field(default_factory=list)   # InstancedMesh, shared by their copies
 
     @property
     def has_media(self) -> bool:
@@ -139,7 +165,8 @@ class PackedScene:
 
     @property
     def has_bvh(self) -> bool:
-        return self.mesh is not None or self.cached_mesh is not None or bool(self.moving_meshes)
+        return self.mesh is not None or self.cached_mesh is not None or bool(self.moving_meshes) \
+            or bool(self.instanced_meshes)
 
     @property
     def cached_mesh(self) -> DeviceMesh | None:
@@ -500,6 +527,20 @@ def _transform_mesh(shape: m.Shape, where: str):
     return tri[keep], normals[keep], uvs[keep], ng[keep]
 
 
+def _placed_shapes(shapes: list[m.Shape]):
+    """(scene index, shape) of every shape to pack: an instanced mesh with fewer than
+    INSTANCE_MIN_COPIES copies, or one that emits (each copy's triangles are lights), as
+    its copies, each a shape of its own; other shapes as they are."""
+    for index, shape in enumerate(shapes):
+        if shape.instances is not None and (len(shape.instances) < INSTANCE_MIN_COPIES
+                                            or shape.emission is not None):
+            for t in np.asarray(shape.instances, np.float64):
+                yield index, dataclasses.replace(shape, instances=None,
+                                                 world_from_object=t @ shape.world_from_object)
+        else:
+            yield index, shape
+
+
 def pack_scene(scene: m.Scene) -> PackedScene:
     """Flatten a scene into compiled primitives, BVH triangles, materials and lights."""
     scene.validate()
@@ -558,7 +599,8 @@ def pack_scene(scene: m.Scene) -> PackedScene:
     compiled_budget = MAX_COMPILED_PRIMITIVES
     sphere_lights: list[tuple[int, int]] = []   # (light index, sphere index)
     moving: list[MovingMesh] = []
-    for index, shape in enumerate(scene.shapes):
+    instanced: list[InstancedMesh] = []
+    for index, shape in _placed_shapes(scene.shapes):
         where = f"{scene.source}: shape {shape.name or index}"
         M = shape.world_from_object
         flip = shape.flip_normals != (np.linalg.det(M[:3, :3]) < 0)
@@ -627,6 +669,12 @@ def pack_scene(scene: m.Scene) -> PackedScene:
                 moving.append(MovingMesh(tri, normals, uvs, shape.material, open_, close))
                 for W in (open_, close):
                     grow(m.transform_points(W, tri.reshape(-1, 3)))
+        elif shape.kind == "mesh" and shape.instances is not None:
+            tri, normals, uvs, _ = _transform_mesh(shape, where)
+            if len(tri):
+                copies = np.asarray(shape.instances, np.float64)[:, :3]
+                instanced.append(InstancedMesh(tri, normals, uvs, shape.material, copies))
+                grow(np.concatenate(instanced[-1].world_bounds()))
         elif shape.kind == "mesh":
             if index in cached:
                 continue        # in the cached device arrays; their bounds are grown below
@@ -744,4 +792,4 @@ def pack_scene(scene: m.Scene) -> PackedScene:
                      if len(light_arr) and (light_arr["info"][:, 0] == v).any()},
         environment=environment, env_image=env_image, textures=textures, moving_meshes=moving,
         media=media, media_grids=media_grids, mesh_bounds=mesh_bounds, mesh_slot=slot,
-        mesh_shapes=soup.shapes)
+        mesh_shapes=soup.shapes, instanced_meshes=instanced)

@@ -311,6 +311,10 @@ class Renderer:
             self.defines["GLRENDER_METALLIC_ROUGHNESS"] = 1  # bsdf/metallic_roughness.glsl
         if codegen.has_emission_textures(p):
             self.defines["GLRENDER_EMISSION_TEXTURES"] = 1   # lights/light.glsl area_light_radiance
+        if p.instanced_meshes and s.executor == "wavefront":
+            # the extend stage stores a triangle per path, not the instance it belongs to
+            raise UsageError(f"{self.scene.source}: the wavefront executor does not trace "
+                             f"instanced meshes (two-level BVH); use --executor megakernel")
         if p.has_media:
             takers = [n for n in integrators.names() if integrators.get(n).media]
             kind = self._media_for or integ.kind

@@ -235,6 +235,9 @@ class Shape:
     Meshes carry ``vertices`` (V,3), ``triangles`` (T,3) and optionally ``normals`` (V,3)
     and ``uvs`` (V,2), in object space; ``world_from_object`` places them.
     Spheres use ``center`` and ``radius`` in object space.
+    ``instances`` (meshes): (K, 4, 4) transforms placing K copies, copy k at
+    ``instances[k] @ world_from_object`` (glTF nodes sharing a mesh, Mitsuba
+    ``shapegroup``/``instance``, TOML ``instances``); the shape itself is not drawn.
     """
 
     kind: str
@@ -253,6 +256,7 @@ class Shape:
     name: str = ""
     interior: Optional[int] = None                # index into Scene.media: behind the surface
     exterior: Optional[int] = None                # and on the side its normal faces
+    instances: Optional[np.ndarray] = None        # (K, 4, 4): copies of a mesh (see above)
 
     @property
     def moving(self) -> bool:
@@ -599,6 +603,17 @@ class Scene:
                 if k is not None and not 0 <= k < len(self.media):
                     raise SceneError(f"{self.source}: shape {shape.name or i}: {side} medium index "
                                      f"{k} out of range")
+            if shape.instances is not None:
+                where = f"{self.source}: shape {shape.name or i}: instances"
+                t = np.asarray(shape.instances)
+                if shape.kind != "mesh":
+                    raise SceneError(f"{where}: only meshes are instanced, this is a {shape.kind}")
+                if t.ndim != 3 or t.shape[1:] != (4, 4) or not np.issubdtype(t.dtype, np.number):
+                    raise SceneError(f"{where}: expected K 4x4 transforms, got shape {t.shape}")
+                if not np.all(np.isfinite(t)) or not np.allclose(t[:, 3], [0, 0, 0, 1]):
+                    raise SceneError(f"{where}: transforms must be finite with last row (0, 0, 0, 1)")
+                if shape.moving:
+                    raise SceneError(f"{where}: instanced meshes cannot move over the shutter")
         if self.camera.medium is not None and not 0 <= self.camera.medium < len(self.media):
             raise SceneError(f"{self.source}: camera: medium index {self.camera.medium} out of range")
         if not self.shapes and not self.lights:

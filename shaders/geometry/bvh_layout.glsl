@@ -7,7 +7,11 @@
 //                  (glrender/accel/quantize.py): origin + exponents, the four
 //                  child references, and the child boxes as 8-bit planes.
 // u_bvh_triangles  rgba32f, 3 texels per triangle: corners v0, v1, v2 (BVH order).
-// u_bvh_instances  rgba32f, the motion instances (geometry/motion.glsl).
+// u_bvh_instances  rgba32f: texel 0 = (motion instances, static triangles, static
+//                  instances, top-level root node) as uint bits, then
+//                  kTexelsPerMotionInstance texels per motion instance
+//                  (geometry/motion.glsl), then kTexelsPerStaticInstance per static
+//                  instance (geometry/instances.glsl).
 // Unit 3 is reserved for geometry.
 // The shading data of each triangle, in BVH order (geometry/mesh_surface.glsl):
 // u_tri_normals    rgba32f, 3 texels per triangle: vertex normals (xyz, -).
@@ -33,6 +37,8 @@ const uint kBvhLeafCountShift = 28u;
 const uint kBvhLeafFirstMask = 0x0FFFFFFFu;
 const int kBvhTexelsPerNode = 4;
 const int kBvhTexelsPerTriangle = 3;
+const int kTexelsPerMotionInstance = 12;
+const int kTexelsPerStaticInstance = 7;
 const uint kBvhExponentBias = 127u;
 // (1 without parts: a divisor that is never used)
 const int kGeometryPartTexels = max(GLRENDER_GEOMETRY_PART_TEXELS, 1);

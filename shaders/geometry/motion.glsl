@@ -12,8 +12,6 @@
 // The quaternions lie on one hemisphere (the host flips the second if needed).
 #include "geometry/bvh.glsl"
 
-const int kTexelsPerMotionInstance = 12;
-
 // Number of motion instances (the list is short: each is tested by every ray).
 int motion_instance_count() {
     return int(floatBitsToUint(texelFetch(u_bvh_instances, 0).x));

@@ -18,6 +18,7 @@ from bvh_reference import NO_HIT, brute_force, icosphere, load_mesh, random_soup
 
 from glrender.accel import build_bvh
 from glrender.accel import bvh as bvh_module
+from glrender.accel import instances as instances_module
 from glrender.gpu import bindings, bvh_upload
 from glrender.gpu.bvh_upload import INSTANCES, KINDS, UNITS_RESERVED, GpuBvh
 from glrender.errors import UsageError
@@ -295,6 +296,8 @@ def test10_texture_units_agree_with_the_layout_file():
     assert int(constants["kBvhLeafFlag"], 0) == bvh_module.LEAF_FLAG
     assert int(constants["kBvhLeafCountShift"], 0) == bvh_module.LEAF_COUNT_SHIFT
     assert int(constants["kBvhLeafFirstMask"], 0) == bvh_module.LEAF_FIRST_MASK
+    assert int(constants["kTexelsPerMotionInstance"]) == instances_module.TEXELS_PER_INSTANCE
+    assert int(constants["kTexelsPerStaticInstance"]) == instances_module.TEXELS_PER_STATIC_INSTANCE
     params_text = (packaged_root() / "common" / "params.glsl").read_text()
     assert re.search(rf"#define GLRENDER_BVH_MAX_DEPTH {bvh_module.MAX_DEPTH}\n", params_text)
 
