@@ -247,8 +247,15 @@ class DeviceScene:
             return None
         buffers = {f"bvh {name}": (t.texels, t.nbytes) for name, t in self.bvh.textures.items()}
         buffers.update({f"triangle {kind}": (t.texels, t.nbytes) for kind, t in self.shading.items()})
-        return mesh_capacity(buffers, len(self.mesh_texels[0]),
-                             self.ctx.gl.info["GL_MAX_TEXTURE_BUFFER_SIZE"])
+        capacity = mesh_capacity(buffers, len(self.mesh_texels[0]),
+                                 self.ctx.gl.info["GL_MAX_TEXTURE_BUFFER_SIZE"])
+        stats = getattr(self.bvh.bvh, "build_stats", None) or self.bvh.bvh.stats()
+        if stats.get("static_instances"):
+            # instanced meshes: the copies placed and the triangles they draw (each counted)
+            capacity["instances"] = int(stats["static_instances"])
+            capacity["placed_triangles"] = int(stats["instanced_triangles"]) + \
+                len(self.mesh_texels[0]) - int(stats["prototype_triangles"])
+        return capacity
 
     def _gather_mesh(self) -> DeviceMesh:
         """The BVH (accel/bvh_cache.py) and the per-triangle texels in its order; stored in

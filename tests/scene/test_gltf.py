@@ -77,10 +77,11 @@ def test02_hierarchy_instancing_material_camera_light(write, caught):
     path = write("t.gltf", json.dumps(_triangle_doc()))
     with caught as messages:
         scene = glrender.load(path)
-    a, b = scene.shapes
-    assert a.vertices is b.vertices                      # one mesh, two instances
-    np.testing.assert_allclose(a.world_from_object[:3, 3], [1, 0, -5])
-    np.testing.assert_allclose(b.world_from_object[:3, :3], [[0, -2, 0], [2, 0, 0], [0, 0, 2]], atol=1e-12)
+    a, = scene.shapes                                    # one mesh, two nodes: its instances
+    np.testing.assert_array_equal(a.world_from_object, np.eye(4))
+    first, second = a.instances
+    np.testing.assert_allclose(first[:3, 3], [1, 0, -5])
+    np.testing.assert_allclose(second[:3, :3], [[0, -2, 0], [2, 0, 0], [0, 0, 2]], atol=1e-12)
     mat = scene.materials[a.material]
     assert mat.kind == "roughplastic" and mat.reflectance == pytest.approx((0.8, 0.2, 0.1))
     assert mat.alpha == pytest.approx((0.25, 0.25)) and mat.distribution == "ggx"

@@ -1,7 +1,7 @@
 """glTF 2.0 (``.gltf`` with external or data-URI buffers, and binary ``.glb``).
 
-Read: the node hierarchy (matrix or TRS), meshes instanced by several nodes (the
-arrays are shared), triangle / strip / fan primitives with POSITION, NORMAL and
+Read: the node hierarchy (matrix or TRS), meshes instanced by several nodes (one shape
+with the nodes' transforms as its ``instances``: many copies share one tree), triangle / strip / fan primitives with POSITION, NORMAL and
 TEXCOORD_0, metallic-roughness materials, perspective and orthographic cameras and
 KHR_lights_punctual. Materials map onto the renderer's BSDFs by the metallic-roughness
 rule of :mod:`.pbr` (docs/scene-format.md), with KHR_materials_transmission and
@@ -588,6 +588,7 @@ def load_gltf(path, **params) -> m.Scene:
                      "extensions.KHR_lights_punctual")
     light_defs = g.array(lights.get("lights"), "extensions.KHR_lights_punctual.lights")
     camera = None
+    placed: dict[tuple[int, int], list[int]] = {}     # (mesh, primitive) -> its shapes
     stack = [(r, np.eye(4), 0, ()) for r in reversed(roots)]
     while stack:
         index, parent, depth, path_nodes = stack.pop()
@@ -608,6 +609,7 @@ def load_gltf(path, **params) -> m.Scene:
                 if mesh is None:
                     continue
                 mat, emission = g.material(prim.get("material"))
+                placed.setdefault((node["mesh"], k), []).append(len(scene.shapes))
                 scene.shapes.append(m.Shape("mesh", material=mat, world_from_object=M,
                                             vertices=mesh.vertices, triangles=mesh.triangles,
                                             normals=mesh.normals, uvs=mesh.uvs, emission=emission,
@@ -627,11 +629,27 @@ def load_gltf(path, **params) -> m.Scene:
         for child in reversed(g.array(node.get("children"), f"{where}.children")):
             stack.append((child, M, depth + 1, path_nodes + (index,)))
     g.notes.emit()
+    _share_meshes(scene, placed)
     if camera is not None:
         scene.camera = camera
     if not scene.shapes and not scene.lights:
         raise SceneError(f"{path}: the scene has no meshes and no lights")
     return finish_scene(scene, has_camera=camera is not None)
+
+
+def _share_meshes(scene: m.Scene, placed: dict[tuple[int, int], list[int]]) -> None:
+    """One shape per mesh primitive that several nodes place, with the nodes' transforms as
+    its instances (Shape.instances), where its first node put it."""
+    drop = set()
+    for (mesh, k), shapes in placed.items():
+        if len(shapes) > 1:
+            first = scene.shapes[shapes[0]]
+            first.instances = np.stack([scene.shapes[i].world_from_object for i in shapes])
+            first.world_from_object = np.eye(4)
+            first.name = f"mesh {mesh} primitive {k} ({len(shapes)} nodes)"
+            drop.update(shapes[1:])
+    if drop:
+        scene.shapes = [s for i, s in enumerate(scene.shapes) if i not in drop]
 
 
 # glTF cameras look along -z with +y up and +x right; Mitsuba's along +z with +x left

@@ -12,6 +12,7 @@ variants do (``spectrum_list_to_srgb``, with an analytic CIE 1931 fit).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import re
@@ -332,6 +333,7 @@ class _Builder:
         self.media: dict[int, int] = {}           # id(Node) -> medium index
         self.used: set[int] = set()               # id(Node) of every BSDF and texture read
         self.has_camera = False
+        self.groups: dict[int, tuple[Node, list[np.ndarray]]] = {}   # shapegroup -> instances
 
     def deref(self, item, where_line=None):
         if isinstance(item, tuple) and item[0] == "ref":
@@ -594,6 +596,44 @@ class _Builder:
                 self.unused(child)
 
     def shape(self, node: Node) -> None:
+        """A top-level shape: drawn, or a shapegroup (drawn by its instances), or an instance
+        of one (collected; :meth:`instances` makes the group's shapes)."""
+        if node.type == "shapegroup":
+            self.groups.setdefault(id(node), (node, []))
+            return
+        if node.type == "instance":
+            groups = [obj for _, obj in self.objects(node, "shape")]
+            if len(groups) != 1 or groups[0].type != "shapegroup":
+                node.fail("expected one shapegroup (nested or a <ref id=\"...\"/>)")
+            M = self.prop(node, "to_world", "transform", np.eye(4))
+            self.groups.setdefault(id(groups[0]), (groups[0], []))[1].append(M)
+            return
+        shape = self.make_shape(node)
+        if shape is not None:
+            self.scene.shapes.append(shape)
+
+    def instances(self) -> None:
+        """The shapes of every shapegroup, placed by its instances: a mesh once, with the
+        instances' transforms (Shape.instances: many copies share one tree); other shapes
+        once per instance."""
+        for group, transforms in self.groups.values():
+            members = [obj for _, obj in self.objects(group, "shape")]
+            if any(obj.type in ("shapegroup", "instance") for obj in members):
+                group.fail("a shapegroup holds shapes, not shapegroups or instances")
+            if not transforms:
+                continue
+            for member in members:
+                shape = self.make_shape(member)
+                if shape is None:
+                    continue
+                if shape.kind == "mesh":
+                    shape.instances = np.stack(transforms)
+                    self.scene.shapes.append(shape)
+                else:
+                    self.scene.shapes += [dataclasses.replace(shape, world_from_object=T @ shape.world_from_object)
+                                          for T in transforms]
+
+    def make_shape(self, node: Node) -> m.Shape | None:
         t = node.type
         M = self.prop(node, "to_world", "transform", np.eye(4))
         if t == "serialized":
@@ -601,7 +641,7 @@ class _Builder:
                       "or OBJ)")
         if t not in ("obj", "ply", "rectangle", "cube", "sphere", "disk"):
             self.r.notes.add(f"shape type {excerpt(t)}", node.line)
-            return
+            return None
         bsdfs = [obj for _, obj in self.objects(node, "bsdf")]
         if bsdfs:
             material = self.material(bsdfs[0])
@@ -648,7 +688,7 @@ class _Builder:
             from .meshes import disk_shape
 
             shape = disk_shape(shape)
-        self.scene.shapes.append(shape)
+        return shape
 
     # -- participating media ---------------------------------------------------------------
     def medium(self, node: Node) -> int:
@@ -976,6 +1016,7 @@ def load_mitsuba(path, **params) -> m.Scene:
             b.unused(obj)
         elif isinstance(obj, Node) and obj.tag == "medium" and obj.id and id(obj) not in b.media:
             reader.notes.add(f"medium {excerpt(obj.id)} (not used by any shape or sensor)", obj.line)
+    b.instances()
     unused = sorted(set(params) - reader.used)
     if unused:
         warn(f"{path}: parameters given but not used: {', '.join(unused)}")

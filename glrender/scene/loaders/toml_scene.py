@@ -389,7 +389,7 @@ def _shape(ctx, i: int, t, materials: dict[str, int], media: dict[str, int]) -> 
     t = ctx.table(t, key)
     _check_keys(ctx, t, key, {"type", "material", "transform", "transform_close", "emission", "file",
                               "center", "radius", "flip_normals", "face_normals", "name",
-                              "interior", "exterior"})
+                              "interior", "exterior", "instances"})
     kind = ctx.string(t.get("type"), f"{key}.type", ("rectangle", "cube", "sphere", "disk", "mesh"))
     mat_name = ctx.string(t.get("material"), f"{key}.material")
     if mat_name not in materials:
@@ -420,11 +420,41 @@ def _shape(ctx, i: int, t, materials: dict[str, int], media: dict[str, int]) -> 
         mesh = read_mesh(path, ctx.files)
         shape.vertices, shape.triangles, shape.normals, shape.uvs = \
             mesh.vertices, mesh.triangles, mesh.normals, mesh.uvs
+    if "instances" in t:
+        if kind != "mesh":
+            ctx.fail(f"{key}.instances", f"only meshes are instanced, this is a {kind}")
+        shape.instances = _instances(ctx, t["instances"], f"{key}.instances")
     if kind == "disk":
         from .meshes import disk_shape
 
         shape = disk_shape(shape)
     return [shape]
+
+
+def _instances(ctx: _Ctx, value, key: str) -> np.ndarray:
+    """(K, 4, 4) transforms: an array of transforms (each as ``transform``), or a ``.npy``
+    file of K row-major 4x4 matrices, shape (K, 4, 4) or (K, 16)."""
+    if isinstance(value, str):
+        path = ctx.file(value, key)
+        if path.suffix.lower() != ".npy":
+            ctx.fail(key, f"expected a .npy file of 4x4 matrices, got {excerpt(value)}")
+        try:
+            data = np.load(path, allow_pickle=False)
+        except (ValueError, OSError, EOFError) as exc:
+            ctx.fail(key, f"cannot read {excerpt(value)} as a numpy array ({cause(exc)})")
+        if data.dtype.kind not in "fiu" or data.ndim not in (2, 3) or not len(data) or \
+                data.shape[1:] not in ((4, 4), (16,)):
+            ctx.fail(key, f"{excerpt(value)}: expected K row-major 4x4 matrices, shape (K, 4, 4) or "
+                          f"(K, 16), got {data.dtype} {tuple(data.shape)}")
+        data = np.asarray(data, np.float64).reshape(-1, 4, 4)
+        bad = np.flatnonzero(~np.isfinite(data).all(axis=(1, 2)) |
+                             ~np.isclose(data[:, 3], [0, 0, 0, 1]).all(axis=1))
+        if len(bad):
+            ctx.fail(key, f"{excerpt(value)}: matrix {bad[0]} is not finite with last row (0, 0, 0, 1)")
+        return data
+    if not isinstance(value, list) or not value:
+        ctx.fail(key, f"expected an array of transforms or a .npy file name, got {_show(value)}")
+    return np.stack([_transform(ctx, v, f"{key}[{i}]") for i, v in enumerate(value)])
 
 
 # -- participating media ----------------------------------------------------------------------
