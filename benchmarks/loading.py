@@ -83,21 +83,35 @@ print(json.dumps({"load": t1 - t0, "pack": device.timings["pack"],
 """
 
 
-def write_meshes(folder: Path) -> dict[str, Path]:
+def sphere_mesh():
+    """benchmarks/bvh.py's displaced sphere of 999,698 triangles: (vertices, triangles)."""
     import numpy as np
 
     sys.path.insert(0, str(ROOT / "benchmarks"))
     from bvh import procedural_mesh
 
     v, f = procedural_mesh(1_000_000)
-    v = v.astype(np.float64)
-    ply = folder / "sphere.ply"
+    return v.astype(np.float64), f
+
+
+def write_ply(path: Path, v, f) -> Path:
+    """Binary little-endian PLY of positions and triangles."""
+    import numpy as np
+
     header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(v)}\n"
               "property float x\nproperty float y\nproperty float z\n"
               f"element face {len(f)}\nproperty list uchar int vertex_indices\nend_header\n")
     faces = np.zeros(len(f), np.dtype([("n", "u1"), ("i", "<i4", (3,))]))
     faces["n"], faces["i"] = 3, f
-    ply.write_bytes(header.encode() + v.astype("<f4").tobytes() + faces.tobytes())
+    path.write_bytes(header.encode() + v.astype("<f4").tobytes() + faces.tobytes())
+    return path
+
+
+def write_meshes(folder: Path) -> dict[str, Path]:
+    import numpy as np
+
+    v, f = sphere_mesh()
+    ply = write_ply(folder / "sphere.ply", v, f)
     from glrender.scene.loaders.meshes import vertex_normals
 
     n = vertex_normals(v, f)
