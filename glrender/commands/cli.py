@@ -87,7 +87,7 @@ def cmd_info(args) -> int:
     ctx = create_context(args.device, threads=args.threads)
     info = ctx.info()
     info["devices"] = devices
-    info["mesh"] = reference_capacity(ctx.gl.info["GL_MAX_TEXTURE_BUFFER_SIZE"])
+    info["mesh"] = reference_capacity(ctx.gl)
     if args.json:
         print(json.dumps(info, indent=2))
         return 0
@@ -109,8 +109,9 @@ def cmd_info(args) -> int:
     mesh = info["mesh"]
     print(f"BVH triangles:   {mesh['bytes_per_triangle']:.0f} device bytes per triangle (a "
           f"{mesh['triangles']:,}-triangle reference mesh; a scene's own: --stats), at most "
-          f"{mesh['max_triangles']:,} triangles (its {mesh['limited_by']} buffer reaches "
-          f"GL_MAX_TEXTURE_BUFFER_SIZE)")
+          f"{mesh['max_triangles']:,} triangles (their {mesh['limited_by']} then fill the "
+          f"{mesh['textures']} buffer textures of GL_MAX_TEXTURE_BUFFER_SIZE texels glrender "
+          "binds for them)")
     print("extensions:")
     for key, value in info["extensions"].items():
         print(f"  {key:42s} {'yes' if value else 'no'}")

@@ -99,6 +99,15 @@ def count_parts(gl, kind: str, texels: int, triangles: int) -> int:
     return parts
 
 
+def triangle_ceiling(gl) -> tuple[int, str]:
+    """The most triangles :func:`check_triangles` accepts on this device and the kind whose
+    textures they fill first: over the per-triangle kinds, the least of the texels its parts
+    may hold over its texels per triangle (one more triangle needs one texture too many)."""
+    size = part_texels(gl)
+    return min(((max_parts(gl, kind) * size // spec.texels_per_triangle, kind)
+                for kind, spec in KINDS.items() if spec.texels_per_triangle), key=lambda c: c[0])
+
+
 def check_triangles(gl, triangles: int) -> None:
     """Refuses (UsageError) ``triangles`` whose per-triangle data would span more textures
     than this device binds: before their BVH is built."""

@@ -1,11 +1,13 @@
 """How large a mesh fits on a device: the bytes per triangle of what the renderer uploads for
-its BVH triangles, and the device limits that bound them (``--stats``, ``glrender info``).
+its BVH triangles, and the most triangles the device takes (``--stats``, ``glrender info``).
 
 Every BVH triangle lives in buffer textures (accel/bvh.py ``pack``, device_scene.py): the
 tree's nodes and triangle corners, and the normal, uv and info texels in the tree's order.
-A buffer texture holds at most ``GL_MAX_TEXTURE_BUFFER_SIZE`` texels, so the buffer with the
-most texels per triangle decides the largest triangle count; the bytes per triangle say what
-such a mesh costs in device memory (which GL does not report).
+A buffer texture holds at most ``GL_MAX_TEXTURE_BUFFER_SIZE`` texels, and each kind of that
+data may span several textures (gpu/bvh_upload.py's parts, as many as the kind has units), so
+the most triangles is the limit the upload refuses a scene past (bvh_upload.py
+``triangle_ceiling``); the bytes per triangle say what such a mesh costs in device memory
+(which GL does not report).
 """
 from __future__ import annotations
 
@@ -22,24 +24,33 @@ def device_limits(gl_info) -> dict[str, int]:
     return {name: int(gl_info[name]) for name in LIMITS}
 
 
-def mesh_capacity(buffers: dict[str, tuple[int, int]], triangles: int, texel_limit: int) -> dict:
+def mesh_capacity(buffers: dict[str, tuple[int, int]], triangles: int,
+                  texel_limit: int | None = None) -> dict:
     """What the BVH triangles' ``buffers`` (name -> (texels, bytes) on the device) cost per
-    triangle for ``triangles`` triangles, and the most triangles whose buffers stay within
-    ``texel_limit`` texels each (a mesh of the same kind: its texels grow with its triangles)."""
+    triangle for ``triangles`` triangles. The most triangles a device takes is
+    :func:`device_ceiling`'s: it needs the device's texture units besides its texel limit,
+    so ``texel_limit`` (what callers of the one-texture figure passed) is not used."""
     texels = {name: t / triangles for name, (t, _) in buffers.items()}
-    limited_by = max(texels, key=texels.get)
     return {"triangles": triangles,
             "device_bytes": sum(b for _, b in buffers.values()),
             "bytes_per_triangle": round(sum(b for _, b in buffers.values()) / triangles, 2),
-            "texels_per_triangle": {name: round(t, 4) for name, t in texels.items()},
-            "max_triangles": int(texel_limit // texels[limited_by]),
-            "limited_by": limited_by}
+            "texels_per_triangle": {name: round(t, 4) for name, t in texels.items()}}
 
 
-def reference_capacity(texel_limit: int) -> dict:
+def device_ceiling(gl) -> dict:
+    """The most BVH triangles the device of ``gl`` (a context's ``gl``) takes, as the upload
+    decides it (bvh_upload.py ``triangle_ceiling``): ``max_triangles``; ``limited_by``, the
+    data that fills its textures first; ``textures``, how many textures that data may span."""
+    from .bvh_upload import KINDS, max_parts, triangle_ceiling
+
+    most, kind = triangle_ceiling(gl)
+    return {"max_triangles": most, "limited_by": KINDS[kind].label, "textures": max_parts(gl, kind)}
+
+
+def reference_capacity(gl) -> dict:
     """:func:`mesh_capacity` of a reference mesh (a height field of 8,192 triangles, built as
-    a render builds its BVH) with the triangle data device_scene.py uploads: what a scene
-    without its own figures may expect."""
+    a render builds its BVH) with the triangle data device_scene.py uploads, and the
+    :func:`device_ceiling` of ``gl``: what a scene without its own figures may expect."""
     from ..accel import build_bvh
 
     n = REFERENCE_GRID
@@ -53,4 +64,4 @@ def reference_capacity(texel_limit: int) -> dict:
     # the normal, uv and info texels (16 bytes each): 3, 2 and 1 per triangle
     buffers.update({"triangle normals": (3 * count, 48 * count), "triangle uvs": (2 * count, 32 * count),
                     "triangle info": (count, 16 * count)})
-    return mesh_capacity(buffers, count, texel_limit)
+    return {**mesh_capacity(buffers, count), **device_ceiling(gl)}

@@ -90,3 +90,20 @@ def test02_more_parts_than_units_are_refused_before_the_build(gl_ctx, monkeypatc
     assert message == ("99,860 triangles are too many for this device: their triangle corners need 6 "
                        "buffer textures of at most 50,000 texels (GL_MAX_TEXTURE_BUFFER_SIZE) and "
                        "glrender binds 5; render the scene in pieces of fewer triangles")
+
+
+def test03_the_triangle_ceiling_is_what_the_upload_takes():
+    """triangle_ceiling (--stats and glrender info: max_triangles) is the most triangles
+    check_triangles lets through: one more is refused. With llvmpipe's limits (2^27 texels a
+    texture, 32 units) the corners and the normals fill their 5 textures first."""
+    from types import SimpleNamespace
+
+    for texels, units in ((1 << 27, 32), (50_000, 32), (65_536, 28)):
+        gl = SimpleNamespace(info={"GL_MAX_TEXTURE_BUFFER_SIZE": texels,
+                                   "GL_MAX_COMPUTE_TEXTURE_IMAGE_UNITS": units})
+        most, kind = bvh_upload.triangle_ceiling(gl)
+        bvh_upload.check_triangles(gl, most)
+        with pytest.raises(UsageError):
+            bvh_upload.check_triangles(gl, most + 1)
+        if texels == 1 << 27:
+            assert (most, kind) == (5 * (texels // 12 * 12) // 3, "triangles")
