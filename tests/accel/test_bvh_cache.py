@@ -17,13 +17,16 @@ from glrender.scene.loaders import meshes
 
 
 @pytest.fixture
-def cache(tmp_path, monkeypatch):
-    """An empty cache folder of its own, and every mesh large enough to be cached."""
+def cache(tmp_path, monkeypatch, request):
+    """An empty cache folder of its own, and every mesh large enough to be cached: every BVH,
+    and every finished mesh (normals) unless the test's module sets
+    ``CACHE_FINISHED_MESHES = False`` (tests/gpu/test_mesh_cache.py imports this fixture)."""
     monkeypatch.setenv("GLRENDER_CACHE_DIR", str(tmp_path / "cache"))
     monkeypatch.delenv("GLRENDER_CACHE", raising=False)
     monkeypatch.delenv("GLRENDER_CACHE_SIZE", raising=False)
     monkeypatch.setattr(bvh_cache, "MIN_TRIANGLES", 0)
-    monkeypatch.setattr(meshes, "CACHE_MIN_TRIANGLES", 0)
+    if getattr(request.module, "CACHE_FINISHED_MESHES", True):
+        monkeypatch.setattr(meshes, "CACHE_MIN_TRIANGLES", 0)
     monkeypatch.setattr(disk_cache, "_warned", set())
     return tmp_path / "cache" / "bvh"
 

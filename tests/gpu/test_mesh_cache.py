@@ -19,18 +19,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "accel"))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "render"))
 from bvh_reference import icosphere  # noqa: E402
 from render_scenes import base  # noqa: E402
-from test_bvh_cache import damage, entries  # noqa: E402
+from test_bvh_cache import cache, damage, entries  # noqa: E402, F401 (cache: a fixture)
 
-
-@pytest.fixture
-def cache(tmp_path, monkeypatch):
-    """An empty cache folder of its own, and every mesh large enough to be cached."""
-    monkeypatch.setenv("GLRENDER_CACHE_DIR", str(tmp_path / "cache"))
-    monkeypatch.delenv("GLRENDER_CACHE", raising=False)
-    monkeypatch.delenv("GLRENDER_CACHE_SIZE", raising=False)
-    monkeypatch.setattr(bvh_cache, "MIN_TRIANGLES", 0)
-    monkeypatch.setattr(disk_cache, "_warned", set())
-    return tmp_path / "cache" / "bvh"
+# the cache fixture: every BVH cached, finished meshes (normals) at their own threshold
+CACHE_FINISHED_MESHES = False
 
 
 def mesh_scene() -> m.Scene:
