@@ -6,8 +6,10 @@ build (BVH, packing, upload), compile (GLSL compile and link plus llvmpipe's cod
 generation at the first dispatch), render (the pass) and the process's wall time.
 
 - cold: ``MESA_SHADER_CACHE_DIR`` points at a new, empty folder, so every kernel is
-  compiled from source;
-- warm: the same folder again, so Mesa finds the compiled kernels on disk.
+  compiled from source, and so does ``GLRENDER_CACHE_DIR`` (the mesh cache: a mesh's
+  normals and BVH computed, not read from the user's cache);
+- warm: the same folders again, so Mesa finds the compiled kernels on disk and glrender the
+  meshes large enough to be cached.
 
 The cache location is Mesa's: ``MESA_SHADER_CACHE_DIR`` (default ``~/.cache/mesa_shader_cache``;
 ``MESA_SHADER_CACHE_DISABLE=true`` turns it off). Mitsuba 3 (``llvm_ad_rgb``) is timed in
@@ -228,9 +230,9 @@ def main() -> None:
         scene = ROOT / "scenes" / name / "scene.toml"
         cold, warm = [], []
         for _ in range(args.repeats):
-            with tempfile.TemporaryDirectory() as cache:
-                c = run_glrender(scene, Path(cache))
-                w = run_glrender(scene, Path(cache))
+            with tempfile.TemporaryDirectory() as cache, tempfile.TemporaryDirectory() as meshes:
+                c, w = (run_glrender(scene, Path(cache), GLRENDER_CACHE="on", GLRENDER_CACHE_DIR=meshes)
+                        for _ in range(2))
             device = c["device"]
             cold.append(c["seconds"])
             warm.append(w["seconds"])
@@ -255,8 +257,8 @@ def main() -> None:
         f"{min(loads):.2f}-{max(loads):.2f} (at the start, after the scenes' table and at the "
         "end). Seconds from the command to "
         "the end of the first pass (8 spp at the scene's resolution), medians of "
-        f"{args.repeats} fresh processes; cold: an empty `MESA_SHADER_CACHE_DIR`, warm: the "
-        "same folder again. `compile` is GLSL compile and link plus llvmpipe's code generation "
+        f"{args.repeats} fresh processes; cold: an empty `MESA_SHADER_CACHE_DIR` and an empty "
+        "mesh cache folder (`GLRENDER_CACHE_DIR`), warm: the same folders again. `compile` is GLSL compile and link plus llvmpipe's code generation "
         "at the first dispatch; `wall` includes Python's start and imports.",
         "",
         "| scene | cache | load | context | build | compile | first pass | wall |",
