@@ -24,12 +24,10 @@ def device_limits(gl_info) -> dict[str, int]:
     return {name: int(gl_info[name]) for name in LIMITS}
 
 
-def mesh_capacity(buffers: dict[str, tuple[int, int]], triangles: int,
-                  texel_limit: int | None = None) -> dict:
+def mesh_capacity(buffers: dict[str, tuple[int, int]], triangles: int) -> dict:
     """What the BVH triangles' ``buffers`` (name -> (texels, bytes) on the device) cost per
-    triangle for ``triangles`` triangles. The most triangles a device takes is
-    :func:`device_ceiling`'s: it needs the device's texture units besides its texel limit,
-    so ``texel_limit`` (what callers of the one-texture figure passed) is not used."""
+    triangle for ``triangles`` triangles (the most triangles a device takes is
+    :func:`device_ceiling`'s)."""
     texels = {name: t / triangles for name, (t, _) in buffers.items()}
     return {"triangles": triangles,
             "device_bytes": sum(b for _, b in buffers.values()),

@@ -240,15 +240,16 @@ class DeviceScene:
 
     def mesh_capacity(self) -> dict | None:
         """:func:`~glrender.gpu.capacity.mesh_capacity` of the uploaded BVH triangles (the
-        tree's buffers and the triangle texels); None without BVH triangles."""
-        from .capacity import mesh_capacity
+        tree's buffers and the triangle texels) with the device's
+        :func:`~glrender.gpu.capacity.device_ceiling`, and for instanced meshes the copies and
+        the triangles they place; None without BVH triangles."""
+        from .capacity import device_ceiling, mesh_capacity
 
         if self.bvh is None or not len(self.mesh_texels[0]):
             return None
         buffers = {f"bvh {name}": (t.texels, t.nbytes) for name, t in self.bvh.textures.items()}
         buffers.update({f"triangle {kind}": (t.texels, t.nbytes) for kind, t in self.shading.items()})
-        capacity = mesh_capacity(buffers, len(self.mesh_texels[0]),
-                                 self.ctx.gl.info["GL_MAX_TEXTURE_BUFFER_SIZE"])
+        capacity = {**mesh_capacity(buffers, len(self.mesh_texels[0])), **device_ceiling(self.ctx.gl)}
         stats = getattr(self.bvh.bvh, "build_stats", None) or self.bvh.bvh.stats()
         if stats.get("static_instances"):
             # instanced meshes: the copies placed and the triangles they draw (each counted)

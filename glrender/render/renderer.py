@@ -252,12 +252,9 @@ class Renderer:
 
     @property
     def mesh_capacity(self) -> dict[str, Any] | None:
-        """The BVH triangles' device bytes per triangle (DeviceScene.mesh_capacity) and the
-        most that fit (capacity.device_ceiling); None without BVH triangles."""
-        from ..gpu.capacity import device_ceiling
-
-        capacity = self.device_scene.mesh_capacity() if self.device_scene is not None else None
-        return {**capacity, **device_ceiling(self.device_scene.ctx.gl)} if capacity else capacity
+        """The BVH triangles' device bytes per triangle and the most that fit
+        (DeviceScene.mesh_capacity); None without BVH triangles."""
+        return self.device_scene.mesh_capacity() if self.device_scene is not None else None
 
     # -- setup -------------------------------------------------------------------------------
     def _upload(self) -> None:
