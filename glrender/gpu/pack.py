@@ -8,9 +8,10 @@ Geometry splits two ways, decided per shape:
   the compiler folds the zero components of axis-aligned quads, which measured up
   to 8x faster than fetching the same data from a buffer.
 - *BVH triangles*: every other mesh, flattened into world space, with per-triangle
-  shading data in BVH order. A mesh placed :data:`INSTANCE_MIN_COPIES` times or more
-  (``Shape.instances``) keeps one copy of its triangles, which the copies share through a
-  two-level BVH (:mod:`glrender.accel.instances`); fewer copies are flattened.
+  shading data in BVH order. A mesh placed several times (``Shape.instances``) whose copies
+  beyond the first hold :data:`INSTANCE_MIN_TRIANGLES` triangles or more keeps one copy of
+  its triangles, which the copies share through a two-level BVH
+  (:mod:`glrender.accel.instances`); smaller ones are flattened.
 
 Materials and lights become std430 arrays (``glrender/gpu/layout.py``).
 """
@@ -35,10 +36,14 @@ MAX_COMPILED_PRIMITIVES = 96
 # from them): the device-ready mesh cache (gpu/mesh_cache.py) keys its entries by it, so bump
 # it with any change that alters a bit of them.
 PACKER_VERSION = 1
-# Copies of one mesh from which they share one bottom-level tree instead of being flattened
-# (benchmarks/instancing.py: the render cost of two levels against the memory and build
-# time of the copies).
-INSTANCE_MIN_COPIES = 8
+# The copies of an instanced mesh share one bottom-level tree instead of being flattened when
+# the copies beyond the first hold this many triangles or more. benchmarks/instancing.py
+# measured the second level's traversal cost within the noise (2 to 32 trees of 104,448
+# triangles), while each flattened copy costs its BVH build (~0.2 s per 100k triangles) and
+# ~170 device bytes per triangle: below this count those costs are negligible (as for the
+# BVH cache, accel/bvh_cache.py MIN_TRIANGLES), and small meshes keep the one-level tree
+# (and the compiled primitives for the smallest).
+INSTANCE_MIN_TRIANGLES = 1 << 15
 
 # The six faces of Mitsuba's cube [-1, 1]^3 as (corner, e1, e2): corner + u e1 + v e2 has the
 # texture coordinates (u, v) of Mitsuba's cube mesh; on every face e1 x e2 points inward
@@ -527,13 +532,20 @@ def _transform_mesh(shape: m.Shape, where: str):
     return tri[keep], normals[keep], uvs[keep], ng[keep]
 
 
+def shares_tree(shape: m.Shape) -> bool:
+    """Whether the copies of an instanced mesh share one bottom-level tree: unless it emits
+    (each triangle of each copy is a light) or its copies beyond the first hold fewer than
+    INSTANCE_MIN_TRIANGLES triangles (they are flattened)."""
+    extra = (len(shape.instances) - 1) * (np.size(shape.triangles) // 3)
+    return shape.emission is None and extra >= INSTANCE_MIN_TRIANGLES
+
+
 def _placed_shapes(shapes: list[m.Shape]):
-    """(scene index, shape) of every shape to pack: an instanced mesh with fewer than
-    INSTANCE_MIN_COPIES copies, or one that emits (each copy's triangles are lights), as
-    its copies, each a shape of its own; other shapes as they are."""
+    """(scene index, shape) of every shape to pack: an instanced mesh whose copies do not
+    share a tree (:func:`shares_tree`) as its copies, each a shape of its own; other shapes
+    as they are."""
     for index, shape in enumerate(shapes):
-        if shape.instances is not None and (len(shape.instances) < INSTANCE_MIN_COPIES
-                                            or shape.emission is not None):
+        if shape.instances is not None and not shares_tree(shape):
             for t in np.asarray(shape.instances, np.float64):
                 yield index, dataclasses.replace(shape, instances=None,
                                                  world_from_object=t @ shape.world_from_object)

@@ -24,10 +24,10 @@ def random_affine(rng, mirror=False):
 
 
 def forest(seed=3, copies=(40, 25)):
-    """A static soup and two prototypes (a teapot, an icosphere) placed by random affine
-    maps, every fifth one a mirror image."""
+    """A static soup and two prototypes (a soup of 150 triangles, an icosphere) placed by
+    random affine maps, every fifth one a mirror image."""
     rng = np.random.default_rng(seed)
-    teapot = load_mesh("teapot.ply")
+    teapot = random_soup(rng, 150, spread=1.5, size=0.5)
     ball = icosphere(2)
     static = random_soup(rng, 300, spread=8.0, size=1.5)
     static = (static[0] - 4.0, static[1])

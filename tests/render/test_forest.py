@@ -64,9 +64,10 @@ def renders(scene, seeds):
 def test02_the_nearest_trees_equal_their_flattened_copies(gl_ctx, monkeypatch):
     scene = nearest_trees(glrender.load(SCENE), NEAREST)
     scene.film.width, scene.film.height = 36, 20
+    monkeypatch.setattr(pack, "INSTANCE_MIN_TRIANGLES", 0)     # the small trunk, instanced too
     assert len(pack.pack_scene(scene).instanced_meshes) == 2
     instanced = renders(scene, SEEDS_INSTANCED)
-    monkeypatch.setattr(pack, "INSTANCE_MIN_COPIES", NEAREST + 1)
+    monkeypatch.setattr(pack, "INSTANCE_MIN_TRIANGLES", 1 << 62)
     assert not pack.pack_scene(scene).instanced_meshes
     flat = renders(scene, SEEDS_FLAT)
     ref, ref_se = flat.mean(axis=0), flat.std(axis=0, ddof=1) / np.sqrt(len(SEEDS_FLAT))

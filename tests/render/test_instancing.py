@@ -3,7 +3,7 @@ flattened copies render: glossy and diffuse copies of a smooth mesh under rotati
 non-uniform scales and mirror images (normals through the inverse transpose), on a floor
 under an area light and a sky, by the path tracer and bdpt (light subpaths hit the copies
 too), per 8-pixel block at a Šidák-corrected alpha of 0.01 over every block, channel and
-case of this file, sigma from the seeds. Few copies are flattened; the wavefront executor
+case of this file, sigma from the seeds. Small copies are flattened; the wavefront executor
 refuses instanced meshes in one line."""
 from __future__ import annotations
 
@@ -71,9 +71,10 @@ def block_tests(scene):
 @pytest.mark.parametrize("integrator, spp", CASES)
 def test01_instanced_matches_flattened(gl_ctx, monkeypatch, integrator, spp):
     scene = copies_scene()
+    monkeypatch.setattr(pack, "INSTANCE_MIN_TRIANGLES", 0)     # small meshes, instanced
     assert len(pack.pack_scene(scene).instanced_meshes) == 2
     instanced = renders(scene, integrator, spp, SEEDS_INSTANCED)
-    monkeypatch.setattr(pack, "INSTANCE_MIN_COPIES", COPIES + 1)
+    monkeypatch.setattr(pack, "INSTANCE_MIN_TRIANGLES", 1 << 62)
     assert not pack.pack_scene(scene).instanced_meshes
     flat = renders(scene, integrator, spp, SEEDS_FLAT)
     ref, ref_se = flat.mean(axis=0), flat.std(axis=0, ddof=1) / np.sqrt(len(SEEDS_FLAT))
@@ -83,21 +84,29 @@ def test01_instanced_matches_flattened(gl_ctx, monkeypatch, integrator, spp):
     assert c.detectable_bias < 0.05, c.summary()
 
 
-def test02_few_copies_are_flattened_and_emitters_always():
+def test02_small_copies_are_flattened_and_emitters_always(monkeypatch):
     scene = copies_scene()
     shape = scene.shapes[1]
-    shape.instances = shape.instances[:pack.INSTANCE_MIN_COPIES - 1]
+    extra = (COPIES - 1) * len(shape.triangles)       # what the copies beyond the first add
+    monkeypatch.setattr(pack, "INSTANCE_MIN_TRIANGLES", extra + 1)
+    assert not pack.shares_tree(shape)
     packed = pack.pack_scene(scene)
-    assert len(packed.instanced_meshes) == 1
-    assert len(packed.mesh[0]) == (pack.INSTANCE_MIN_COPIES - 1) * len(shape.triangles)
+    shared = [pack.shares_tree(s) for s in scene.shapes[1:3]]
+    assert len(packed.instanced_meshes) == sum(shared)
+    assert len(packed.mesh[0]) == sum(COPIES * len(s.triangles)
+                                      for s, k in zip(scene.shapes[1:3], shared) if not k)
+    monkeypatch.setattr(pack, "INSTANCE_MIN_TRIANGLES", extra)
+    assert pack.shares_tree(shape)
+    monkeypatch.setattr(pack, "INSTANCE_MIN_TRIANGLES", 0)
     scene.shapes[2].emission = m.Emission((1.0, 1.0, 1.0))
     packed = pack.pack_scene(scene)
-    assert not packed.instanced_meshes
+    assert len(packed.instanced_meshes) == 1 and not pack.shares_tree(scene.shapes[2])
     # every copy's triangles are lights, besides the rectangle and the sky
     assert len(packed.lights) == COPIES * len(scene.shapes[2].triangles) + 2
 
 
-def test03_the_wavefront_executor_refuses_them(gl_ctx):
+def test03_the_wavefront_executor_refuses_them(gl_ctx, monkeypatch):
+    monkeypatch.setattr(pack, "INSTANCE_MIN_TRIANGLES", 0)
     with pytest.raises(UsageError, match="instanced meshes"):
         glrender.render(copies_scene(8), spp=1, progress=False, executor="wavefront")
 
