@@ -25,28 +25,17 @@ ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "RESULTS.md"
 SCENE = ROOT / "scenes" / "forest" / "scene.toml"
 sys.path.insert(0, str(ROOT / "benchmarks"))
-
-
-def nearest(scene, count: int):
-    """``scene`` with only the ``count`` trees nearest its camera."""
-    import numpy as np
-
-    crown = next(s for s in scene.shapes if s.instances is not None)
-    eye = scene.camera.world_from_camera[:3, 3]
-    keep = np.argsort(np.linalg.norm(crown.instances[:, :3, 3] - eye, axis=1))[:count]
-    for shape in scene.shapes:
-        if shape.instances is not None:
-            shape.instances = shape.instances[keep]
-    return scene
+sys.path.insert(0, str(ROOT / "tools"))
 
 
 def measure(ctx, count: int, instanced: bool, spp: int, size: tuple[int, int]) -> dict:
     import glrender
     from glrender.gpu import pack
     from glrender.render.renderer import Renderer, settings_from_scene
+    from make_forest import nearest_trees
 
     pack.INSTANCE_MIN_TRIANGLES = 0 if instanced else 1 << 62
-    scene = nearest(glrender.load(SCENE), count)
+    scene = nearest_trees(glrender.load(SCENE), count)
     scene.film.width, scene.film.height = size
     settings = settings_from_scene(scene, spp=spp + 1, seed=1, integrator="path")
     with Renderer(scene, settings, ctx=ctx) as r:

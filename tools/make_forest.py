@@ -127,6 +127,18 @@ radiance = [0.25, 0.35, 0.55]
 """
 
 
+def nearest_trees(scene, count: int):
+    """``scene`` (the forest, loaded) with only the ``count`` trees nearest its camera: the
+    instanced scene of tests/render/test_forest.py and benchmarks/instancing.py."""
+    crown = next(s for s in scene.shapes if s.instances is not None)
+    eye = scene.camera.world_from_camera[:3, 3]
+    keep = np.argsort(np.linalg.norm(crown.instances[:, :3, 3] - eye, axis=1))[:count]
+    for shape in scene.shapes:
+        if shape.instances is not None:
+            shape.instances = shape.instances[keep]
+    return scene
+
+
 def main() -> None:
     rng = np.random.default_rng(SEED)
     OUT.mkdir(parents=True, exist_ok=True)

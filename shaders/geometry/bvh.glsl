@@ -142,6 +142,42 @@ void bvh_sort2(inout float ta, inout uint ra, inout float tb, inout uint rb) {
     rb = swap ? r : rb;
 }
 
+// One inner node of an ordered traversal (bvh_traverse, instances_traverse): the children
+// the ray enters closer than hit.t, sorted by entry distance; the nearest becomes `node`
+// (kNone if none) and the others are pushed farthest first. Reads and writes the caller's
+// slab, node, hit, stack, stack_t, sp and kNone; on a stack about to overflow it sets
+// hit.prim = kBvhStackOverflow and returns false from the caller. A macro, not a function:
+// GLSL passes arrays by copy, and the traversal loop is the hot path.
+#define BVH_VISIT_INNER_NODE() { \
+    uvec4 child; \
+    vec4 tn = bvh_node_entry(slab, node, hit.t, child); \
+    float t0 = tn.x, t1 = tn.y, t2 = tn.z, t3 = tn.w; \
+    uint c0 = child.x, c1 = child.y, c2 = child.z, c3 = child.w; \
+    /* Sorting network for four; misses (+inf) sink to the end. */ \
+    bvh_sort2(t0, c0, t1, c1); \
+    bvh_sort2(t2, c2, t3, c3); \
+    bvh_sort2(t0, c0, t2, c2); \
+    bvh_sort2(t1, c1, t3, c3); \
+    bvh_sort2(t1, c1, t2, c2); \
+    if (sp + 3 > kBvhStackSize) { \
+        hit.prim = kBvhStackOverflow; \
+        return false; \
+    } \
+    if (t3 < kInfinity) { \
+        stack_t[sp] = t3; \
+        stack[sp++] = c3; \
+    } \
+    if (t2 < kInfinity) { \
+        stack_t[sp] = t2; \
+        stack[sp++] = c2; \
+    } \
+    if (t1 < kInfinity) { \
+        stack_t[sp] = t1; \
+        stack[sp++] = c1; \
+    } \
+    node = t0 < kInfinity ? c0 : kNone; \
+}
+
 // The traversal behind every query, from node `root` (0: the static scene; a
 // motion instance's own tree otherwise). any_hit is a constant at every call
 // site, so the compiler keeps only one variant's code in each.
@@ -190,33 +226,7 @@ bool bvh_traverse(uint root, vec3 o, vec3 d, float t_max, const bool any_hit, ou
         }
         // ... and one inner node.
         if ((node & kBvhLeafFlag) == 0u) {
-            uvec4 child;
-            vec4 tn = bvh_node_entry(slab, node, hit.t, child);
-            float t0 = tn.x, t1 = tn.y, t2 = tn.z, t3 = tn.w;
-            uint c0 = child.x, c1 = child.y, c2 = child.z, c3 = child.w;
-            // Sorting network for four; misses (+inf) sink to the end.
-            bvh_sort2(t0, c0, t1, c1);
-            bvh_sort2(t2, c2, t3, c3);
-            bvh_sort2(t0, c0, t2, c2);
-            bvh_sort2(t1, c1, t3, c3);
-            bvh_sort2(t1, c1, t2, c2);
-            if (sp + 3 > kBvhStackSize) {
-                hit.prim = kBvhStackOverflow;
-                return false;
-            }
-            if (t3 < kInfinity) {
-                stack_t[sp] = t3;
-                stack[sp++] = c3;
-            }
-            if (t2 < kInfinity) {
-                stack_t[sp] = t2;
-                stack[sp++] = c2;
-            }
-            if (t1 < kInfinity) {
-                stack_t[sp] = t1;
-                stack[sp++] = c1;
-            }
-            node = t0 < kInfinity ? c0 : kNone;
+            BVH_VISIT_INNER_NODE();
         }
         // A leaf reference takes the free leaf slot; an empty hand pops the stack
         // (one entry per iteration; one entered beyond the closest hit is dropped).
@@ -235,6 +245,21 @@ bool bvh_traverse(uint root, vec3 o, vec3 d, float t_max, const bool any_hit, ou
         }
     }
     return found;
+}
+
+// A second-level query (a motion instance's or a static instance's tree, the ray (o, d)
+// moved into its space) closer than hit.t: a closer hit replaces hit and returns true; a
+// stack overflow sets hit.prim to kBvhStackOverflow and returns false.
+bool bvh_traverse_closer(uint root, vec3 o, vec3 d, const bool any_hit, inout BvhHit hit) {
+    BvhHit h;
+    if (bvh_traverse(root, o, d, hit.t, any_hit, h)) {
+        hit = h;
+        return true;
+    }
+    if (h.prim == kBvhStackOverflow) {
+        hit.prim = kBvhStackOverflow;
+    }
+    return false;
 }
 
 // Nearest hit of the ray o + t d, t in (0, t_max), in the static scene (d need

@@ -45,32 +45,7 @@ bool instances_traverse(vec3 o, vec3 d, const bool any_hit, inout BvhHit hit, in
             continue;
         }
         if ((node & kBvhLeafFlag) == 0u) {
-            uvec4 child;
-            vec4 tn = bvh_node_entry(slab, node, hit.t, child);
-            float t0 = tn.x, t1 = tn.y, t2 = tn.z, t3 = tn.w;
-            uint c0 = child.x, c1 = child.y, c2 = child.z, c3 = child.w;
-            bvh_sort2(t0, c0, t1, c1);
-            bvh_sort2(t2, c2, t3, c3);
-            bvh_sort2(t0, c0, t2, c2);
-            bvh_sort2(t1, c1, t3, c3);
-            bvh_sort2(t1, c1, t2, c2);
-            if (sp + 3 > kBvhStackSize) {
-                hit.prim = kBvhStackOverflow;
-                return false;
-            }
-            if (t3 < kInfinity) {
-                stack_t[sp] = t3;
-                stack[sp++] = c3;
-            }
-            if (t2 < kInfinity) {
-                stack_t[sp] = t2;
-                stack[sp++] = c2;
-            }
-            if (t1 < kInfinity) {
-                stack_t[sp] = t1;
-                stack[sp++] = c1;
-            }
-            node = t0 < kInfinity ? c0 : kNone;
+            BVH_VISIT_INNER_NODE();
             continue;
         }
         // a leaf: one instance (the builder's leaves hold one)
@@ -83,16 +58,13 @@ bool instances_traverse(vec3 o, vec3 d, const bool any_hit, inout BvhHit hit, in
         vec3 oo = vec3(dot(r0.xyz, o) + r0.w, dot(r1.xyz, o) + r1.w, dot(r2.xyz, o) + r2.w);
         vec3 dd = vec3(dot(r0.xyz, d), dot(r1.xyz, d), dot(r2.xyz, d));
         uint root = floatBitsToUint(texelFetch(u_bvh_instances, base + 6).x);
-        BvhHit h;
-        if (bvh_traverse(root, oo, dd, hit.t, any_hit, h)) {
-            hit = h;
+        if (bvh_traverse_closer(root, oo, dd, any_hit, hit)) {
             inst = k;
             found = true;
             if (any_hit) {
                 return true;
             }
-        } else if (h.prim == kBvhStackOverflow) {
-            hit.prim = kBvhStackOverflow;
+        } else if (hit.prim == kBvhStackOverflow) {
             return false;
         }
     }

@@ -81,16 +81,13 @@ bool bvh_traverse_t(vec3 o, vec3 d, float t_max, float time, const bool any_hit,
         mat3 rotation, scale;
         motion_transform(k, time, translation, rotation, scale);
         mat3 object_from_world = inverse(scale) * transpose(rotation);
-        BvhHit h;
-        if (bvh_traverse(floatBitsToUint(lo.w), object_from_world * (o - translation),
-                         object_from_world * d, hit.t, any_hit, h)) {
-            hit = h;
+        if (bvh_traverse_closer(floatBitsToUint(lo.w), object_from_world * (o - translation),
+                                object_from_world * d, any_hit, hit)) {
             found = true;
             if (any_hit) {
                 return true;
             }
-        } else if (h.prim == kBvhStackOverflow) {
-            hit.prim = kBvhStackOverflow;
+        } else if (hit.prim == kBvhStackOverflow) {
             return false;
         }
     }

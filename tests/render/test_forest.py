@@ -5,6 +5,7 @@ trees nearest the camera, instanced, equal their flattened copies per 6-pixel bl
 Šidák-corrected alpha of 0.01, sigma from the seeds."""
 from __future__ import annotations
 
+import importlib.util
 import json
 import subprocess
 import sys
@@ -17,7 +18,8 @@ import glrender
 from glrender.gpu import pack
 from glrender.testing.images import compare_images
 
-SCENE = Path(__file__).resolve().parents[2] / "scenes" / "forest" / "scene.toml"
+ROOT = Path(__file__).resolve().parents[2]
+SCENE = ROOT / "scenes" / "forest" / "scene.toml"
 SEEDS_FLAT, SEEDS_INSTANCED = tuple(range(1, 5)), tuple(range(11, 15))
 NEAREST = 8
 
@@ -45,20 +47,17 @@ def test01_the_forest_renders_in_little_memory(tmp_path):
     assert np.median(low[:, 1] / low[:, 0]) > 1.5 and np.median(low[:, 1] / low[:, 2]) > 1.5
 
 
-def nearest_trees(scene, count):
-    """The scene with only the `count` trees nearest the camera."""
-    crown = next(s for s in scene.shapes if s.instances is not None)
-    eye = scene.camera.world_from_camera[:3, 3]
-    keep = np.argsort(np.linalg.norm(crown.instances[:, :3, 3] - eye, axis=1))[:count]
-    for shape in scene.shapes:
-        if shape.instances is not None:
-            shape.instances = shape.instances[keep]
-    return scene
-
-
 def renders(scene, seeds):
     return np.stack([glrender.render(scene, spp=8, seed=seed, progress=False, sampler="independent").mean
                      for seed in seeds])
+
+
+def nearest_trees(scene, count):
+    """tools/make_forest.py's nearest_trees (the forest's own generator)."""
+    spec = importlib.util.spec_from_file_location("make_forest", ROOT / "tools" / "make_forest.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.nearest_trees(scene, count)
 
 
 def test02_the_nearest_trees_equal_their_flattened_copies(gl_ctx, monkeypatch):
