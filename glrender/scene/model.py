@@ -48,13 +48,15 @@ def scale(v: ArrayLike) -> np.ndarray:
     return np.diag([v[0], v[1], v[2], 1.0])
 
 
-def rotate(axis: ArrayLike, angle_degrees: float) -> np.ndarray:
-    """Rotation about ``axis`` by ``angle_degrees`` (right-handed)."""
+def rotate(axis: ArrayLike, angle_degrees: float, normalize: bool = True) -> np.ndarray:
+    """Rotation about ``axis`` by ``angle_degrees`` (right-handed). ``normalize=False`` takes
+    the axis as given in Rodrigues' formula, as Mitsuba 3's ``rotate`` does: an axis that is
+    not a unit vector then scales and shears as well (Mitsuba XML scenes)."""
     a = np.asarray(axis, np.float64)
     n = np.linalg.norm(a)
     if n == 0:
         raise SceneError("rotate: the axis has zero length")
-    x, y, z = a / n
+    x, y, z = a / n if normalize else a
     t = math.radians(angle_degrees)
     c, s = math.cos(t), math.sin(t)
     m = np.eye(4)

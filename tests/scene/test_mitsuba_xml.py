@@ -204,3 +204,14 @@ def test12_default_bsdf_is_black_on_emitters(write):
     light, plain = (scene.materials[shape.material] for shape in scene.shapes)
     assert light.kind == "diffuse" and light.reflectance == (0.0, 0.0, 0.0)
     assert plain.kind == "diffuse" and plain.reflectance == (0.5, 0.5, 0.5)
+
+
+def test12_rotate_takes_the_axis_as_given(write):
+    """Mitsuba 3's rotate puts the axis into Rodrigues' formula unnormalised: an axis longer
+    than 1 scales and shears too (checked against Mitsuba's ScalarTransform4f.rotate)."""
+    path = write("r.xml", _scene('<shape type="sphere"><transform name="to_world">'
+                                 '<rotate x="1" y="1" angle="45"/></transform></shape>'))
+    (shape,) = glrender.load(path).shapes
+    c = s = np.sqrt(0.5)
+    expected = [[c + (1 - c), 1 - c, s], [1 - c, c + (1 - c), -s], [-s, s, c]]
+    np.testing.assert_allclose(shape.world_from_object[:3, :3], expected, atol=1e-12)

@@ -212,7 +212,9 @@ class _Reader:
                     else:
                         T = m.scale(_xyz(a, 1.0, where))
                 elif op.tag == "rotate":
-                    T = m.rotate(_xyz(a, 0.0, where), _number(a.get("angle"), where, "angle"))
+                    # as Mitsuba 3: the axis is not normalised (a longer one scales too)
+                    T = m.rotate(_xyz(a, 0.0, where), _number(a.get("angle"), where, "angle"),
+                                 normalize=False)
                 elif op.tag == "matrix":
                     values = _numbers(a.get("value", ""), where)
                     if len(values) == 9:
