@@ -230,9 +230,10 @@ def _add_render(sub) -> None:
                    help="direct-lighting strategy: light or BSDF sampling alone, or both with "
                         "the balance or power heuristic")
     g.add_argument("--light-selection", choices=LIGHT_SELECTIONS, default=None,
-                   help="how light samples choose a light: uniformly, by power, or by a light "
-                        "BVH at the shading point (path, direct, and the camera paths of sppm "
-                        "and photon; light paths choose by power; default: the scene's)")
+                   help="how light samples choose a light: auto (uniformly below 64 lights, by "
+                        "power from 64), uniformly, by power, or by a light BVH at the shading "
+                        "point (path, direct, and the camera paths of sppm and photon; light "
+                        "paths choose by power; default: the scene's, auto)")
     g.add_argument("--max-depth", type=int, default=None, metavar="N",
                    help="path segments: 1 = emitters seen directly, 2 = direct light, "
                         "-1 = unbounded, up to a cap: 256 segments, bdpt 16 (the summary line "

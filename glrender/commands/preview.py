@@ -48,8 +48,8 @@ def add_preview_parser(sub) -> None:
     g.add_argument("--strategy", choices=tuple(STRATEGIES), default=None,
                    help="first direct-lighting strategy (default: the scene's; key M switches)")
     g.add_argument("--light-selection", choices=LIGHT_SELECTIONS, default=None,
-                   help="how light samples choose a light: uniformly, by power, or by a light BVH "
-                        "(default: the scene's)")
+                   help="how light samples choose a light: auto (uniformly below 64 lights, by "
+                        "power from 64), uniformly, by power, or by a light BVH (default: the scene's)")
     g.add_argument("--max-depth", type=int, default=None, metavar="N",
                    help="first max depth: path segments, -1 unbounded up to a cap of 256, bdpt 16 "
                         "(keys [ and ] change it)")

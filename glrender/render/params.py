@@ -11,6 +11,21 @@ from ..sampling.sequences import SAMPLERS
 
 STRATEGIES = {"light": 0, "bsdf": 1, "mis-balance": 2, "mis-power": 3}
 LIGHT_SELECTION = {"uniform": 0, "power": 1, "bvh": 2}
+#: light records (an emitting mesh's triangles each) from which ``light_selection = "auto"``
+#: chooses lights by power instead of uniformly (benchmarks/light_selection.py: power selection
+#: measured 1.1-3.9x uniform's efficiency from 97 records on, 0.3-0.8x with 25 or fewer)
+AUTO_POWER_LIGHTS = 64
+
+
+def choose_light_selection(selection: str, light_count: int) -> str:
+    """The light selection a render uses: ``selection`` itself, or for ``auto`` uniform
+    below AUTO_POWER_LIGHTS light records and power from there on. The light BVH is chosen
+    only on request: it measured better than power selection on the many-lights city
+    (3.1x) but worse on open streets of 25 to 6,145 lights (0.3-0.7x), so the light count
+    alone does not tell where it wins (benchmarks/RESULTS.md, "Light selection by scene")."""
+    if selection != "auto":
+        return selection
+    return "power" if light_count >= AUTO_POWER_LIGHTS else "uniform"
 AREA_SAMPLING = {"area": 0, "solid-angle": 1}
 FILTERS = {"box": 0, "tent": 1, "gaussian": 2, "mitchell": 3}
 RR_RULES = {"throughput": 0, "fixed": 1, "off": 2}
@@ -67,6 +82,8 @@ def shader_defines(*, sampler: str = "independent", material_kinds=("diffuse",),
     rr_depth = default.rr_depth if rr_depth is None else rr_depth
     strategy = default.strategy if strategy is None else strategy
     light_selection = default.light_selection if light_selection is None else light_selection
+    # (a renderer chooses for auto from the scene's lights; a shader test has none)
+    light_selection = choose_light_selection(light_selection, 0)
     area_sampling = default.area_sampling if area_sampling is None else area_sampling
     rule, survival = parse_rr(default.rr if rr is None else rr)
     return {

@@ -36,7 +36,7 @@ from ..film import Film
 from . import strategies, wavefront
 from .accumulation import SPLAT_SCALE, Accumulation
 from .driver import part_digests
-from .params import shader_defines
+from .params import choose_light_selection, shader_defines
 
 #: RenderSettings.executor: the render kernel, or the wavefront stages (path tracer)
 EXECUTORS = ("megakernel", "wavefront")
@@ -213,6 +213,10 @@ class Renderer:
             self.device_scene = share.device_scene.acquire()
             pack = time.perf_counter() - t_pack      # about 0: the scene data is shared
         self.packed: PackedScene = self.device_scene.packed
+        integ = self.settings.integrator
+        chosen = choose_light_selection(integ.light_selection, len(self.packed.lights))
+        if chosen != integ.light_selection:
+            self.settings = replace(self.settings, integrator=replace(integ, light_selection=chosen))
         self.width, self.height = scene.film.width, scene.film.height
         s = self.settings
         self.accumulation = Accumulation(

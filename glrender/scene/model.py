@@ -442,9 +442,10 @@ class Film:
 
 INTEGRATORS = integrator_names()   # glrender/integrators.py: the one table of integrators
 STRATEGIES = ("light", "bsdf", "mis-balance", "mis-power")
-# how next-event estimation chooses a light: uniformly, by power, or by a light BVH at the
-# shading point (glrender/sampling/light_tree.py)
-LIGHT_SELECTIONS = ("uniform", "power", "bvh")
+# how next-event estimation chooses a light: by the scene's light count (auto: see
+# glrender/render/params.py choose_light_selection), uniformly, by power, or by a light BVH at
+# the shading point (glrender/sampling/light_tree.py)
+LIGHT_SELECTIONS = ("auto", "uniform", "power", "bvh")
 SPLIT_LIMIT = 16   # light samples per vertex and first-vertex branches of the path tracer
 # ... and their product: one invocation renders a whole sample with all its branches and
 # light samples, and llvmpipe stops an invocation silently after ~65,535 loop iterations of
@@ -491,7 +492,8 @@ class Integrator:
     strategy: str = "mis-power"        # direct lighting / NEE weighting
     emitter_samples: int = 1           # direct integrator only
     bsdf_samples: int = 1
-    light_selection: str = "uniform"   # uniform (as Mitsuba) | power (alias table) | bvh (light tree)
+    light_selection: str = "auto"      # auto (by light count) | uniform (as Mitsuba) | power
+                                       # (alias table) | bvh (light tree)
     area_sampling: str = "solid-angle"  # area | solid-angle (triangle/rectangle lights that look
                                         # large; small ones by area either way: lights/light.glsl)
     hide_emitters: bool = False
@@ -504,7 +506,7 @@ class Integrator:
             raise SceneError(f"integrator.strategy: expected one of {', '.join(STRATEGIES)}, "
                              f"got {self.strategy!r}")
         if self.light_selection not in LIGHT_SELECTIONS:
-            raise SceneError(f"integrator.light_selection: expected uniform, power or bvh, "
+            raise SceneError(f"integrator.light_selection: expected auto, uniform, power or bvh, "
                              f"got {self.light_selection!r}")
         if self.area_sampling not in ("area", "solid-angle"):
             raise SceneError(f"integrator.area_sampling: expected area or solid-angle, "

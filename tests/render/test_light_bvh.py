@@ -109,3 +109,23 @@ def scene():
 def test02_the_wavefront_executor_refuses_it(scene):
     with pytest.raises(UsageError, match="light BVH"):
         settings_from_scene(scene, integrator="path", light_selection="bvh", executor="wavefront")
+
+
+def test03_auto_chooses_by_the_light_count(gl_ctx):
+    """``auto`` (the default): uniform below AUTO_POWER_LIGHTS light records, power from there
+    on; the light BVH only on request."""
+    from glrender.render.params import AUTO_POWER_LIGHTS, choose_light_selection
+    from glrender.render.renderer import Renderer
+
+    assert m.Integrator().light_selection == "auto"
+    assert choose_light_selection("auto", AUTO_POWER_LIGHTS - 1) == "uniform"
+    assert choose_light_selection("auto", AUTO_POWER_LIGHTS) == "power"
+    assert all(choose_light_selection(s, 10 ** 6) == s for s in ("uniform", "power", "bvh"))
+    scene = many_lights(size=8)          # 60 emitters, 20 point and spot lights and the sky
+    few = base(8, 8)
+    few.camera = scene.camera
+    few.shapes, few.lights, few.materials = scene.shapes[:3], scene.lights[-3:], scene.materials
+    for s, want in ((scene, "power"), (few, "uniform")):
+        with Renderer(s, settings_from_scene(s, spp=1)) as r:
+            assert r.settings.integrator.light_selection == want
+            assert (len(r.packed.lights) >= AUTO_POWER_LIGHTS) == (want == "power")
