@@ -442,8 +442,13 @@ class Renderer:
             # the BVH triangles as the device reads them: the same whether packed now or
             # read from the mesh cache (gpu/mesh_cache.py), which keeps no packed soup
             device = self.device_scene
-            for arr in (device.bvh.bvh.pack()["triangles"], *device.mesh_texels):
+            packed = device.bvh.bvh.pack()
+            for arr in (packed["triangles"], *device.mesh_texels):
                 yield "geometry", np.ascontiguousarray(arr).tobytes()
+            if len(packed["instances"]) > 1:
+                # the instances' transforms (motion and static); a scene without any keeps
+                # the fingerprint it had before instances were hashed
+                yield "geometry", np.ascontiguousarray(packed["instances"]).tobytes()
         if self.packed.env_image is not None:
             yield "environment map", np.ascontiguousarray(self.packed.env_image).tobytes()
         yield "textures", self.packed.textures.fingerprint()

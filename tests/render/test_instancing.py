@@ -128,3 +128,19 @@ def test04_bad_instances_are_refused():
     scene.shapes[1].instances = np.zeros((3, 4, 4))
     with pytest.raises(glrender.errors.SceneError, match="last row"):
         pack.pack_scene(scene)
+
+
+def test05_moving_one_copy_changes_the_fingerprint(gl_ctx, monkeypatch):
+    """A checkpoint resumes only the same scene: the copies' transforms are in the
+    fingerprint (a copy moved within the scene's box leaves the triangles and texels as
+    they were)."""
+    from glrender.render.renderer import Renderer, settings_from_scene
+
+    monkeypatch.setattr(pack, "INSTANCE_MIN_TRIANGLES", 0)
+    prints = []
+    for shift in (0.0, 0.25):
+        scene = copies_scene(8)
+        scene.shapes[1].instances[3, 0, 3] += shift
+        with Renderer(scene, settings_from_scene(scene, spp=1)) as r:
+            prints.append(r.fingerprint())
+    assert prints[0] != prints[1]
