@@ -335,48 +335,62 @@ def _infinite_importance(block, k, n) -> float:
     return importance
 
 
-def _top(block, p, n) -> tuple[list[float], float]:
-    """The lights at infinity's importances and the root's at p: the first choice."""
-    n = np.asarray(n, np.float64)
-    infinite = [_infinite_importance(block, k, n) for k in range(_u(block, 1))]
-    root = float(light_tree_importance(_node(block, 0), p, n)) if _u(block, 0) else 0.0
-    return infinite, root
+def light_tree_step(block, node: np.ndarray, i: int, p, n, u: float):
+    """One level of the descent from internal node ``node`` (index i): its two children (the
+    first follows it, the second at its child index) and their importances at p; the
+    second is taken where u >= the first's share p0 (so u = -1 takes the first, 1 the
+    second). (the child taken, its index, u rescaled to [0, 1) for the levels below, the
+    step's probability; 0: both children have importance 0)."""
+    second = _u(node, 12)
+    first_node, second_node = _node(block, i + 1), _node(block, second)
+    i0 = float(light_tree_importance(first_node, p, n))
+    i1 = float(light_tree_importance(second_node, p, n))
+    if not i0 + i1 > 0:
+        return node, i, u, 0.0
+    p0 = i0 / (i0 + i1)
+    if u < p0:
+        return first_node, i + 1, min(u / p0, ONE_MINUS_EPSILON) if p0 > 0 else 0.0, p0
+    return second_node, second, min((u - p0) / (1 - p0), ONE_MINUS_EPSILON) if p0 < 1 else 0.0, 1 - p0
 
 
 def light_tree_sample(block: np.ndarray, p, n, u: float) -> tuple[int, float]:
     """The light the tree chooses at one point p (normal n) for u in [0, 1), and its
-    probability ((-1, 0.0): none, every light's importance is 0)."""
-    infinite, root = _top(block, p, n)
-    total = sum(infinite) + root
+    probability ((-1, 0.0): none, every light's importance is 0). One pass over the lights
+    at infinity and the root: each candidate replaces the one held with probability its
+    importance over the sum so far (u rescaled after each)."""
+    n = np.asarray(n, np.float64)
+    total, chosen, weight = 0.0, -1, 0.0
+    candidates = [(_u(block, HEADER + INFINITE_FLOATS * k), _infinite_importance(block, k, n))
+                  for k in range(_u(block, 1))]
+    if _u(block, 0):
+        candidates.append((None, float(light_tree_importance(_node(block, 0), p, n))))
+    for light, importance in candidates:
+        total += importance
+        if not total > 0:
+            continue
+        q = importance / total
+        if u < q:
+            chosen, weight, u = light, importance, min(u / q, ONE_MINUS_EPSILON)
+        else:
+            u = min((u - q) / (1 - q), ONE_MINUS_EPSILON)
     if not total > 0:
         return -1, 0.0
-    u_scaled = u * total
-    for k, importance in enumerate(infinite):
-        if u_scaled < importance:
-            return _u(block, HEADER + INFINITE_FLOATS * k), importance / total
-        u_scaled -= importance
-    u = min(u_scaled / root, ONE_MINUS_EPSILON)
-    pmf = root / total
-    i = 0
-    while True:
-        node = _node(block, i)
-        if _u(node, 13) & FLAG_LEAF:
-            return _u(node, 12), pmf
-        second = _u(node, 12)
-        i0 = float(light_tree_importance(_node(block, i + 1), p, n))
-        i1 = float(light_tree_importance(_node(block, second), p, n))
-        if not i0 + i1 > 0:
+    if chosen is not None:
+        return chosen, weight / total
+    pmf, node, i = weight / total, _node(block, 0), 0
+    while not _u(node, 13) & FLAG_LEAF:
+        node, i, u, step = light_tree_step(block, node, i, p, n, u)
+        if not step > 0:
             return -1, 0.0
-        p0 = i0 / (i0 + i1)
-        if u < p0:
-            i, u, pmf = i + 1, min(u / p0, ONE_MINUS_EPSILON), pmf * p0
-        else:
-            i, u, pmf = second, min((u - p0) / (1 - p0), ONE_MINUS_EPSILON), pmf * (1 - p0)
+        pmf *= step
+    return _u(node, 12), pmf
 
 
 def light_tree_pmf(block: np.ndarray, p, n, light: int, infinite: bool) -> float:
     """The probability that light_tree_sample chooses ``light`` at p (normal n)."""
-    importances, root = _top(block, p, n)
+    n = np.asarray(n, np.float64)
+    importances = [_infinite_importance(block, k, n) for k in range(_u(block, 1))]
+    root = float(light_tree_importance(_node(block, 0), p, n)) if _u(block, 0) else 0.0
     total = sum(importances) + root
     if not total > 0:
         return 0.0
@@ -389,16 +403,11 @@ def light_tree_pmf(block: np.ndarray, p, n, light: int, infinite: bool) -> float
     leaf, trail = _u(block, at) - 1, _u(block, at + 1)
     if leaf < 0 or not root > 0:
         return 0.0
-    pmf = root / total
-    i = 0
+    pmf, node, i = root / total, _node(block, 0), 0
     while i != leaf:
-        node = _node(block, i)
-        second = _u(node, 12)
-        i0 = float(light_tree_importance(_node(block, i + 1), p, n))
-        i1 = float(light_tree_importance(_node(block, second), p, n))
-        if not i0 + i1 > 0:
+        node, i, _, step = light_tree_step(block, node, i, p, n, 1.0 if trail & 1 else -1.0)
+        if not step > 0:
             return 0.0
-        pmf *= (i1 if trail & 1 else i0) / (i0 + i1)
-        i = second if trail & 1 else i + 1
+        pmf *= step
         trail >>= 1
     return pmf

@@ -102,57 +102,62 @@ float light_tree_infinite_importance(uint tree, uint k, vec3 n) {
     return importance;
 }
 
-// The first choice at p: the sum of the lights at infinity's importances and the root's.
-float light_tree_top(uint tree, vec3 p, vec3 n, out float root) {
-    uint n_inf = distribution_fetch_uint(tree + 1u);
-    float infinite = 0.0;
-    for (uint k = 0u; k < n_inf; ++k) infinite += light_tree_infinite_importance(tree, k, n);
-    root = distribution_fetch_uint(tree) > 0u ? light_tree_importance(light_tree_node(light_tree_nodes(tree), 0u), p, n) : 0.0;
-    return infinite;
+// One level of the descent from internal node nd (index i): its two children, the first
+// following nd and the second at nd.child, weighed by their importance at p; the second is
+// taken where u >= the first's share p0 (so u = -1 takes the first, 1 the second). nd and i
+// become the child taken and u is rescaled to [0, 1) for the levels below. Returns the
+// step's probability (0: both children have importance 0, a dead end).
+float light_tree_step(uint nodes, inout LightTreeNode nd, inout uint i, inout float u, vec3 p, vec3 n) {
+    LightTreeNode first = light_tree_node(nodes, i + 1u);
+    LightTreeNode second = light_tree_node(nodes, nd.child);
+    float i0 = light_tree_importance(first, p, n);
+    float i1 = light_tree_importance(second, p, n);
+    if (!(i0 + i1 > 0.0)) return 0.0;
+    float p0 = i0 / (i0 + i1);
+    bool take_second = u >= p0;
+    i = take_second ? nd.child : i + 1u;
+    nd = take_second ? second : first;
+    u = min(take_second ? (u - p0) / (1.0 - p0) : u / p0, kOneMinusEpsilon);
+    return take_second ? 1.0 - p0 : p0;
 }
 
 // The light chosen at p (normal n) for u in [0, 1) and its probability (0: none, no light
-// can reach p).
+// can reach p). One pass over the lights at infinity and the root: each candidate replaces
+// the one held with probability its importance over the sum so far (u rescaled after each).
 LightChoice light_tree_sample(uint tree, vec3 p, vec3 n, float u) {
-    float root;
-    float infinite = light_tree_top(tree, p, n, root);
-    float total = infinite + root;
-    if (!(total > 0.0)) return LightChoice(0u, 0.0);
-    float u_scaled = u * total;
-    if (u_scaled < infinite) {
-        uint n_inf = distribution_fetch_uint(tree + 1u);
-        for (uint k = 0u; k < n_inf; ++k) {
-            float importance = light_tree_infinite_importance(tree, k, n);
-            if (u_scaled < importance || k + 1u == n_inf)
-                return LightChoice(distribution_fetch_uint(tree + kLightTreeHeader + kLightTreeInfiniteFloats * k),
-                                   importance / total);
-            u_scaled -= importance;
+    uint n_inf = distribution_fetch_uint(tree + 1u);
+    bool has_root = distribution_fetch_uint(tree) > 0u;
+    uint nodes = light_tree_nodes(tree);
+    LightTreeNode nd;
+    if (has_root) nd = light_tree_node(nodes, 0u);
+    float total = 0.0;
+    float weight = 0.0;
+    uint chosen = n_inf;         // n_inf: the root
+    for (uint k = 0u; k <= n_inf; ++k) {
+        float importance = k < n_inf ? light_tree_infinite_importance(tree, k, n)
+                                     : (has_root ? light_tree_importance(nd, p, n) : 0.0);
+        total += importance;
+        if (!(total > 0.0)) continue;
+        float q = importance / total;
+        if (u < q) {
+            chosen = k;
+            weight = importance;
+            u = min(u / q, kOneMinusEpsilon);
+        } else {
+            u = min((u - q) / (1.0 - q), kOneMinusEpsilon);
         }
     }
-    u = min((u_scaled - infinite) / root, kOneMinusEpsilon);
-    float pmf = root / total;
+    if (!(total > 0.0)) return LightChoice(0u, 0.0);
+    if (chosen < n_inf)
+        return LightChoice(distribution_fetch_uint(tree + kLightTreeHeader + kLightTreeInfiniteFloats * chosen),
+                           weight / total);
+    float pmf = weight / total;
     uint i = 0u;
-    uint nodes = light_tree_nodes(tree);
-    LightTreeNode nd = light_tree_node(nodes, 0u);
     for (int depth = 0; depth <= kLightTreeMaxDepth; ++depth) {
         if ((nd.flags & kLightTreeLeaf) != 0u) return LightChoice(nd.child, pmf);
-        LightTreeNode first = light_tree_node(nodes, i + 1u);
-        LightTreeNode second = light_tree_node(nodes, nd.child);
-        float i0 = light_tree_importance(first, p, n);
-        float i1 = light_tree_importance(second, p, n);
-        if (!(i0 + i1 > 0.0)) break;
-        float p0 = i0 / (i0 + i1);
-        if (u < p0) {
-            i += 1u;
-            nd = first;
-            u = min(u / p0, kOneMinusEpsilon);
-            pmf *= p0;
-        } else {
-            i = nd.child;
-            nd = second;
-            u = min((u - p0) / (1.0 - p0), kOneMinusEpsilon);
-            pmf *= 1.0 - p0;
-        }
+        float step = light_tree_step(nodes, nd, i, u, p, n);
+        if (!(step > 0.0)) break;
+        pmf *= step;
     }
     return LightChoice(0u, 0.0);
 }
@@ -160,17 +165,26 @@ LightChoice light_tree_sample(uint tree, vec3 p, vec3 n, float u) {
 // The probability that light_tree_sample chooses light `light` at p (normal n); `infinite`:
 // the light is at infinity (outside the tree).
 float light_tree_pmf(uint tree, vec3 p, vec3 n, uint light, bool infinite) {
-    float root;
-    float total = light_tree_top(tree, p, n, root);
+    uint n_inf = distribution_fetch_uint(tree + 1u);
+    float total = 0.0;
+    float mine = 0.0;
+    for (uint k = 0u; k < n_inf; ++k) {
+        float importance = light_tree_infinite_importance(tree, k, n);
+        total += importance;
+        if (infinite && distribution_fetch_uint(tree + kLightTreeHeader + kLightTreeInfiniteFloats * k) == light)
+            mine = importance;
+    }
+    bool has_root = distribution_fetch_uint(tree) > 0u;
+    uint nodes = light_tree_nodes(tree);
+    LightTreeNode nd;
+    float root = 0.0;
+    if (has_root) {
+        nd = light_tree_node(nodes, 0u);
+        root = light_tree_importance(nd, p, n);
+    }
     total += root;
     if (!(total > 0.0)) return 0.0;
-    if (infinite) {
-        uint n_inf = distribution_fetch_uint(tree + 1u);
-        for (uint k = 0u; k < n_inf; ++k)
-            if (distribution_fetch_uint(tree + kLightTreeHeader + kLightTreeInfiniteFloats * k) == light)
-                return light_tree_infinite_importance(tree, k, n) / total;
-        return 0.0;
-    }
+    if (infinite) return mine / total;
     uint at = distribution_fetch_uint(tree + 3u) + 2u * light;
     uint leaf = distribution_fetch_uint(tree + at);
     uint trail = distribution_fetch_uint(tree + at + 1u);
@@ -178,18 +192,11 @@ float light_tree_pmf(uint tree, vec3 p, vec3 n, uint light, bool infinite) {
     leaf -= 1u;
     float pmf = root / total;
     uint i = 0u;
-    uint nodes = light_tree_nodes(tree);
-    LightTreeNode nd = light_tree_node(nodes, 0u);
     for (int depth = 0; depth < kLightTreeMaxDepth && i != leaf; ++depth) {
-        LightTreeNode first = light_tree_node(nodes, i + 1u);
-        LightTreeNode second = light_tree_node(nodes, nd.child);
-        float i0 = light_tree_importance(first, p, n);
-        float i1 = light_tree_importance(second, p, n);
-        if (!(i0 + i1 > 0.0)) return 0.0;
-        bool take_second = (trail & 1u) != 0u;
-        pmf *= (take_second ? i1 : i0) / (i0 + i1);
-        i = take_second ? nd.child : i + 1u;
-        nd = take_second ? second : first;
+        float u = (trail & 1u) != 0u ? 1.0 : -1.0;
+        float step = light_tree_step(nodes, nd, i, u, p, n);
+        if (!(step > 0.0)) return 0.0;
+        pmf *= step;
         trail >>= 1u;
     }
     return pmf;
