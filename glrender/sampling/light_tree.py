@@ -46,15 +46,30 @@ Packed format (one block of glrender.sampling.distributions' float32 array; *uin
 entries are bit-exact):
 
     [0] nodes (uint), [1] n_inf (uint), [2] 0, [3] trails (uint: the per-light table's
-    offset in the block); then per light at infinity 8 elements: its light index (uint),
+    offset in the block), [4:7] the root's box's lo xyz (float32, rounded outward), 0,
+    [8:11] its hi xyz, 0; then per light at infinity 8 elements: its light index (uint),
     its importance scale, 1 (uint) for a directional light (times |cos| to n), 0, its
-    direction xyz, 0; then the nodes, 16 elements each (depth first: a node's first child
-    follows it): the box's centre xyz, phi; its half extent xyz (rounded outward),
-    cos(theta_o); w xyz, cos(theta_e); the second child's node index or the leaf's light
-    index (uint), flags (uint: 1 leaf, 2 two-sided), sin(theta_o), the box's half
-    diagonal;
+    direction xyz, 0; then the nodes, 8 elements (32 bytes) each, the root first and a
+    node's two children adjacent (a level of the descent reads one 64-byte run):
+    [0] phi; [1] the radius of a sphere about the decoded box's centre holding the decoded
+    box (float32, rounded up); [2] the cone's axis w, octahedral (uint: x in the low 16
+    bits, y in the high 16, pbrt-v4's OctahedralVector); [3] (uint) cos(theta_o) in bits
+    0-14, cos(theta_e) in bits 15-29 (each 15-bit steps over [-1, 1]), bit 30 two-sided,
+    bit 31 leaf; [4] the first child's node index or the leaf's light index (uint);
+    [5:8] the box (uint, six 16-bit steps, low halves first: lo x, lo y, lo z, hi x, hi y,
+    hi z): lo = parent lo + q (parent hi - parent lo) / 65535, hi = parent hi - q (...)
+    within the parent's decoded box (the header's box for the root), as pbrt-v4's
+    CompactLightBounds quantises within the scene's;
     then per light: its leaf's node index + 1 (uint, 0: not in the tree) and its bit trail
     (uint: bit k is 1 where the descent takes the second child at depth k).
+
+The quantisation rounds outward, so that each decoded node still bounds its lights and the
+importance stays an upper bound: box steps round toward the parent's sides (with a margin
+of two float32 steps of the parent's coordinates for the shader's rounding); the cosines
+round down (the cones widen: by up to 2/32767 in cos theta, about 0.6 degrees for a
+single planar light's cone of 0); the cone's half angle grows by the angle between its
+axis and the decoded axis (at most about 1e-4 radians) and 1e-6. The probabilities are
+those of the decoded tree: up to these roundings, the unquantised tree's.
 
 The GLSL sampler is ``shaders/lights/light_tree.glsl``; the functions here named like its
 functions are its numpy twins, reading the same packed block.
@@ -71,9 +86,9 @@ from ._array import ONE_MINUS_EPSILON
 BUCKETS = 12
 SMALL = 16            # nodes of at most this many lights split at the median of their widest axis
 MAX_DEPTH = 32        # the bit trail's width: deeper subtrees are split by count
-HEADER = 4
+HEADER = 12           # counts, then the root's box (float32 lo xyz, 0, hi xyz, 0)
 INFINITE_FLOATS = 8
-NODE_FLOATS = 16
+NODE_FLOATS = 8       # 32 bytes: CompactLightBounds-style quantised nodes
 CLAMP = 0.25          # d^2 >= (CLAMP |diagonal|)^2
 FLAG_LEAF = 1
 FLAG_TWO_SIDED = 2
@@ -148,33 +163,143 @@ def _prefix_cones(w, cos_o, phi, bucket, nb) -> tuple[np.ndarray, np.ndarray]:
     return cosines[:, 0], cosines[:, 1]
 
 
+# ---- quantised nodes ----------------------------------------------------------------------
+BOX_STEPS = 65535     # a box coordinate: 16 bits within the parent's decoded box
+COS_STEPS = 32767     # cos(theta_o), cos(theta_e): 15 bits over [-1, 1]
+OCT_STEPS = 65535     # each octahedral coordinate of the cone's axis: 16 bits over [-1, 1]
+WORD_TWO_SIDED = 1 << 30
+WORD_LEAF = 1 << 31
+CONE_MARGIN = 1e-6    # radians the cone widens beyond the axis's encoding error (float32 decode)
+
+
+def decode_box(q_lo, q_hi, p_lo, p_hi) -> tuple[np.ndarray, np.ndarray]:
+    """The box of quantised steps q_lo (up from the parent box's lo) and q_hi (down from its
+    hi) within the parent's decoded box p_lo, p_hi, in float32 as the shader decodes it."""
+    p_lo, p_hi = np.asarray(p_lo, np.float32), np.asarray(p_hi, np.float32)
+    s = (p_hi - p_lo) * np.float32(1.0 / BOX_STEPS)
+    return (p_lo + np.asarray(q_lo).astype(np.float32) * s,
+            p_hi - np.asarray(q_hi).astype(np.float32) * s)
+
+
+def quantise_box(lo, hi, p_lo, p_hi):
+    """Boxes lo, hi (m, 3) inside the decoded parent boxes p_lo, p_hi (float32): the steps
+    (uint32) and the decoded boxes, rounded outward (the decoded box holds the box, with a
+    margin of two float32 steps of the parent's coordinates for the shader's rounding)."""
+    p_lo, p_hi = np.asarray(p_lo, np.float32), np.asarray(p_hi, np.float32)
+    ext = (p_hi.astype(np.float64) - p_lo)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t_lo = np.where(ext > 0, (lo - p_lo.astype(np.float64)) / ext * BOX_STEPS, 0.0)
+        t_hi = np.where(ext > 0, (p_hi.astype(np.float64) - hi) / ext * BOX_STEPS, 0.0)
+    q_lo = np.clip(np.floor(t_lo), 0, BOX_STEPS).astype(np.int64)
+    q_hi = np.clip(np.floor(t_hi), 0, BOX_STEPS).astype(np.int64)
+    margin = 2 * np.spacing(np.maximum(np.abs(p_lo), np.abs(p_hi))).astype(np.float64)
+    for _ in range(4):
+        d_lo, d_hi = decode_box(q_lo, q_hi, p_lo, p_hi)
+        bad_lo = (q_lo > 0) & (d_lo.astype(np.float64) + margin > lo)
+        bad_hi = (q_hi > 0) & (d_hi.astype(np.float64) - margin < hi)
+        if not (bad_lo.any() or bad_hi.any()):
+            break
+        q_lo -= bad_lo
+        q_hi -= bad_hi
+    else:   # still too close after 4 steps (a box of steps below float32's): the parent's side
+        q_lo[bad_lo] = 0
+        q_hi[bad_hi] = 0
+    d_lo, d_hi = decode_box(q_lo, q_hi, p_lo, p_hi)
+    return q_lo.astype(np.uint32), q_hi.astype(np.uint32), d_lo, d_hi
+
+
+def half_diagonal(lo, hi) -> np.ndarray:
+    """The radius (float32, rounded up) of a sphere about the decoded box's centre, as the
+    shader computes it (0.5 (lo + hi) in float32), that holds the box."""
+    lo, hi = np.asarray(lo, np.float32), np.asarray(hi, np.float32)
+    centre = np.float32(0.5) * (lo + hi)
+    reach = np.maximum(hi.astype(np.float64) - centre, centre.astype(np.float64) - lo)
+    radius = np.linalg.norm(reach, axis=-1) * (1 + 2.0 ** -20)
+    return np.nextafter(radius.astype(np.float32), np.float32(np.inf))
+
+
+def decode_octahedral(bits) -> np.ndarray:
+    """Unit vectors (float32, as the shader decodes them) of octahedral words: x in the
+    low 16 bits, y in the high 16 (pbrt-v4's OctahedralVector)."""
+    bits = np.asarray(bits, np.uint32)
+    x = (bits & 0xFFFF).astype(np.float32) * np.float32(2.0 / OCT_STEPS) - np.float32(1)
+    y = (bits >> 16).astype(np.float32) * np.float32(2.0 / OCT_STEPS) - np.float32(1)
+    z = np.float32(1) - np.abs(x) - np.abs(y)
+    fold = z < 0
+    fx = np.where(fold, (np.float32(1) - np.abs(y)) * np.where(x >= 0, 1, -1).astype(np.float32), x)
+    fy = np.where(fold, (np.float32(1) - np.abs(x)) * np.where(y >= 0, 1, -1).astype(np.float32), y)
+    v = np.stack([fx, fy, z], axis=-1).astype(np.float32)
+    return (v / np.linalg.norm(v.astype(np.float64), axis=-1, keepdims=True)).astype(np.float32)
+
+
+def encode_octahedral(w) -> tuple[np.ndarray, np.ndarray]:
+    """Unit vectors w (m, 3) as octahedral words (uint32) and the vectors they decode to."""
+    w = np.asarray(w, np.float64)
+    v = w / np.maximum(np.abs(w).sum(axis=-1, keepdims=True), 1e-300)
+    fold = v[:, 2] < 0
+    sx = np.where(v[:, 0] >= 0, 1.0, -1.0)
+    sy = np.where(v[:, 1] >= 0, 1.0, -1.0)
+    x = np.where(fold, (1 - np.abs(v[:, 1])) * sx, v[:, 0])
+    y = np.where(fold, (1 - np.abs(v[:, 0])) * sy, v[:, 1])
+    enc = lambda f: np.round(np.clip((f + 1) / 2, 0, 1) * OCT_STEPS).astype(np.uint32)
+    bits = enc(x) | (enc(y) << 16)
+    return bits, decode_octahedral(bits)
+
+
+def widen_cone(cos_o, w, w_decoded) -> np.ndarray:
+    """cos(theta_o) of cones about the decoded axes that hold the cones (w, theta_o):
+    theta_o grows by the angle between w and its decoded axis (and CONE_MARGIN)."""
+    w = np.asarray(w, np.float64)
+    wd = np.asarray(w_decoded, np.float64)
+    error = np.arctan2(np.linalg.norm(np.cross(w, wd), axis=-1), (w * wd).sum(axis=-1))
+    theta = np.arccos(np.clip(cos_o, -1.0, 1.0)) + error + CONE_MARGIN
+    return np.where((np.asarray(cos_o) <= -1.0) | (theta >= math.pi), -1.0, np.cos(np.minimum(theta, math.pi)))
+
+
+def decode_cos(q) -> np.ndarray:
+    """Cosines (float32, as the shader decodes them) of 15-bit steps."""
+    return np.asarray(q).astype(np.float32) * np.float32(2.0 / COS_STEPS) - np.float32(1)
+
+
+def quantise_cos(c) -> np.ndarray:
+    """Cosines in [-1, 1] as 15-bit steps (uint32) rounded down: the decoded angle is at
+    least the angle (a cone widens), with a margin of two float32 steps for the shader's
+    rounding."""
+    c = np.asarray(c, np.float64)
+    q = np.clip(np.floor((c + 1) / 2 * COS_STEPS), 0, COS_STEPS).astype(np.int64)
+    q -= (q > 0) & (decode_cos(q).astype(np.float64) > c - 2.0 ** -22)
+    return q.astype(np.uint32)
+
+
 class _Builder:
+    """Builds the tree top-down into node slots allocated a pair at a time (a node's two
+    children adjacent): per slot its box, intensity, cone, flags and child (or light)."""
+
     def __init__(self, b: LightBounds, lights: np.ndarray) -> None:
         self.b = b
         self.lights = lights
-        self.nodes: list[np.ndarray] = []
+        size = max(2 * len(b.phi) - 1, 1)
+        self.lo = np.zeros((size, 3))
+        self.hi = np.zeros((size, 3))
+        self.phi = np.zeros(size)
+        self.w = np.zeros((size, 3))
+        self.cos_o = np.zeros(size)
+        self.cos_e = np.zeros(size)
+        self.flags = np.zeros(size, np.uint32)
+        self.child = np.zeros(size, np.uint32)
+        self.parent = np.full(size, -1, np.int64)
+        self.depth = np.zeros(size, np.int64)
+        self.used = 1                      # slot 0: the root
         self.trail = np.zeros(len(b.phi), np.uint64)
         self.leaf = np.zeros(len(b.phi), np.uint32)
 
-    def node(self, idx: np.ndarray) -> np.ndarray:
+    def node(self, idx: np.ndarray, slot: int) -> None:
         b = self.b
-        rec = np.zeros(NODE_FLOATS, np.float32)
-        lo, hi = b.lo[idx].min(axis=0), b.hi[idx].max(axis=0)
-        # the box as centre and half extent, rounded outward in float32
-        centre = (0.5 * (lo + hi)).astype(np.float32)
-        extent = np.maximum(hi - centre, centre - lo).astype(np.float32)
-        extent = np.nextafter(extent, np.float32(np.inf))
-        rec[0:3] = centre
-        rec[3] = b.phi[idx].sum()
-        rec[4:7] = extent
-        axis, cos_o = _cone(b.w[idx], b.cos_o[idx], b.phi[idx])
-        rec[7] = cos_o
-        rec[8:11] = axis
-        rec[11] = b.cos_e[idx].min()
-        rec[13] = _uints([FLAG_TWO_SIDED if b.two_sided[idx].any() else 0])[0]
-        rec[14] = math.sqrt(max(1.0 - float(np.float32(cos_o)) ** 2, 0.0))
-        rec[15] = np.linalg.norm(extent.astype(np.float64))
-        return rec
+        self.lo[slot], self.hi[slot] = b.lo[idx].min(axis=0), b.hi[idx].max(axis=0)
+        self.phi[slot] = b.phi[idx].sum()
+        self.w[slot], self.cos_o[slot] = _cone(b.w[idx], b.cos_o[idx], b.phi[idx])
+        self.cos_e[slot] = b.cos_e[idx].min()
+        self.flags[slot] = FLAG_TWO_SIDED if b.two_sided[idx].any() else 0
 
     def split(self, idx: np.ndarray, depth: int) -> tuple[np.ndarray, np.ndarray]:
         b = self.b
@@ -234,22 +359,64 @@ class _Builder:
         bucket = np.minimum((t * BUCKETS).astype(np.int64), BUCKETS - 1)
         return idx[bucket <= k], idx[bucket > k]
 
-    def build(self, idx: np.ndarray, depth: int, trail: int) -> int:
-        at = len(self.nodes)
-        rec = self.node(idx)
-        self.nodes.append(rec)
+    def build(self, idx: np.ndarray, depth: int, trail: int, slot: int) -> None:
+        self.node(idx, slot)
+        self.depth[slot] = depth
         if len(idx) == 1:
             light = int(self.lights[idx[0]])
-            rec[12] = _uints([light])[0]
-            rec[13] = _uints([np.float32(rec[13]).view(np.uint32) | FLAG_LEAF])[0]
-            self.leaf[light] = at + 1
+            self.child[slot] = light
+            self.flags[slot] |= FLAG_LEAF
+            self.leaf[light] = slot + 1
             self.trail[light] = trail
-            return at
+            return
         first, second = self.split(idx, depth)
-        self.build(first, depth + 1, trail)
-        child = self.build(second, depth + 1, trail | (1 << depth))
-        rec[12] = _uints([child])[0]
-        return at
+        pair = self.used
+        self.used += 2
+        self.child[slot] = pair
+        self.parent[pair:pair + 2] = slot
+        self.build(first, depth + 1, trail, pair)
+        self.build(second, depth + 1, trail | (1 << depth), pair + 1)
+
+    def encode(self) -> tuple[np.ndarray, np.ndarray]:
+        """The packed nodes (NODE_FLOATS each) and the root's box (float32 lo, hi): each
+        node's box quantised within its parent's decoded box, a level at a time."""
+        count = self.used
+        words = np.zeros((count, NODE_FLOATS), np.uint32)
+        lo, hi = self.lo[:count], self.hi[:count]
+        # the root's box in float32, rounded outward: the frame of the root's quantised box
+        root_lo = np.nextafter(lo[0].astype(np.float32), np.float32(-np.inf))
+        root_hi = np.nextafter(hi[0].astype(np.float32), np.float32(np.inf))
+        dec_lo = np.zeros((count, 3), np.float32)
+        dec_hi = np.zeros((count, 3), np.float32)
+        depth = self.depth[:count]
+        for level in range(int(depth.max()) + 1):
+            at = np.flatnonzero(depth == level)
+            parent = self.parent[at]
+            p_lo = np.where(parent[:, None] < 0, root_lo, dec_lo[np.maximum(parent, 0)])
+            p_hi = np.where(parent[:, None] < 0, root_hi, dec_hi[np.maximum(parent, 0)])
+            q_lo, q_hi, dec_lo[at], dec_hi[at] = quantise_box(lo[at], hi[at], p_lo, p_hi)
+            words[at, 5] = q_lo[:, 0] | (q_lo[:, 1] << 16)
+            words[at, 6] = q_lo[:, 2] | (q_hi[:, 0] << 16)
+            words[at, 7] = q_hi[:, 1] | (q_hi[:, 2] << 16)
+        words[:, 1] = np.float32(half_diagonal(dec_lo, dec_hi)).view(np.uint32)
+        words[:, 0] = self.phi[:count].astype(np.float32).view(np.uint32)
+        oct_bits, w_decoded = encode_octahedral(self.w[:count])
+        words[:, 2] = oct_bits
+        cos_o = widen_cone(self.cos_o[:count], self.w[:count], w_decoded)
+        words[:, 3] = (quantise_cos(cos_o) | (quantise_cos(self.cos_e[:count]) << 15) |
+                       np.where(self.flags[:count] & FLAG_TWO_SIDED, WORD_TWO_SIDED, 0).astype(np.uint32) |
+                       np.where(self.flags[:count] & FLAG_LEAF, WORD_LEAF, 0).astype(np.uint32))
+        words[:, 4] = self.child[:count]
+        return words.view(np.float32), np.stack([root_lo, root_hi])
+
+
+def _build(bounds: LightBounds) -> _Builder:
+    """The tree over ``bounds``'s finite lights with phi > 0, unquantised."""
+    builder = _Builder(bounds, np.arange(len(bounds.phi)))
+    finite = np.flatnonzero(~bounds.infinite & (bounds.phi > 0))
+    if len(finite):
+        builder.build(finite, 0, 0, 0)
+    return builder
 
 
 def light_tree_table(bounds: LightBounds) -> np.ndarray:
@@ -258,10 +425,13 @@ def light_tree_table(bounds: LightBounds) -> np.ndarray:
     n = len(bounds.phi)
     infinite = np.flatnonzero(bounds.infinite)
     finite = np.flatnonzero(~bounds.infinite & (bounds.phi > 0))
-    builder = _Builder(bounds, np.arange(n))
+    builder = _build(bounds)
+    header = np.zeros(HEADER, np.float32)
     if len(finite):
-        builder.build(finite, 0, 0)
-    nodes = np.array(builder.nodes, np.float32).reshape(-1, NODE_FLOATS)
+        nodes, root_box = builder.encode()
+        header[4:7], header[8:11] = root_box
+    else:
+        nodes = np.zeros((0, NODE_FLOATS), np.float32)
     n_inf = len(infinite)
     inf_block = np.zeros((n_inf, INFINITE_FLOATS), np.float32)
     inf_block[:, 0] = _uints(infinite)
@@ -269,7 +439,6 @@ def light_tree_table(bounds: LightBounds) -> np.ndarray:
     inf_block[:, 2] = _uints((bounds.cos_o[infinite] == 1.0).astype(np.uint32))
     inf_block[:, 4:7] = bounds.w[infinite]
     trails_at = HEADER + inf_block.size + nodes.size
-    header = np.zeros(HEADER, np.float32)
     header[[0, 1, 3]] = _uints([len(nodes), n_inf, trails_at])
     per_light = np.zeros((n, 2), np.float32)
     per_light[:, 0] = _uints(builder.leaf)
@@ -282,6 +451,41 @@ def _u(block, i) -> int:
     return int(np.asarray(block[i], np.float32).view(np.uint32))
 
 
+@dataclass
+class LightTreeNode:
+    """A decoded node (float32 values, as the shader decodes them)."""
+    lo: np.ndarray
+    hi: np.ndarray
+    phi: float
+    half_diag: float
+    w: np.ndarray
+    cos_o: float
+    cos_e: float
+    two_sided: bool
+    leaf: bool
+    child: int
+
+
+def _decode(block, i: int, p_lo, p_hi) -> LightTreeNode:
+    """Node i of the block, its box within the decoded parent box p_lo, p_hi."""
+    at = HEADER + INFINITE_FLOATS * _u(block, 1) + NODE_FLOATS * i
+    w = np.asarray(block[at:at + NODE_FLOATS], np.float32).view(np.uint32)
+    q_lo = np.array([w[5] & 0xFFFF, w[5] >> 16, w[6] & 0xFFFF])
+    q_hi = np.array([w[6] >> 16, w[7] & 0xFFFF, w[7] >> 16])
+    lo, hi = decode_box(q_lo, q_hi, p_lo, p_hi)
+    return LightTreeNode(lo=lo, hi=hi, phi=float(w[0:1].view(np.float32)[0]),
+                         half_diag=float(w[1:2].view(np.float32)[0]), w=decode_octahedral(w[2]),
+                         cos_o=float(decode_cos(w[3] & 0x7FFF)), cos_e=float(decode_cos((w[3] >> 15) & 0x7FFF)),
+                         two_sided=bool(w[3] & WORD_TWO_SIDED), leaf=bool(w[3] & WORD_LEAF), child=int(w[4]))
+
+
+def light_tree_root(block) -> LightTreeNode:
+    """The tree's root, decoded within the header's box."""
+    lo = np.asarray(block[4:7], np.float32)
+    hi = np.asarray(block[8:11], np.float32)
+    return _decode(block, 0, lo, hi)
+
+
 def _cos_sub_clamped(sin_a, cos_a, sin_b, cos_b):
     return np.where(cos_a > cos_b, 1.0, cos_a * cos_b + sin_a * sin_b)
 
@@ -290,15 +494,16 @@ def _sin_sub_clamped(sin_a, cos_a, sin_b, cos_b):
     return np.where(cos_a > cos_b, 0.0, sin_a * cos_b - cos_a * sin_b)
 
 
-def light_tree_importance(node: np.ndarray, p, n) -> np.ndarray:
-    """Importance of the node record ``node`` (16 floats) at points p (..., 3) with normals
-    n (..., 3; 0: a point in a medium, no cosine there)."""
+def light_tree_importance(node: LightTreeNode, p, n) -> np.ndarray:
+    """Importance of the decoded node at points p (..., 3) with normals n (..., 3; 0: a
+    point in a medium, no cosine there)."""
     p = np.asarray(p, np.float64)
     n = np.asarray(n, np.float64)
-    pc, extent = node[0:3].astype(np.float64), node[4:7].astype(np.float64)
-    phi, cos_o, w, cos_e = float(node[3]), float(node[7]), node[8:11].astype(np.float64), float(node[11])
-    two_sided = (_u(node, 13) & FLAG_TWO_SIDED) != 0
-    sin_o, half_diag = float(node[14]), float(node[15])
+    pc = (np.float32(0.5) * (node.lo + node.hi)).astype(np.float64)
+    extent = (np.float32(0.5) * (node.hi - node.lo)).astype(np.float64)
+    phi, cos_o, w, cos_e = node.phi, node.cos_o, node.w.astype(np.float64), node.cos_e
+    sin_o = math.sqrt(max(1.0 - cos_o * cos_o, 0.0))
+    half_diag = node.half_diag
     v = p - pc
     dc2 = (v * v).sum(axis=-1)
     d2 = np.maximum(np.maximum(dc2, (2 * CLAMP * half_diag) ** 2), MIN_DISTANCE2)
@@ -306,7 +511,7 @@ def light_tree_importance(node: np.ndarray, p, n) -> np.ndarray:
     with np.errstate(invalid="ignore", divide="ignore"):
         wi = v / np.sqrt(np.maximum(dc2, 1e-300))[..., None]
         cos_w = wi @ w
-        if two_sided:
+        if node.two_sided:
             cos_w = np.abs(cos_w)
         sin_w = np.sqrt(np.maximum(1 - cos_w * cos_w, 0.0))
         sin_b = np.minimum(half_diag / np.sqrt(np.maximum(dc2, 1e-300)), 1.0)
@@ -322,11 +527,6 @@ def light_tree_importance(node: np.ndarray, p, n) -> np.ndarray:
     return np.where(inside, phi / d2, np.maximum(imp, 0.0))
 
 
-def _node(block, i) -> np.ndarray:
-    at = HEADER + INFINITE_FLOATS * _u(block, 1) + NODE_FLOATS * i
-    return np.asarray(block[at:at + NODE_FLOATS], np.float32)
-
-
 def _infinite_importance(block, k, n) -> float:
     at = HEADER + INFINITE_FLOATS * k
     importance = float(block[at + 1])
@@ -335,22 +535,21 @@ def _infinite_importance(block, k, n) -> float:
     return importance
 
 
-def light_tree_step(block, node: np.ndarray, i: int, p, n, u: float):
-    """One level of the descent from internal node ``node`` (index i): its two children (the
-    first follows it, the second at its child index) and their importances at p; the
-    second is taken where u >= the first's share p0 (so u = -1 takes the first, 1 the
-    second). (the child taken, its index, u rescaled to [0, 1) for the levels below, the
-    step's probability; 0: both children have importance 0)."""
-    second = _u(node, 12)
-    first_node, second_node = _node(block, i + 1), _node(block, second)
-    i0 = float(light_tree_importance(first_node, p, n))
-    i1 = float(light_tree_importance(second_node, p, n))
+def light_tree_step(block, node: LightTreeNode, p, n, u: float):
+    """One level of the descent from internal node ``node``: its two children (adjacent)
+    and their importances at p; the second is taken where u >= the first's share p0 (so u
+    = -1 takes the first, 1 the second). (child, its node index, u rescaled to [0, 1) for
+    the levels below, the step's probability; 0: both children have importance 0)."""
+    first = _decode(block, node.child, node.lo, node.hi)
+    second = _decode(block, node.child + 1, node.lo, node.hi)
+    i0 = float(light_tree_importance(first, p, n))
+    i1 = float(light_tree_importance(second, p, n))
     if not i0 + i1 > 0:
-        return node, i, u, 0.0
+        return node, -1, u, 0.0
     p0 = i0 / (i0 + i1)
     if u < p0:
-        return first_node, i + 1, min(u / p0, ONE_MINUS_EPSILON) if p0 > 0 else 0.0, p0
-    return second_node, second, min((u - p0) / (1 - p0), ONE_MINUS_EPSILON) if p0 < 1 else 0.0, 1 - p0
+        return first, node.child, min(u / p0, ONE_MINUS_EPSILON) if p0 > 0 else 0.0, p0
+    return second, node.child + 1, min((u - p0) / (1 - p0), ONE_MINUS_EPSILON) if p0 < 1 else 0.0, 1 - p0
 
 
 def light_tree_sample(block: np.ndarray, p, n, u: float) -> tuple[int, float]:
@@ -362,8 +561,9 @@ def light_tree_sample(block: np.ndarray, p, n, u: float) -> tuple[int, float]:
     total, chosen, weight = 0.0, -1, 0.0
     candidates = [(_u(block, HEADER + INFINITE_FLOATS * k), _infinite_importance(block, k, n))
                   for k in range(_u(block, 1))]
-    if _u(block, 0):
-        candidates.append((None, float(light_tree_importance(_node(block, 0), p, n))))
+    root = light_tree_root(block) if _u(block, 0) else None
+    if root is not None:
+        candidates.append((None, float(light_tree_importance(root, p, n))))
     for light, importance in candidates:
         total += importance
         if not total > 0:
@@ -377,21 +577,22 @@ def light_tree_sample(block: np.ndarray, p, n, u: float) -> tuple[int, float]:
         return -1, 0.0
     if chosen is not None:
         return chosen, weight / total
-    pmf, node, i = weight / total, _node(block, 0), 0
-    while not _u(node, 13) & FLAG_LEAF:
-        node, i, u, step = light_tree_step(block, node, i, p, n, u)
+    pmf, node = weight / total, root
+    while not node.leaf:
+        node, _, u, step = light_tree_step(block, node, p, n, u)
         if not step > 0:
             return -1, 0.0
         pmf *= step
-    return _u(node, 12), pmf
+    return node.child, pmf
 
 
 def light_tree_pmf(block: np.ndarray, p, n, light: int, infinite: bool) -> float:
     """The probability that light_tree_sample chooses ``light`` at p (normal n)."""
     n = np.asarray(n, np.float64)
     importances = [_infinite_importance(block, k, n) for k in range(_u(block, 1))]
-    root = float(light_tree_importance(_node(block, 0), p, n)) if _u(block, 0) else 0.0
-    total = sum(importances) + root
+    root = light_tree_root(block) if _u(block, 0) else None
+    root_importance = float(light_tree_importance(root, p, n)) if root is not None else 0.0
+    total = sum(importances) + root_importance
     if not total > 0:
         return 0.0
     if infinite:
@@ -401,11 +602,11 @@ def light_tree_pmf(block: np.ndarray, p, n, light: int, infinite: bool) -> float
         return 0.0
     at = _u(block, 3) + 2 * light
     leaf, trail = _u(block, at) - 1, _u(block, at + 1)
-    if leaf < 0 or not root > 0:
+    if leaf < 0 or not root_importance > 0:
         return 0.0
-    pmf, node, i = root / total, _node(block, 0), 0
+    pmf, node, i = root_importance / total, root, 0
     while i != leaf:
-        node, i, _, step = light_tree_step(block, node, i, p, n, 1.0 if trail & 1 else -1.0)
+        node, i, _, step = light_tree_step(block, node, p, n, 1.0 if trail & 1 else -1.0)
         if not step > 0:
             return 0.0
         pmf *= step

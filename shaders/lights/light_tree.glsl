@@ -1,32 +1,34 @@
 // The light BVH of light selection "bvh": choosing a light for a light sample at a point by
 // descending a tree over the lights, each step by the children's importance there (Conty
-// Estevez and Kulla 2018; pbrt-v4's BVHLightSampler). The tree, its packed layout and the
-// importance are documented in one place, glrender/sampling/light_tree.py, which builds
-// it; its functions named like these are their numpy twins.
+// Estevez and Kulla 2018; pbrt-v4's BVHLightSampler). The tree, its packed layout (32-byte
+// quantised nodes, a node's two children adjacent) and the importance are documented in
+// one place, glrender/sampling/light_tree.py, which builds it; its functions named like
+// these are their numpy twins.
 #include "common/constants.glsl"
 #include "sampling/distribution_data.glsl"
 #include "lights/light_choice.glsl"
 
-const uint kLightTreeHeader = 4u;
+const uint kLightTreeHeader = 12u;            // counts, then the root's box
 const uint kLightTreeInfiniteFloats = 8u;
-const uint kLightTreeNodeFloats = 16u;
-const uint kLightTreeLeaf = 1u;
-const uint kLightTreeTwoSided = 2u;
+const uint kLightTreeNodeFloats = 8u;
+const uint kLightTreeLeaf = 1u << 31;         // in a node's word 3
+const uint kLightTreeTwoSided = 1u << 30;
 const float kLightTreeClamp = 0.25;           // d^2 >= (kLightTreeClamp |diagonal|)^2
 const float kLightTreeMinDistance2 = 1e-10;
 const int kLightTreeMaxDepth = 32;
 
+// A decoded node: its box (rounded outward), the sphere about the box's centre that holds
+// it, intensity and cone (widened by its quantisation).
 struct LightTreeNode {
-    vec3 centre;
+    vec3 lo;
+    vec3 hi;
     float phi;
-    vec3 extent;      // the box's half extent
-    float cos_o;
+    float half_diag;  // the radius of the box's bounding sphere
     vec3 w;
+    float cos_o;
     float cos_e;
-    uint child;       // the second child's node index, or a leaf's light index
-    uint flags;
-    float sin_o;
-    float half_diag;  // length(extent)
+    uint word;        // cos_o and cos_e's steps, kLightTreeTwoSided, kLightTreeLeaf
+    uint child;       // the first child's node index (the second's follows), or a leaf's light index
 };
 
 // Where the nodes of the tree whose block starts at `tree` start.
@@ -34,21 +36,39 @@ uint light_tree_nodes(uint tree) {
     return tree + kLightTreeHeader + kLightTreeInfiniteFloats * distribution_fetch_uint(tree + 1u);
 }
 
-// Node i of the tree whose nodes start at `nodes`.
-LightTreeNode light_tree_node(uint nodes, uint i) {
-    uint at = nodes + kLightTreeNodeFloats * i;
+// pbrt-v4's OctahedralVector: x in the low 16 bits, y in the high 16.
+vec3 light_tree_octahedral(uint bits) {
+    vec2 e = vec2(float(bits & 0xFFFFu), float(bits >> 16u)) * (2.0 / 65535.0) - 1.0;
+    float z = 1.0 - abs(e.x) - abs(e.y);
+    if (z < 0.0)
+        e = vec2((1.0 - abs(e.y)) * (e.x >= 0.0 ? 1.0 : -1.0), (1.0 - abs(e.x)) * (e.y >= 0.0 ? 1.0 : -1.0));
+    return normalize(vec3(e, z));
+}
+
+// Node `at` (its first element's index) decoded within its parent's decoded box.
+LightTreeNode light_tree_decode(uint at, vec3 parent_lo, vec3 parent_hi) {
     LightTreeNode nd;
-    nd.centre = vec3(distribution_fetch(at), distribution_fetch(at + 1u), distribution_fetch(at + 2u));
-    nd.phi = distribution_fetch(at + 3u);
-    nd.extent = vec3(distribution_fetch(at + 4u), distribution_fetch(at + 5u), distribution_fetch(at + 6u));
-    nd.cos_o = distribution_fetch(at + 7u);
-    nd.w = vec3(distribution_fetch(at + 8u), distribution_fetch(at + 9u), distribution_fetch(at + 10u));
-    nd.cos_e = distribution_fetch(at + 11u);
-    nd.child = distribution_fetch_uint(at + 12u);
-    nd.flags = distribution_fetch_uint(at + 13u);
-    nd.sin_o = distribution_fetch(at + 14u);
-    nd.half_diag = distribution_fetch(at + 15u);
+    nd.phi = distribution_fetch(at);
+    nd.half_diag = distribution_fetch(at + 1u);
+    nd.w = light_tree_octahedral(distribution_fetch_uint(at + 2u));
+    nd.word = distribution_fetch_uint(at + 3u);
+    nd.child = distribution_fetch_uint(at + 4u);
+    uint b0 = distribution_fetch_uint(at + 5u);
+    uint b1 = distribution_fetch_uint(at + 6u);
+    uint b2 = distribution_fetch_uint(at + 7u);
+    nd.cos_o = float(nd.word & 0x7FFFu) * (2.0 / 32767.0) - 1.0;
+    nd.cos_e = float((nd.word >> 15u) & 0x7FFFu) * (2.0 / 32767.0) - 1.0;
+    vec3 s = (parent_hi - parent_lo) * (1.0 / 65535.0);
+    nd.lo = parent_lo + vec3(float(b0 & 0xFFFFu), float(b0 >> 16u), float(b1 & 0xFFFFu)) * s;
+    nd.hi = parent_hi - vec3(float(b1 >> 16u), float(b2 & 0xFFFFu), float(b2 >> 16u)) * s;
     return nd;
+}
+
+// The root of the tree whose block starts at `tree`, within the header's box.
+LightTreeNode light_tree_root(uint tree) {
+    vec3 lo = vec3(distribution_fetch(tree + 4u), distribution_fetch(tree + 5u), distribution_fetch(tree + 6u));
+    vec3 hi = vec3(distribution_fetch(tree + 8u), distribution_fetch(tree + 9u), distribution_fetch(tree + 10u));
+    return light_tree_decode(light_tree_nodes(tree), lo, hi);
 }
 
 // cos(max(0, a - b)) and sin(max(0, a - b)) from the sines and cosines of a and b.
@@ -62,23 +82,25 @@ float sin_sub_clamped(float sin_a, float cos_a, float sin_b, float cos_b) {
 
 // A bound on what node nd's lights bring to point p with normal n (0: a point in a medium).
 float light_tree_importance(LightTreeNode nd, vec3 p, vec3 n) {
-    vec3 v = p - nd.centre;
+    vec3 v = p - 0.5 * (nd.lo + nd.hi);
+    vec3 extent = 0.5 * (nd.hi - nd.lo);
     float dc2 = dot(v, v);
     float floor_d = 2.0 * kLightTreeClamp * nd.half_diag;
     float d2 = max(max(dc2, floor_d * floor_d), kLightTreeMinDistance2);
-    if (all(lessThanEqual(abs(v), nd.extent)) || dc2 <= nd.half_diag * nd.half_diag) return nd.phi / d2;
+    if (all(lessThanEqual(abs(v), extent)) || dc2 <= nd.half_diag * nd.half_diag) return nd.phi / d2;
     float inv_d = inversesqrt(dc2);
     vec3 wi = v * inv_d;
     float cos_w = dot(wi, nd.w);
-    if ((nd.flags & kLightTreeTwoSided) != 0u) cos_w = abs(cos_w);
+    if ((nd.word & kLightTreeTwoSided) != 0u) cos_w = abs(cos_w);
     float sin_w = sqrt(max(1.0 - cos_w * cos_w, 0.0));
+    float sin_o = sqrt(max(1.0 - nd.cos_o * nd.cos_o, 0.0));
     // the cone of directions the box subtends from p
     float sin_b = min(nd.half_diag * inv_d, 1.0);
     float cos_b = sqrt(max(1.0 - sin_b * sin_b, 0.0));
     // the angle from the emission cone to p, less the box's: theta' = max(0, theta_w -
     // theta_o - theta_b)
-    float cos_x = cos_sub_clamped(sin_w, cos_w, nd.sin_o, nd.cos_o);
-    float sin_x = sin_sub_clamped(sin_w, cos_w, nd.sin_o, nd.cos_o);
+    float cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, nd.cos_o);
+    float sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, nd.cos_o);
     float cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
     if (cos_p <= nd.cos_e) return 0.0;
     float importance = nd.phi * cos_p / d2;
@@ -102,20 +124,21 @@ float light_tree_infinite_importance(uint tree, uint k, vec3 n) {
     return importance;
 }
 
-// One level of the descent from internal node nd (index i): its two children, the first
-// following nd and the second at nd.child, weighed by their importance at p; the second is
-// taken where u >= the first's share p0 (so u = -1 takes the first, 1 the second). nd and i
-// become the child taken and u is rescaled to [0, 1) for the levels below. Returns the
+// One level of the descent from internal node nd (index i): its two children, adjacent at
+// nd.child, decoded within its box and weighed by their importance at p; the second is
+// taken where u >= the first's share p0 (so u = -1 takes the first, 1 the second). nd and
+// i become the child taken and u is rescaled to [0, 1) for the levels below. Returns the
 // step's probability (0: both children have importance 0, a dead end).
 float light_tree_step(uint nodes, inout LightTreeNode nd, inout uint i, inout float u, vec3 p, vec3 n) {
-    LightTreeNode first = light_tree_node(nodes, i + 1u);
-    LightTreeNode second = light_tree_node(nodes, nd.child);
+    uint at = nodes + kLightTreeNodeFloats * nd.child;
+    LightTreeNode first = light_tree_decode(at, nd.lo, nd.hi);
+    LightTreeNode second = light_tree_decode(at + kLightTreeNodeFloats, nd.lo, nd.hi);
     float i0 = light_tree_importance(first, p, n);
     float i1 = light_tree_importance(second, p, n);
     if (!(i0 + i1 > 0.0)) return 0.0;
     float p0 = i0 / (i0 + i1);
     bool take_second = u >= p0;
-    i = take_second ? nd.child : i + 1u;
+    i = nd.child + (take_second ? 1u : 0u);
     nd = take_second ? second : first;
     u = min(take_second ? (u - p0) / (1.0 - p0) : u / p0, kOneMinusEpsilon);
     return take_second ? 1.0 - p0 : p0;
@@ -127,9 +150,8 @@ float light_tree_step(uint nodes, inout LightTreeNode nd, inout uint i, inout fl
 LightChoice light_tree_sample(uint tree, vec3 p, vec3 n, float u) {
     uint n_inf = distribution_fetch_uint(tree + 1u);
     bool has_root = distribution_fetch_uint(tree) > 0u;
-    uint nodes = light_tree_nodes(tree);
     LightTreeNode nd;
-    if (has_root) nd = light_tree_node(nodes, 0u);
+    if (has_root) nd = light_tree_root(tree);
     float total = 0.0;
     float weight = 0.0;
     uint chosen = n_inf;         // n_inf: the root
@@ -152,9 +174,10 @@ LightChoice light_tree_sample(uint tree, vec3 p, vec3 n, float u) {
         return LightChoice(distribution_fetch_uint(tree + kLightTreeHeader + kLightTreeInfiniteFloats * chosen),
                            weight / total);
     float pmf = weight / total;
+    uint nodes = light_tree_nodes(tree);
     uint i = 0u;
     for (int depth = 0; depth <= kLightTreeMaxDepth; ++depth) {
-        if ((nd.flags & kLightTreeLeaf) != 0u) return LightChoice(nd.child, pmf);
+        if ((nd.word & kLightTreeLeaf) != 0u) return LightChoice(nd.child, pmf);
         float step = light_tree_step(nodes, nd, i, u, p, n);
         if (!(step > 0.0)) break;
         pmf *= step;
@@ -175,11 +198,10 @@ float light_tree_pmf(uint tree, vec3 p, vec3 n, uint light, bool infinite) {
             mine = importance;
     }
     bool has_root = distribution_fetch_uint(tree) > 0u;
-    uint nodes = light_tree_nodes(tree);
     LightTreeNode nd;
     float root = 0.0;
     if (has_root) {
-        nd = light_tree_node(nodes, 0u);
+        nd = light_tree_root(tree);
         root = light_tree_importance(nd, p, n);
     }
     total += root;
@@ -192,6 +214,7 @@ float light_tree_pmf(uint tree, vec3 p, vec3 n, uint light, bool infinite) {
     leaf -= 1u;
     float pmf = root / total;
     uint i = 0u;
+    uint nodes = light_tree_nodes(tree);
     for (int depth = 0; depth < kLightTreeMaxDepth && i != leaf; ++depth) {
         float u = (trail & 1u) != 0u ? 1.0 : -1.0;
         float step = light_tree_step(nodes, nd, i, u, p, n);

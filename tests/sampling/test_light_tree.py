@@ -113,7 +113,7 @@ def test01_probabilities_sum_to_one(gl_ctx, tree):
     # the lights at infinity: n_inf / (n_inf + 1) among them, uniformly
     # the lights at infinity: in proportion to their irradiance (the directional one's
     # times |cos|) beside the tree's root
-    root = np.array([lt.light_tree_importance(lt._node(block, 0), p[k], n[k]) for k in range(len(p))])
+    root = np.array([lt.light_tree_importance(lt.light_tree_root(block), p[k], n[k]) for k in range(len(p))])
     inf = np.flatnonzero(b.infinite)
     irradiance = np.stack([b.phi[inf[0]] * np.abs(n @ b.w[inf[0]]), np.full(len(p), b.phi[inf[1]])], axis=1)
     np.testing.assert_allclose(pmf[:, inf], irradiance / (irradiance.sum(axis=1) + root)[:, None], rtol=2e-4)
@@ -197,3 +197,118 @@ def test05_point_and_spot_lights_alone(gl_ctx):
     n = np.zeros((3, 3), np.float32)
     pmf = glsl_pmf_all(block, p, n, b.infinite)[:, 0]
     np.testing.assert_array_equal(pmf, [1.0, 0.0, 0.0])   # atan(1.5 / 2) = 0.64 > 0.5
+
+
+def angle(a, b):
+    """The angles between the directions a and b (..., 3), accurate near 0."""
+    a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
+    return np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), (a * b).sum(axis=-1))
+
+
+def decoded_nodes(block):
+    """Every node of the block decoded by the numpy twin, top-down: (node, parent box)."""
+    out = {}
+    root = lt.light_tree_root(block)
+    out[0] = (root, np.asarray(block[4:7], np.float32), np.asarray(block[8:11], np.float32))
+    stack = [0]
+    while stack:
+        i = stack.pop()
+        nd = out[i][0]
+        if not nd.leaf:
+            for c in (nd.child, nd.child + 1):
+                out[c] = (lt._decode(block, c, nd.lo, nd.hi), nd.lo, nd.hi)
+                stack.append(c)
+    return out
+
+
+def test06_quantised_nodes_hold_their_lights(tree):
+    """Each decoded node bounds what it holds: its box holds the node's box, its sphere the
+    decoded box, its cone (axis, theta_o) the node's cone and its theta_e is at least the
+    node's; its intensity is the node's (float32)."""
+    block, b, *_ = tree
+    builder = lt._build(b)
+    nodes = decoded_nodes(block)
+    assert len(nodes) == builder.used == 2 * int((~b.infinite).sum()) - 1
+    for i, (nd, _, _) in nodes.items():
+        assert np.all(nd.lo.astype(np.float64) <= builder.lo[i]) and np.all(nd.hi.astype(np.float64) >= builder.hi[i]), i
+        centre = (np.float32(0.5) * (nd.lo + nd.hi)).astype(np.float64)
+        corners = np.array([[(nd.hi if (k >> a) & 1 else nd.lo)[a] for a in range(3)] for k in range(8)], np.float64)
+        assert np.linalg.norm(corners - centre, axis=1).max() <= nd.half_diag, i
+        assert nd.phi == np.float32(builder.phi[i])
+        assert nd.cos_e <= builder.cos_e[i]
+        assert nd.leaf == bool(builder.flags[i] & lt.FLAG_LEAF)
+        assert nd.two_sided == bool(builder.flags[i] & lt.FLAG_TWO_SIDED)
+        if builder.cos_o[i] > -1:
+            axis_error = angle(nd.w, builder.w[i])
+            assert np.arccos(builder.cos_o[i]) + axis_error <= np.arccos(nd.cos_o), i
+    # quantisation is close: boxes grow by a few steps of their parent's, cones by ~0.01 rad
+    for i, (nd, p_lo, p_hi) in nodes.items():
+        step = (p_hi.astype(np.float64) - p_lo) / lt.BOX_STEPS
+        assert np.all(builder.lo[i] - nd.lo <= 2 * step + 1e-5) and np.all(nd.hi - builder.hi[i] <= 2 * step + 1e-5)
+
+
+def test07_quantisers_round_outward():
+    """The box, cosine and axis encodings on their own, on hard cases: tiny boxes far from
+    the origin inside large parents, boxes touching their parent's sides, points; cosines
+    at +-1 and 0; axes along and near the octahedron's folds."""
+    rng = np.random.default_rng(11)
+    m = 4000
+    centre = rng.uniform(-1e4, 1e4, (m, 3)) * (rng.random((m, 1)) < 0.5)
+    size = 10.0 ** rng.uniform(-6, 4, (m, 1))
+    p_lo = (centre - size).astype(np.float32)
+    p_hi = (centre + size).astype(np.float32)
+    t = np.sort(rng.random((m, 2, 3)), axis=1)
+    t[::7, 0] = 0.0
+    t[::5, 1] = 1.0
+    t[::11, 1] = t[::11, 0]    # points
+    lo = p_lo + t[:, 0] * (p_hi.astype(np.float64) - p_lo)
+    hi = p_lo + t[:, 1] * (p_hi.astype(np.float64) - p_lo)
+    lo, hi = np.maximum(lo, p_lo), np.minimum(hi, p_hi)
+    q_lo, q_hi, d_lo, d_hi = lt.quantise_box(lo, hi, p_lo, p_hi)
+    assert np.all(q_lo <= lt.BOX_STEPS) and np.all(q_hi <= lt.BOX_STEPS)
+    assert np.all(d_lo <= lo) and np.all(d_hi >= hi)
+    np.testing.assert_array_equal((d_lo, d_hi), lt.decode_box(q_lo, q_hi, p_lo, p_hi))
+    c = np.concatenate([[-1.0, 0.0, 1.0, -1 + 1e-9, 1 - 1e-9], rng.uniform(-1, 1, 2000)])
+    q = lt.quantise_cos(c)
+    assert np.all(lt.decode_cos(q) <= c) and np.all(q <= lt.COS_STEPS)
+    assert np.all(c - lt.decode_cos(q) < 2.5 / lt.COS_STEPS)
+    w = rng.normal(size=(3000, 3))
+    w[:6] = [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]]
+    w[6:12, 2] = 0.0           # on the fold z = 0
+    w /= np.linalg.norm(w, axis=1, keepdims=True)
+    bits, wd = lt.encode_octahedral(w)
+    np.testing.assert_array_equal(wd, lt.decode_octahedral(bits))
+    error = angle(wd, w)
+    assert error.max() < 1e-4
+    cos_o = rng.uniform(-1, 1, len(w))
+    cos_o[:20] = 1.0
+    widened = lt.widen_cone(cos_o, w, wd)
+    assert np.all(np.arccos(cos_o) + error <= np.arccos(widened))
+
+
+def test08_glsl_decodes_as_the_twin(gl_ctx, tree):
+    """The shader decodes every node as the numpy twin (its box within one float32 step
+    for a fused multiply-add, still holding the node's box)."""
+    block, b, *_ = tree
+    builder = lt._build(b)
+    nodes = decoded_nodes(block)
+    idx = np.array(sorted(nodes), np.uint32)
+    p_lo = np.array([nodes[i][1] for i in idx], np.float32)
+    p_hi = np.array([nodes[i][2] for i in idx], np.float32)
+    at = (lt.HEADER + lt.INFINITE_FLOATS * lt._u(block, 1) + lt.NODE_FLOATS * idx).astype(np.uint32)
+    out = run_glsl("LightTreeNode nd = light_tree_decode(at, p_lo, p_hi); vec3 lo = nd.lo; vec3 hi = nd.hi; "
+                   "vec3 w = nd.w; vec4 c = vec4(nd.cos_o, nd.cos_e, nd.phi, nd.half_diag); "
+                   "uint word = nd.word; uint child = nd.child;",
+                   {"at": at, "p_lo": p_lo, "p_hi": p_hi},
+                   {"lo": "vec3", "hi": "vec3", "w": "vec3", "c": "vec4", "word": "uint", "child": "uint"},
+                   includes=["lights/light_tree.glsl"], buffers={"table": block}, preamble=PREAMBLE)
+    twin = [nodes[i][0] for i in idx]
+    lo = np.array([t.lo for t in twin])
+    hi = np.array([t.hi for t in twin])
+    ulp = np.spacing(np.maximum(np.abs(p_lo), np.abs(p_hi)))
+    assert np.all(np.abs(out["lo"] - lo) <= ulp) and np.all(np.abs(out["hi"] - hi) <= ulp)
+    assert np.all(out["lo"] <= builder.lo[idx]) and np.all(out["hi"] >= builder.hi[idx])
+    np.testing.assert_allclose(out["w"], np.array([t.w for t in twin]), atol=1e-6)
+    np.testing.assert_array_equal(out["c"], np.array([[t.cos_o, t.cos_e, t.phi, t.half_diag] for t in twin], np.float32))
+    np.testing.assert_array_equal(out["child"], [t.child for t in twin])
+    np.testing.assert_array_equal(out["word"] >> 30, [t.two_sided * 1 + t.leaf * 2 for t in twin])
