@@ -147,29 +147,39 @@ float light_tree_step(uint nodes, inout LightTreeNode nd, inout uint i, inout fl
     return take_second ? 1.0 - p0 : p0;
 }
 
+// One candidate of the first choice (a light at infinity, then the root): it replaces the
+// one held with probability its importance over the sum so far, `total` (which it joins);
+// u is rescaled to [0, 1) for what follows. True: it is held.
+bool light_tree_candidate(float importance, inout float total, inout float u) {
+    total += importance;
+    if (!(total > 0.0)) return false;
+    float q = importance / total;
+    bool take = u < q;
+    u = min(take ? u / q : (u - q) / (1.0 - q), kOneMinusEpsilon);
+    return take;
+}
+
 // The light chosen at p (normal n) for u in [0, 1) and its probability (0: none, no light
-// can reach p). One pass over the lights at infinity and the root: each candidate replaces
-// the one held with probability its importance over the sum so far (u rescaled after each).
+// can reach p). One pass over the lights at infinity and the root (light_tree_candidate).
 LightChoice light_tree_sample(uint tree, vec3 p, vec3 n, float u) {
     uint n_inf = distribution_fetch_uint(tree + 1u);
-    bool has_root = distribution_fetch_uint(tree) > 0u;
-    LightTreeNode nd;
-    if (has_root) nd = light_tree_root(tree);
     float total = 0.0;
     float weight = 0.0;
     uint chosen = n_inf;         // n_inf: the root
-    for (uint k = 0u; k <= n_inf; ++k) {
-        float importance = k < n_inf ? light_tree_infinite_importance(tree, k, n)
-                                     : (has_root ? light_tree_importance(nd, p, n) : 0.0);
-        total += importance;
-        if (!(total > 0.0)) continue;
-        float q = importance / total;
-        if (u < q) {
+    for (uint k = 0u; k < n_inf; ++k) {
+        float importance = light_tree_infinite_importance(tree, k, n);
+        if (light_tree_candidate(importance, total, u)) {
             chosen = k;
             weight = importance;
-            u = min(u / q, kOneMinusEpsilon);
-        } else {
-            u = min((u - q) / (1.0 - q), kOneMinusEpsilon);
+        }
+    }
+    LightTreeNode nd;
+    if (distribution_fetch_uint(tree) > 0u) {
+        nd = light_tree_root(tree);
+        float importance = light_tree_importance(nd, p, n);
+        if (light_tree_candidate(importance, total, u)) {
+            chosen = n_inf;
+            weight = importance;
         }
     }
     if (!(total > 0.0)) return LightChoice(0u, 0.0);
