@@ -49,25 +49,23 @@ entries are bit-exact):
     offset in the block), [4:7] the root's box's lo xyz (float32, rounded outward), 0,
     [8:11] its hi xyz, 0; then per light at infinity 8 elements: its light index (uint),
     its importance scale, 1 (uint) for a directional light (times |cos| to n), 0, its
-    direction xyz, 0; then the nodes, 6 elements (24 bytes) each, the root first and a
-    node's two children adjacent (a level of the descent reads one run of 12 elements):
-    [0] phi; [1] the cone's axis w, octahedral (uint: x in the low 16 bits, y in the high
-    16, pbrt-v4's OctahedralVector); [2] (uint) cos(theta_o) in bits 0-14, cos(theta_e) in
-    bits 15-29 (each 15-bit steps over [-1, 1]), bit 30 two-sided, bit 31 leaf; [3:6]
-    (uint) the box as six 12-bit steps, bits 0-11 and 12-23 of each: lo x, lo y | lo z,
-    hi x | hi y, hi z, with lo = parent lo + q (parent hi - parent lo) / 4095 and hi =
-    parent hi - q (...) within the parent's decoded box (the header's box for the root),
-    as pbrt-v4's CompactLightBounds quantises within the scene's; and in bits 24-31 of the
-    three, low byte first, the first child's node index or the leaf's light index (24
-    bits: at most 2^23 lights in the tree). The radius of the box's bounding sphere is
-    computed from the decoded box (half_diagonal);
+    direction xyz, 0; then the nodes, 8 elements (32 bytes) each, the root first and a
+    node's two children adjacent (a level of the descent reads one 64-byte run):
+    [0] phi; [1] the radius of a sphere about the decoded box's centre holding the decoded
+    box (float32, rounded up); [2] the cone's axis w, octahedral (uint: x in the low 16
+    bits, y in the high 16, pbrt-v4's OctahedralVector); [3] (uint) cos(theta_o) in bits
+    0-14, cos(theta_e) in bits 15-29 (each 15-bit steps over [-1, 1]), bit 30 two-sided,
+    bit 31 leaf; [4] the first child's node index or the leaf's light index (uint);
+    [5:8] the box (uint, six 16-bit steps, low halves first: lo x, lo y, lo z, hi x, hi y,
+    hi z): lo = parent lo + q (parent hi - parent lo) / 65535, hi = parent hi - q (...)
+    within the parent's decoded box (the header's box for the root), as pbrt-v4's
+    CompactLightBounds quantises within the scene's;
     then per light: its leaf's node index + 1 (uint, 0: not in the tree) and its bit trail
     (uint: bit k is 1 where the descent takes the second child at depth k).
 
 The quantisation rounds outward, so that each decoded node still bounds its lights and the
 importance stays an upper bound: box steps round toward the parent's sides (with a margin
-of two float32 steps of the parent's coordinates for the shader's rounding; a box grows by
-at most about 1/4095 of its parent's extent on each side); the cosines
+of two float32 steps of the parent's coordinates for the shader's rounding); the cosines
 round down (the cones widen: by up to 2/32767 in cos theta, about 0.6 degrees for a
 single planar light's cone of 0); the cone's half angle grows by the angle between its
 axis and the decoded axis (at most about 1e-4 radians) and 1e-6. The probabilities are
@@ -83,7 +81,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import UsageError
 from ._array import ONE_MINUS_EPSILON
 
 BUCKETS = 12
@@ -91,7 +88,7 @@ SMALL = 16            # nodes of at most this many lights split at the median of
 MAX_DEPTH = 32        # the bit trail's width: deeper subtrees are split by count
 HEADER = 12           # counts, then the root's box (float32 lo xyz, 0, hi xyz, 0)
 INFINITE_FLOATS = 8
-NODE_FLOATS = 6       # 24 bytes: quantised nodes after pbrt-v4's CompactLightBounds
+NODE_FLOATS = 8       # 32 bytes: CompactLightBounds-style quantised nodes
 CLAMP = 0.25          # d^2 >= (CLAMP |diagonal|)^2
 FLAG_LEAF = 1
 FLAG_TWO_SIDED = 2
@@ -167,8 +164,7 @@ def _prefix_cones(w, cos_o, phi, bucket, nb) -> tuple[np.ndarray, np.ndarray]:
 
 
 # ---- quantised nodes ----------------------------------------------------------------------
-BOX_STEPS = 4095      # a box coordinate: 12 bits within the parent's decoded box
-MAX_CHILD = (1 << 24) - 1   # a node's child (or light) index: 24 bits
+BOX_STEPS = 65535     # a box coordinate: 16 bits within the parent's decoded box
 COS_STEPS = 32767     # cos(theta_o), cos(theta_e): 15 bits over [-1, 1]
 OCT_STEPS = 65535     # each octahedral coordinate of the cone's axis: 16 bits over [-1, 1]
 WORD_TWO_SIDED = 1 << 30
@@ -213,13 +209,13 @@ def quantise_box(lo, hi, p_lo, p_hi):
 
 
 def half_diagonal(lo, hi) -> np.ndarray:
-    """The radius of a sphere about the decoded box's centre (0.5 (lo + hi) in float32) that
-    holds the box, in float32 as the shader computes it: the half extent grown by 2^-22 of
-    the coordinates' magnitude (the centre's and the extent's rounding), its length by
-    2^-20 (the length's)."""
+    """The radius (float32, rounded up) of a sphere about the decoded box's centre, as the
+    shader computes it (0.5 (lo + hi) in float32), that holds the box."""
     lo, hi = np.asarray(lo, np.float32), np.asarray(hi, np.float32)
-    reach = np.float32(0.5) * (hi - lo) + np.float32(2.0 ** -22) * np.maximum(np.abs(lo), np.abs(hi))
-    return np.sqrt((reach * reach).sum(axis=-1, dtype=np.float32)) * np.float32(1 + 2.0 ** -20)
+    centre = np.float32(0.5) * (lo + hi)
+    reach = np.maximum(hi.astype(np.float64) - centre, centre.astype(np.float64) - lo)
+    radius = np.linalg.norm(reach, axis=-1) * (1 + 2.0 ** -20)
+    return np.nextafter(radius.astype(np.float32), np.float32(np.inf))
 
 
 def decode_octahedral(bits) -> np.ndarray:
@@ -399,21 +395,18 @@ class _Builder:
             p_lo = np.where(parent[:, None] < 0, root_lo, dec_lo[np.maximum(parent, 0)])
             p_hi = np.where(parent[:, None] < 0, root_hi, dec_hi[np.maximum(parent, 0)])
             q_lo, q_hi, dec_lo[at], dec_hi[at] = quantise_box(lo[at], hi[at], p_lo, p_hi)
-            words[at, 3] = q_lo[:, 0] | (q_lo[:, 1] << 12)
-            words[at, 4] = q_lo[:, 2] | (q_hi[:, 0] << 12)
-            words[at, 5] = q_hi[:, 1] | (q_hi[:, 2] << 12)
+            words[at, 5] = q_lo[:, 0] | (q_lo[:, 1] << 16)
+            words[at, 6] = q_lo[:, 2] | (q_hi[:, 0] << 16)
+            words[at, 7] = q_hi[:, 1] | (q_hi[:, 2] << 16)
+        words[:, 1] = np.float32(half_diagonal(dec_lo, dec_hi)).view(np.uint32)
         words[:, 0] = self.phi[:count].astype(np.float32).view(np.uint32)
         oct_bits, w_decoded = encode_octahedral(self.w[:count])
-        words[:, 1] = oct_bits
+        words[:, 2] = oct_bits
         cos_o = widen_cone(self.cos_o[:count], self.w[:count], w_decoded)
-        words[:, 2] = (quantise_cos(cos_o) | (quantise_cos(self.cos_e[:count]) << 15) |
+        words[:, 3] = (quantise_cos(cos_o) | (quantise_cos(self.cos_e[:count]) << 15) |
                        np.where(self.flags[:count] & FLAG_TWO_SIDED, WORD_TWO_SIDED, 0).astype(np.uint32) |
                        np.where(self.flags[:count] & FLAG_LEAF, WORD_LEAF, 0).astype(np.uint32))
-        child = self.child[:count]
-        if child.max() > MAX_CHILD:
-            raise UsageError(f"light BVH: {len(self.leaf):,} lights, more than its 24-bit indices hold")
-        for k in range(3):
-            words[:, 3 + k] |= ((child >> (8 * k)) & 0xFF) << 24
+        words[:, 4] = self.child[:count]
         return words.view(np.float32), np.stack([root_lo, root_hi])
 
 
@@ -477,14 +470,13 @@ def _decode(block, i: int, p_lo, p_hi) -> LightTreeNode:
     """Node i of the block, its box within the decoded parent box p_lo, p_hi."""
     at = HEADER + INFINITE_FLOATS * _u(block, 1) + NODE_FLOATS * i
     w = np.asarray(block[at:at + NODE_FLOATS], np.float32).view(np.uint32)
-    q_lo = np.array([w[3] & 0xFFF, (w[3] >> 12) & 0xFFF, w[4] & 0xFFF])
-    q_hi = np.array([(w[4] >> 12) & 0xFFF, w[5] & 0xFFF, (w[5] >> 12) & 0xFFF])
+    q_lo = np.array([w[5] & 0xFFFF, w[5] >> 16, w[6] & 0xFFFF])
+    q_hi = np.array([w[6] >> 16, w[7] & 0xFFFF, w[7] >> 16])
     lo, hi = decode_box(q_lo, q_hi, p_lo, p_hi)
-    child = int(w[3] >> 24) | int(w[4] >> 24) << 8 | int(w[5] >> 24) << 16
     return LightTreeNode(lo=lo, hi=hi, phi=float(w[0:1].view(np.float32)[0]),
-                         half_diag=float(half_diagonal(lo, hi)), w=decode_octahedral(w[1]),
-                         cos_o=float(decode_cos(w[2] & 0x7FFF)), cos_e=float(decode_cos((w[2] >> 15) & 0x7FFF)),
-                         two_sided=bool(w[2] & WORD_TWO_SIDED), leaf=bool(w[2] & WORD_LEAF), child=child)
+                         half_diag=float(w[1:2].view(np.float32)[0]), w=decode_octahedral(w[2]),
+                         cos_o=float(decode_cos(w[3] & 0x7FFF)), cos_e=float(decode_cos((w[3] >> 15) & 0x7FFF)),
+                         two_sided=bool(w[3] & WORD_TWO_SIDED), leaf=bool(w[3] & WORD_LEAF), child=int(w[4]))
 
 
 def light_tree_root(block) -> LightTreeNode:

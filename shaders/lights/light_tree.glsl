@@ -1,6 +1,6 @@
 // The light BVH of light selection "bvh": choosing a light for a light sample at a point by
 // descending a tree over the lights, each step by the children's importance there (Conty
-// Estevez and Kulla 2018; pbrt-v4's BVHLightSampler). The tree, its packed layout (24-byte
+// Estevez and Kulla 2018; pbrt-v4's BVHLightSampler). The tree, its packed layout (32-byte
 // quantised nodes, a node's two children adjacent) and the importance are documented in
 // one place, glrender/sampling/light_tree.py, which builds it; its functions named like
 // these are their numpy twins.
@@ -10,8 +10,8 @@
 
 const uint kLightTreeHeader = 12u;            // counts, then the root's box
 const uint kLightTreeInfiniteFloats = 8u;
-const uint kLightTreeNodeFloats = 6u;
-const uint kLightTreeLeaf = 1u << 31;         // in a node's word 2
+const uint kLightTreeNodeFloats = 8u;
+const uint kLightTreeLeaf = 1u << 31;         // in a node's word 3
 const uint kLightTreeTwoSided = 1u << 30;
 const float kLightTreeClamp = 0.25;           // d^2 >= (kLightTreeClamp |diagonal|)^2
 const float kLightTreeMinDistance2 = 1e-10;
@@ -49,21 +49,18 @@ vec3 light_tree_octahedral(uint bits) {
 LightTreeNode light_tree_decode(uint at, vec3 parent_lo, vec3 parent_hi) {
     LightTreeNode nd;
     nd.phi = distribution_fetch(at);
-    nd.w = light_tree_octahedral(distribution_fetch_uint(at + 1u));
-    nd.word = distribution_fetch_uint(at + 2u);
-    uint b0 = distribution_fetch_uint(at + 3u);
-    uint b1 = distribution_fetch_uint(at + 4u);
-    uint b2 = distribution_fetch_uint(at + 5u);
+    nd.half_diag = distribution_fetch(at + 1u);
+    nd.w = light_tree_octahedral(distribution_fetch_uint(at + 2u));
+    nd.word = distribution_fetch_uint(at + 3u);
+    nd.child = distribution_fetch_uint(at + 4u);
+    uint b0 = distribution_fetch_uint(at + 5u);
+    uint b1 = distribution_fetch_uint(at + 6u);
+    uint b2 = distribution_fetch_uint(at + 7u);
     nd.cos_o = float(nd.word & 0x7FFFu) * (2.0 / 32767.0) - 1.0;
     nd.cos_e = float((nd.word >> 15u) & 0x7FFFu) * (2.0 / 32767.0) - 1.0;
-    vec3 s = (parent_hi - parent_lo) * (1.0 / 4095.0);
-    nd.lo = parent_lo + vec3(float(b0 & 0xFFFu), float((b0 >> 12u) & 0xFFFu), float(b1 & 0xFFFu)) * s;
-    nd.hi = parent_hi - vec3(float((b1 >> 12u) & 0xFFFu), float(b2 & 0xFFFu), float((b2 >> 12u) & 0xFFFu)) * s;
-    nd.child = (b0 >> 24u) | ((b1 >> 24u) << 8u) | ((b2 >> 24u) << 16u);
-    // the half extent grown by 2^-22 of the coordinates (the centre's rounding), its length
-    // by 2^-20 (the length's): a sphere about the centre holding the box
-    vec3 reach = 0.5 * (nd.hi - nd.lo) + 2.384185791015625e-7 * max(abs(nd.lo), abs(nd.hi));
-    nd.half_diag = length(reach) * 1.00000095367431640625;
+    vec3 s = (parent_hi - parent_lo) * (1.0 / 65535.0);
+    nd.lo = parent_lo + vec3(float(b0 & 0xFFFFu), float(b0 >> 16u), float(b1 & 0xFFFFu)) * s;
+    nd.hi = parent_hi - vec3(float(b1 >> 16u), float(b2 & 0xFFFFu), float(b2 >> 16u)) * s;
     return nd;
 }
 

@@ -117,11 +117,10 @@ def test01_probabilities_sum_to_one(gl_ctx, tree):
     inf = np.flatnonzero(b.infinite)
     irradiance = np.stack([b.phi[inf[0]] * np.abs(n @ b.w[inf[0]]), np.full(len(p), b.phi[inf[1]])], axis=1)
     np.testing.assert_allclose(pmf[:, inf], irradiance / (irradiance.sum(axis=1) + root)[:, None], rtol=2e-4)
-    # numpy's twin (float64 from the decoded float32 nodes: a node seen near the edge of its
-    # cone loses a few digits in float32, 2.6e-4 of its importance at the worst of these)
+    # numpy's twin
     for k in range(0, 64, 9):
         twin = [lt.light_tree_pmf(block, p[k], n[k], i, bool(b.infinite[i])) for i in range(len(b.phi))]
-        np.testing.assert_allclose(twin, pmf[k], rtol=5e-4, atol=1e-9)
+        np.testing.assert_allclose(twin, pmf[k], rtol=2e-4, atol=1e-9)
 
 
 def test02_a_sample_has_the_probability_of_its_light(gl_ctx, tree):
@@ -310,12 +309,6 @@ def test08_glsl_decodes_as_the_twin(gl_ctx, tree):
     assert np.all(np.abs(out["lo"] - lo) <= ulp) and np.all(np.abs(out["hi"] - hi) <= ulp)
     assert np.all(out["lo"] <= builder.lo[idx]) and np.all(out["hi"] >= builder.hi[idx])
     np.testing.assert_allclose(out["w"], np.array([t.w for t in twin]), atol=1e-6)
-    np.testing.assert_array_equal(out["c"][:, :3], np.array([[t.cos_o, t.cos_e, t.phi] for t in twin], np.float32))
-    np.testing.assert_allclose(out["c"][:, 3], [t.half_diag for t in twin], rtol=1e-6)
-    # the shader's sphere holds the shader's box
-    centre = (np.float32(0.5) * (out["lo"] + out["hi"])).astype(np.float64)
-    for k in range(8):
-        corner = np.where([(k >> a) & 1 for a in range(3)], out["hi"], out["lo"]).astype(np.float64)
-        assert np.all(np.linalg.norm(corner - centre, axis=1) <= out["c"][:, 3])
+    np.testing.assert_array_equal(out["c"], np.array([[t.cos_o, t.cos_e, t.phi, t.half_diag] for t in twin], np.float32))
     np.testing.assert_array_equal(out["child"], [t.child for t in twin])
     np.testing.assert_array_equal(out["word"] >> 30, [t.two_sided * 1 + t.leaf * 2 for t in twin])
