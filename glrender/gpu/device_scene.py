@@ -325,14 +325,16 @@ def light_bounds(lights: np.ndarray, weights: np.ndarray, scene_bounds):
     cutoff; the whole sphere for points and spheres); for lights at infinity the
     irradiance they deliver, from the power weights glrender.gpu.pack gives them over the
     scene's bounding sphere (radius R): a directional light's pi R^2 E, an environment's
-    4 pi^2 R^2 times its mean radiance L, which delivers pi L."""
+    4 pi^2 R^2 times its mean radiance L, which delivers pi L. Their ``offset``: where
+    light_table packs the tree, after select_light's alias table (1 + 3n elements for n > 1
+    lights; shaders/lights/light_selection.glsl light_tree_offset)."""
     from ..sampling.light_tree import LightBounds
 
     kinds = {v: k for k, v in layout.LIGHT_KINDS.items()}
     n = len(lights)
     b = LightBounds(lo=np.zeros((n, 3)), hi=np.zeros((n, 3)), phi=np.zeros(n), w=np.zeros((n, 3)),
                     cos_o=np.full(n, -1.0), cos_e=np.zeros(n), two_sided=np.zeros(n, bool),
-                    infinite=np.zeros(n, bool))
+                    infinite=np.zeros(n, bool), offset=1 + 3 * n if n > 1 else 0)
     b.w[:, 2] = 1.0
     lo, hi = (np.asarray(v, np.float64) for v in scene_bounds)
     radius = float(max(np.linalg.norm(hi - lo) / 2, 1e-3))

@@ -45,12 +45,15 @@ cone, but one found without a pass per member.
 Packed format (one block of glrender.sampling.distributions' float32 array; *uint*
 entries are bit-exact):
 
-    [0] nodes (uint), [1] n_inf (uint), [2] 0, [3] trails (uint: the per-light table's
+    [0] nodes (uint), [1] n_inf (uint), [2] pad (uint), [3] trails (uint: the per-light table's
     offset in the block), [4:7] the root's box's lo xyz (float32, rounded outward), 0,
     [8:11] its hi xyz, 0; then per light at infinity 8 elements: its light index (uint),
     its importance scale, 1 (uint) for a directional light (times |cos| to n), 0, its
-    direction xyz, 0; then the nodes, 8 elements (32 bytes) each, the root first and a
-    node's two children adjacent (a level of the descent reads one 64-byte run):
+    direction xyz, 0; then pad zeros (0-3: the nodes start on a multiple of 4 elements of
+    the whole array, LightBounds.offset giving where the block starts, so that the shader
+    reads a node as two 16-byte loads); then the nodes, 8 elements (32 bytes) each, the
+    root first and a node's two children adjacent (a level of the descent reads one 64-byte
+    run):
     [0] phi; [1] the radius of a sphere about the decoded box's centre holding the decoded
     box (float32, rounded up); [2] the cone's axis w, octahedral (uint: x in the low 16
     bits, y in the high 16, pbrt-v4's OctahedralVector); [3] (uint) cos(theta_o) in bits
@@ -110,6 +113,7 @@ class LightBounds:
     cos_e: np.ndarray
     two_sided: np.ndarray
     infinite: np.ndarray
+    offset: int = 0     # where the packed block will start in the distributions array
 
 
 def _uints(values) -> np.ndarray:
@@ -438,12 +442,15 @@ def light_tree_table(bounds: LightBounds) -> np.ndarray:
     inf_block[:, 1] = np.maximum(bounds.phi[infinite], 0.0)
     inf_block[:, 2] = _uints((bounds.cos_o[infinite] == 1.0).astype(np.uint32))
     inf_block[:, 4:7] = bounds.w[infinite]
-    trails_at = HEADER + inf_block.size + nodes.size
-    header[[0, 1, 3]] = _uints([len(nodes), n_inf, trails_at])
+    # the nodes start on a multiple of 4 elements of the whole array: two 16-byte loads each
+    pad = -(bounds.offset + HEADER + inf_block.size) % 4
+    trails_at = HEADER + inf_block.size + pad + nodes.size
+    header[[0, 1, 2, 3]] = _uints([len(nodes), n_inf, pad, trails_at])
     per_light = np.zeros((n, 2), np.float32)
     per_light[:, 0] = _uints(builder.leaf)
     per_light[:, 1] = _uints(builder.trail.astype(np.uint32))
-    return np.concatenate([header, inf_block.reshape(-1), nodes.reshape(-1), per_light.reshape(-1)])
+    return np.concatenate([header, inf_block.reshape(-1), np.zeros(pad, np.float32), nodes.reshape(-1),
+                           per_light.reshape(-1)])
 
 
 # ---- numpy twins of shaders/lights/light_tree.glsl --------------------------------------------
@@ -468,7 +475,7 @@ class LightTreeNode:
 
 def _decode(block, i: int, p_lo, p_hi) -> LightTreeNode:
     """Node i of the block, its box within the decoded parent box p_lo, p_hi."""
-    at = HEADER + INFINITE_FLOATS * _u(block, 1) + NODE_FLOATS * i
+    at = HEADER + INFINITE_FLOATS * _u(block, 1) + _u(block, 2) + NODE_FLOATS * i
     w = np.asarray(block[at:at + NODE_FLOATS], np.float32).view(np.uint32)
     q_lo = np.array([w[5] & 0xFFFF, w[5] >> 16, w[6] & 0xFFFF])
     q_hi = np.array([w[6] >> 16, w[7] & 0xFFFF, w[7] >> 16])

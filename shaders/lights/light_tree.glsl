@@ -31,9 +31,14 @@ struct LightTreeNode {
     uint child;       // the first child's node index (the second's follows), or a leaf's light index
 };
 
-// Where the nodes of the tree whose block starts at `tree` start.
+// Elements i .. i + 3 of the packed array (i a multiple of 4) as one 16-byte load: defined
+// beside distribution_fetch (scene/layout.glsl: one uvec4 of the buffer).
+uvec4 distribution_fetch4(uint i);
+
+// Where the nodes of the tree whose block starts at `tree` start (a multiple of 4).
 uint light_tree_nodes(uint tree) {
-    return tree + kLightTreeHeader + kLightTreeInfiniteFloats * distribution_fetch_uint(tree + 1u);
+    return tree + kLightTreeHeader + kLightTreeInfiniteFloats * distribution_fetch_uint(tree + 1u) +
+           distribution_fetch_uint(tree + 2u);
 }
 
 // pbrt-v4's OctahedralVector: x in the low 16 bits, y in the high 16.
@@ -45,22 +50,22 @@ vec3 light_tree_octahedral(uint bits) {
     return normalize(vec3(e, z));
 }
 
-// Node `at` (its first element's index) decoded within its parent's decoded box.
+// Node `at` (its first element's index, a multiple of 4) decoded within its parent's
+// decoded box: two 16-byte loads.
 LightTreeNode light_tree_decode(uint at, vec3 parent_lo, vec3 parent_hi) {
+    uvec4 a = distribution_fetch4(at);
+    uvec4 b = distribution_fetch4(at + 4u);
     LightTreeNode nd;
-    nd.phi = distribution_fetch(at);
-    nd.half_diag = distribution_fetch(at + 1u);
-    nd.w = light_tree_octahedral(distribution_fetch_uint(at + 2u));
-    nd.word = distribution_fetch_uint(at + 3u);
-    nd.child = distribution_fetch_uint(at + 4u);
-    uint b0 = distribution_fetch_uint(at + 5u);
-    uint b1 = distribution_fetch_uint(at + 6u);
-    uint b2 = distribution_fetch_uint(at + 7u);
+    nd.phi = uintBitsToFloat(a.x);
+    nd.half_diag = uintBitsToFloat(a.y);
+    nd.w = light_tree_octahedral(a.z);
+    nd.word = a.w;
+    nd.child = b.x;
     nd.cos_o = float(nd.word & 0x7FFFu) * (2.0 / 32767.0) - 1.0;
     nd.cos_e = float((nd.word >> 15u) & 0x7FFFu) * (2.0 / 32767.0) - 1.0;
     vec3 s = (parent_hi - parent_lo) * (1.0 / 65535.0);
-    nd.lo = parent_lo + vec3(float(b0 & 0xFFFFu), float(b0 >> 16u), float(b1 & 0xFFFFu)) * s;
-    nd.hi = parent_hi - vec3(float(b1 >> 16u), float(b2 & 0xFFFFu), float(b2 >> 16u)) * s;
+    nd.lo = parent_lo + vec3(float(b.y & 0xFFFFu), float(b.y >> 16u), float(b.z & 0xFFFFu)) * s;
+    nd.hi = parent_hi - vec3(float(b.z >> 16u), float(b.w & 0xFFFFu), float(b.w >> 16u)) * s;
     return nd;
 }
 

@@ -112,8 +112,9 @@ struct LightData {
 };
 layout(std430, binding = SSBO_LIGHTS) readonly buffer Lights { LightData lights[]; };
 
-// 4: packed distributions (light selection alias table, environment map 2D distribution).
-layout(std430, binding = SSBO_DISTRIBUTIONS) readonly buffer Distributions { float distribution_data[]; };
+// 4: packed distributions (light selection alias table, environment map 2D distribution,
+// light tree), as 16-byte elements: the light tree reads its nodes 4 elements at a time.
+layout(std430, binding = SSBO_DISTRIBUTIONS) readonly buffer Distributions { uvec4 distribution_data[]; };
 
 // 5: first-hit AOVs per pixel, sums over the finite samples as accum_sum's (kAovChannels
 //   per pixel, glrender/render/accum.py AOV_CHANNELS): albedo r, g, b, shading normal
@@ -148,7 +149,12 @@ layout(binding = TEX_MICROFACET_TABLES) uniform samplerBuffer u_microfacet_table
 // z; a one-channel grid repeats its value in rgb), at MediumData's sigma_grid / albedo_grid.
 layout(binding = TEX_MEDIA_GRIDS) uniform samplerBuffer u_media_grids;
 
-// The packed distribution array for sampling/distribution_data.glsl's prototype.
+// The packed distribution array for sampling/distribution_data.glsl's prototype, and 4
+// elements from a multiple of 4 for lights/light_tree.glsl's.
 float distribution_fetch(uint i) {
-    return distribution_data[i];
+    return uintBitsToFloat(distribution_data[i >> 2u][i & 3u]);
+}
+
+uvec4 distribution_fetch4(uint i) {
+    return distribution_data[i >> 2u];
 }

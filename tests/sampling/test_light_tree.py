@@ -23,7 +23,9 @@ from glrender.sampling import light_tree as lt
 from glrender.testing.harness import run_glsl
 from glrender.testing.stats import chi2_sf, sidak_alpha
 
-PREAMBLE = "float distribution_fetch(uint i) { return table[i]; }"
+PREAMBLE = ("float distribution_fetch(uint i) { return table[i]; }\n"
+            "uvec4 distribution_fetch4(uint i) { return floatBitsToUint(vec4(table[i], table[i + 1u], "
+            "table[i + 2u], table[i + 3u])); }")
 CHI2_FAMILY = 6   # test03's shading points
 N_PLANAR, N_SPHERE, N_POINT, N_SPOT, N_INF = 120, 20, 30, 30, 2
 
@@ -295,7 +297,7 @@ def test08_glsl_decodes_as_the_twin(gl_ctx, tree):
     idx = np.array(sorted(nodes), np.uint32)
     p_lo = np.array([nodes[i][1] for i in idx], np.float32)
     p_hi = np.array([nodes[i][2] for i in idx], np.float32)
-    at = (lt.HEADER + lt.INFINITE_FLOATS * lt._u(block, 1) + lt.NODE_FLOATS * idx).astype(np.uint32)
+    at = (lt.HEADER + lt.INFINITE_FLOATS * lt._u(block, 1) + lt._u(block, 2) + lt.NODE_FLOATS * idx).astype(np.uint32)
     out = run_glsl("LightTreeNode nd = light_tree_decode(at, p_lo, p_hi); vec3 lo = nd.lo; vec3 hi = nd.hi; "
                    "vec3 w = nd.w; vec4 c = vec4(nd.cos_o, nd.cos_e, nd.phi, nd.half_diag); "
                    "uint word = nd.word; uint child = nd.child;",
@@ -312,3 +314,44 @@ def test08_glsl_decodes_as_the_twin(gl_ctx, tree):
     np.testing.assert_array_equal(out["c"], np.array([[t.cos_o, t.cos_e, t.phi, t.half_diag] for t in twin], np.float32))
     np.testing.assert_array_equal(out["child"], [t.child for t in twin])
     np.testing.assert_array_equal(out["word"] >> 30, [t.two_sided * 1 + t.leaf * 2 for t in twin])
+
+
+def test09_nodes_start_on_16_bytes(gl_ctx, tree):
+    """Wherever the block sits in the packed array (LightBounds.offset), its nodes start on a
+    multiple of 4 elements (the shader reads them 16 bytes at a time) and are the same nodes;
+    the device scene's light table puts the tree where its light bounds say, after the
+    alias table."""
+    import dataclasses
+    import sys
+    from pathlib import Path
+    from glrender.gpu.device_scene import DeviceScene
+    from glrender.scene import model as m
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "render"))
+    from render_scenes import base
+
+    block, b, *_ = tree
+    nodes = lt._u(block, 0) * lt.NODE_FLOATS
+    for offset in range(5):
+        moved = lt.light_tree_table(dataclasses.replace(b, offset=offset))
+        at = lt.HEADER + lt.INFINITE_FLOATS * lt._u(moved, 1) + lt._u(moved, 2)
+        assert (offset + at) % 4 == 0 and lt._u(moved, 2) < 4
+        np.testing.assert_array_equal(moved[at:at + nodes], block[at - lt._u(moved, 2) + lt._u(block, 2):][:nodes])
+    scene = base(8, 8)
+    grey = scene.add_material(m.Material("diffuse", reflectance=(0.5, 0.5, 0.5)))
+    for k in range(3):
+        scene.shapes.append(m.Shape("rectangle", material=grey, emission=m.Emission((1.0 + k, 1.0, 1.0)),
+                                    world_from_object=m.translate((k, 0.0, 2.0))))
+    scene.lights.append(m.Light("point", position=(0.0, 0.0, 5.0), intensity=(2.0, 2.0, 2.0)))
+    scene.lights.append(m.Light("constant", radiance=(0.1, 0.1, 0.1)))
+    ds = DeviceScene(gl_ctx, scene)
+    try:
+        n = len(ds.packed.lights)
+        dist = ds.light_table("bvh", "area").distributions
+        t = 1 + 3 * n     # shaders/lights/light_selection.glsl light_tree_offset
+        tree_block = dist[t:]
+        assert lt._u(tree_block, 0) == 2 * (n - 1) - 1 and lt._u(tree_block, 1) == 1
+        assert (t + lt.HEADER + lt.INFINITE_FLOATS + lt._u(tree_block, 2)) % 4 == 0
+        total = sum(lt.light_tree_pmf(tree_block, [0.5, 0.0, 0.0], [0.0, 0.0, 1.0], i, i == n - 1) for i in range(n))
+        assert abs(total - 1) < 1e-5
+    finally:
+        ds.release()
