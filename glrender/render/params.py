@@ -13,16 +13,17 @@ STRATEGIES = {"light": 0, "bsdf": 1, "mis-balance": 2, "mis-power": 3}
 LIGHT_SELECTION = {"uniform": 0, "power": 1, "bvh": 2}
 #: light records (an emitting mesh's triangles each) from which ``light_selection = "auto"``
 #: chooses lights by power instead of uniformly (benchmarks/light_selection.py: power selection
-#: measured 1.1-3.9x uniform's efficiency from 97 records on, 0.3-0.8x with 25 or fewer)
+#: measured 1.1-4.2x uniform's efficiency from 97 records on, 0.3-0.9x with 25 or fewer)
 AUTO_POWER_LIGHTS = 64
 
 
 def choose_light_selection(selection: str, light_count: int) -> str:
     """The light selection a render uses: ``selection`` itself, or for ``auto`` uniform
     below AUTO_POWER_LIGHTS light records and power from there on. The light BVH is chosen
-    only on request: it measured better than power selection on the many-lights city
-    (3.1x) but worse on open streets of 25 to 6,145 lights (0.3-0.7x), so the light count
-    alone does not tell where it wins (benchmarks/RESULTS.md, "Light selection by scene")."""
+    only on request: it measured far better than power selection on the many-lights city
+    (8-16x) but not on open streets of 97 to 1,537 lights (0.48-0.67x by the image's MSE,
+    0.79-1.56x by the median pixel), so the light count alone does not tell where it wins
+    (benchmarks/RESULTS.md, "Light selection by scene")."""
     if selection != "auto":
         return selection
     return "power" if light_count >= AUTO_POWER_LIGHTS else "uniform"
