@@ -55,7 +55,7 @@ vec3 direct_at_surface(SurfaceHit hit, vec3 d, float time, inout SamplerState s,
                 if (h2.light != 0u)
                     Le = emitter_hit_contribution_n(h2, wi, 1, p, frame.z, bs.pdf, bs.delta || delta, n, n_l);
             } else {
-                Le = environment_contribution_n(wi, 1, p, bs.pdf, bs.delta || delta, n, n_l);
+                Le = environment_contribution_n(wi, 1, p, frame.z, bs.pdf, bs.delta || delta, n, n_l);
             }
         }
         L += bs.weight * Le / n;

@@ -186,7 +186,7 @@ bool path_segment(inout PathState st, inout SamplerState s) {
         }
     }
     if (!found) {
-        vec3 Le = environment_contribution_n(st.d, depth, st.prev_p, st.prev_pdf,
+        vec3 Le = environment_contribution_n(st.d, depth, st.prev_p, st.prev_n, st.prev_pdf,
                                              st.prev_delta, 1.0, float(kLightSamples));
         st.L += st.beta * Le;
         // seen through a delta surface, the environment is what a camera ray that misses

@@ -69,8 +69,8 @@ vec3 emitter_hit_contribution(SurfaceHit hit, vec3 d, int depth, vec3 prev_p, ve
 }
 
 // Radiance of the environment along d for a ray that escaped, weighted as above.
-vec3 environment_contribution_n(vec3 d, int depth, vec3 prev_p, float prev_pdf, bool prev_delta,
-                                float n_bsdf, float n_light) {
+vec3 environment_contribution_n(vec3 d, int depth, vec3 prev_p, vec3 prev_n, float prev_pdf,
+                                bool prev_delta, float n_bsdf, float n_light) {
     uint env = u_params.counts.z;
     if (env == 0u) return vec3(0.0);
     float pdf_env;
@@ -78,12 +78,15 @@ vec3 environment_contribution_n(vec3 d, int depth, vec3 prev_p, float prev_pdf, 
     if (depth == 0) return kHideEmitters ? vec3(0.0) : Le;
     if (prev_delta || kStrategy == kStrategyBsdf) return Le;
     if (kStrategy == kStrategyLight) return vec3(0.0);
-    // (a light at infinity: its probability does not depend on the point)
-    return Le * mis_weight_n(n_bsdf, prev_pdf, n_light, light_selection_pmf_at(prev_p, vec3(0.0), env - 1u) * pdf_env);
+    // its probability at the vertex the ray left, for the normal its light samples chose for
+    // (the light BVH weighs the lights at infinity against the tree's root there)
+    return Le * mis_weight_n(n_bsdf, prev_pdf, n_light, light_selection_pmf_at(prev_p, prev_n, env - 1u) * pdf_env);
 }
 
+// For rays that no light sample competes with (a camera ray, depth 0, or one a delta BSDF
+// sampled, prev_delta): their weight needs no light probability, hence no normal.
 vec3 environment_contribution(vec3 d, int depth, vec3 prev_p, float prev_pdf, bool prev_delta) {
-    return environment_contribution_n(d, depth, prev_p, prev_pdf, prev_delta, 1.0, 1.0);
+    return environment_contribution_n(d, depth, prev_p, vec3(0.0), prev_pdf, prev_delta, 1.0, 1.0);
 }
 
 // A light sample's shadow ray and what it brings when nothing blocks it: f |cos| Le w / pdf,
@@ -159,7 +162,7 @@ vec3 emission_through(vec3 p, vec3 ng, vec3 n, vec3 w, float time, int m, float 
         if (m != kNoMedium)
             tr *= medium_segment_transmittance(m, from - lead * w, w, found ? lead + h.t : kInfinity);
         if (max_component(tr) <= 0.0) return vec3(0.0);
-        if (!found) return tr * environment_contribution_n(w, 1, p, pdf, delta, n_bsdf, n_light);
+        if (!found) return tr * environment_contribution_n(w, 1, p, n, pdf, delta, n_bsdf, n_light);
         vec3 Le = vec3(0.0);
         if (h.light != 0u) {
             SurfaceHit at = h;
