@@ -41,19 +41,12 @@ QUAD = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], np.float64)
 def street(n: int):
     """A street 40 long and 8 wide between walls, seen along its length, lit by n lights."""
     from glrender.scene import model as m
+    from glrender.lab.scenes import street as furnish, street_lamp
 
     rng = np.random.default_rng(n)
     scene = m.Scene(film=m.Film(width=160, height=90, filter="box"), integrator=m.Integrator(max_depth=4),
                     source=f"<street, {n} lights>")
-    scene.camera = m.Camera(world_from_camera=m.look_at((0, -21, 2.5), (0, 0, 0.5), (0, 0, 1)), fov=50)
-    floor = scene.add_material(m.Material("roughconductor", eta=(0.2, 0.9, 1.1), k=(3.9, 2.4, 2.2),
-                                          alpha=(0.2, 0.2), distribution="ggx"))
-    wall = scene.add_material(m.Material("diffuse", reflectance=(0.6, 0.6, 0.55)))
-    black = scene.add_material(m.Material("diffuse", reflectance=(0.0, 0.0, 0.0)))
-    scene.shapes.append(m.Shape("rectangle", material=floor, world_from_object=m.scale((4.0, 20.0, 1.0))))
-    for side in (-1, 1):
-        scene.shapes.append(m.Shape("rectangle", material=wall, world_from_object=(
-            m.translate((4 * side, 0, 3)) @ m.rotate((0, 1, 0), -90 * side) @ m.scale((3.0, 20.0, 1.0)))))
+    black = furnish(scene)
     emitters = (n + 1) // 2
     for k in range(emitters):
         side = 1 if k % 2 else -1
@@ -66,14 +59,7 @@ def street(n: int):
                                     vertices=QUAD, triangles=np.array([[0, 1, 2], [0, 2, 3]]),
                                     emission=m.Emission(tuple(radiance))))
     for k in range(n - emitters):
-        position = (rng.uniform(-3, 3), rng.uniform(-19, 19), rng.uniform(3, 5))
-        intensity = tuple(10 ** rng.uniform(0, 3) * rng.uniform(0.5, 1.0, 3) * 0.01)
-        if k % 2 == 0:
-            scene.lights.append(m.Light("point", position=position, intensity=intensity))
-        else:
-            target = (position[0], position[1], 0.0)
-            scene.lights.append(m.Light("spot", world_from_light=m.look_at(position, target, (0, 1, 0)),
-                                        intensity=intensity, cutoff_angle=35.0, beam_width=25.0))
+        scene.lights.append(street_lamp(rng, spot=k % 2 == 1))
     scene.lights.append(m.Light("constant", radiance=(0.01, 0.015, 0.03)))
     return scene
 

@@ -20,6 +20,7 @@ from glrender.errors import UsageError
 from glrender.render.renderer import settings_from_scene
 from glrender.scene import model as m
 from glrender.testing.images import compare_images
+from glrender.lab.scenes import street, street_lamp
 
 from render_scenes import base
 
@@ -39,15 +40,7 @@ def many_lights(size=32, emitter=0.2) -> m.Scene:
     near it."""
     rng = np.random.default_rng(3)
     scene = base(size, size, max_depth=4)
-    scene.camera = m.Camera(world_from_camera=m.look_at((0, -21, 2.5), (0, 0, 0.5), (0, 0, 1)), fov=50)
-    floor = scene.add_material(m.Material("roughconductor", eta=(0.2, 0.9, 1.1), k=(3.9, 2.4, 2.2),
-                                          alpha=(0.2, 0.2), distribution="ggx"))
-    wall = scene.add_material(m.Material("diffuse", reflectance=(0.6, 0.6, 0.55)))
-    black = scene.add_material(m.Material("diffuse", reflectance=(0.0, 0.0, 0.0)))
-    scene.shapes.append(m.Shape("rectangle", material=floor, world_from_object=m.scale((4.0, 20.0, 1.0))))
-    for side in (-1, 1):
-        scene.shapes.append(m.Shape("rectangle", material=wall, world_from_object=(
-            m.translate((4 * side, 0, 3)) @ m.rotate((0, 1, 0), -90 * side) @ m.scale((3.0, 20.0, 1.0)))))
+    black = street(scene)
     for k in range(60):
         side = 1 if k % 2 else -1
         centre = (3.95 * side, rng.uniform(-19, 19), rng.uniform(0.5, 5.5))
@@ -58,14 +51,7 @@ def many_lights(size=32, emitter=0.2) -> m.Scene:
         scene.shapes.append(m.Shape("rectangle", material=black, world_from_object=frame @ m.scale(emitter / 2),
                                     emission=m.Emission(tuple(radiance))))
     for k in range(20):
-        position = (rng.uniform(-3, 3), rng.uniform(-19, 19), rng.uniform(3, 5))
-        intensity = tuple(10 ** rng.uniform(0, 3) * rng.uniform(0.5, 1.0, 3) * 0.01)
-        if k < 12:
-            scene.lights.append(m.Light("point", position=position, intensity=intensity))
-        else:
-            target = (position[0], position[1], 0.0)
-            scene.lights.append(m.Light("spot", world_from_light=m.look_at(position, target, (0, 1, 0)),
-                                        intensity=intensity, cutoff_angle=35.0, beam_width=25.0))
+        scene.lights.append(street_lamp(rng, spot=k >= 12))
     scene.lights.append(m.Light("constant", radiance=(0.01, 0.015, 0.03)))
     return scene
 
