@@ -19,12 +19,11 @@ def scene_bounds(scene: m.Scene) -> tuple[np.ndarray, np.ndarray] | None:
         M = shape.world_from_object
         if shape.kind == "mesh" and shape.instances is not None and shape.vertices is not None \
                 and len(shape.vertices):
-            # every copy's box: the corners of the placed mesh's box under each copy's transform
-            lo, hi = m.point_bounds(m.transform_points(M, np.asarray(shape.vertices, np.float64)))
-            corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                                for z in (lo[2], hi[2])])
-            t = np.asarray(shape.instances, np.float64)
-            points.append((np.einsum("kij,cj->kci", t[:, :3, :3], corners) + t[:, None, :3, 3]).reshape(-1, 3))
+            # every copy's box: the placed mesh's box under each copy's transform
+            from ...accel.instances import instance_world_bounds
+
+            box = m.point_bounds(m.transform_points(M, np.asarray(shape.vertices, np.float64)))
+            points += list(instance_world_bounds(np.asarray(shape.instances, np.float64)[:, :3], *box))
         elif shape.kind == "mesh" and shape.vertices is not None and len(shape.vertices):
             v = np.asarray(shape.vertices, np.float64)
             points.append(m.transform_points(M, np.stack(m.point_bounds(v)) if
